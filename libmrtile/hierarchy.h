@@ -1,0 +1,86 @@
+#pragma once
+//! \file hierarchy.h
+//! \brief The persistent multiresolution hierarchy: a strict binary tree of clusters over the points.
+//! \details Built by build_hierarchy() (cluster_tree.h, paper §4.1), saved and loaded by model_file.h.
+//! Invariants (checked by the tests):
+//!  - the points are stored in tree order: every node's points are the contiguous range [begin, end)
+//!    of `cloud.positions`, a node's range is the concatenation of its children's ranges, so **any
+//!    frontier cut of the tree partitions the points exactly**;
+//!  - every internal node has exactly two children, every node holds at least one point;
+//!  - a node's moments are exactly those of its points (they merge: parent = left ⊕ right);
+//!  - nodes are stored parents before children; nodes[0] is the root.
+
+#include "libmrtile/pca.h"
+#include "libmrtile/point_cloud.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mrt {
+
+//! Which flatness test ended the splitting; kept in the model so cuts can use the same measure.
+enum class Criterion : std::uint32_t
+{
+    //! Scale-free (our default): RMS distance of a cluster's points to its best-fit plane at most
+    //! value × the largest side of the cloud's bounding box.
+    Tolerance = 0,
+    //! The paper's τ_PCA,lim: smallest eigenvalue of M = ΔᵀΔ at most value (model units squared).
+    Tau = 1,
+};
+
+struct Node
+{
+    std::uint32_t begin = 0; //!< first point (index into Hierarchy::cloud.positions)
+    std::uint32_t end = 0;   //!< one past the last point
+    std::int32_t parent = -1;
+    std::int32_t left = -1;  //!< -1 for a leaf
+    std::int32_t right = -1; //!< -1 for a leaf
+    std::uint32_t depth = 0; //!< root = 0
+    Moments moments;         //!< count, mean (the cluster centre), M = ΔᵀΔ
+    //! Paper eq. 1: sum of the distances of the node's points to its centre.
+    double internal_error = 0.0;
+    //! Largest distance of a point of the node to the node's best-fit plane (model units). Bounds the
+    //! geometric error of the node's tile; used for screen-space error and 3D Tiles geometricError.
+    double max_plane_distance = 0.0;
+
+    // Derived from `moments` when the hierarchy is built or loaded (not stored in the file).
+    Eigen3x3 frame;                  //!< PCA: frame.vectors[0] = normal, frame.values[0] = λ_min(M)
+    double rms_plane_distance = 0.0; //!< sqrt(λ_min / count)
+
+    bool is_leaf() const { return left < 0; }
+    std::uint32_t count() const { return end - begin; }
+    const Vec3& centre() const { return moments.mean; }
+};
+
+struct BuildInfo
+{
+    Criterion criterion = Criterion::Tolerance;
+    double criterion_value = 0.0; //!< tolerance (fraction) or τ (units²)
+    std::uint32_t pca_limit = 0;
+    std::uint32_t min_cluster = 0;
+    bool reclassify = true;
+    double build_seconds = 0.0;
+};
+
+struct Hierarchy
+{
+    //! The points in tree order (origin, relative positions, optional colours).
+    PointCloud cloud;
+    //! input_index[i] = index in the input of the point stored at tree position i.
+    std::vector<std::uint32_t> input_index;
+    std::vector<Node> nodes;
+    BuildInfo info;
+
+    std::size_t leaf_count() const;
+    std::uint32_t max_depth() const;
+    BoundingBox bbox() const { return bounding_box(cloud.positions); }
+    //! The stop criterion's value for this node, in the criterion's own units: RMS plane distance
+    //! divided by the bbox's largest side (Tolerance) or λ_min (Tau).
+    double flatness(const Node& node, double largest_side) const;
+};
+
+//! Recomputes the derived fields (frame, rms_plane_distance) of every node from its moments.
+void update_derived(Hierarchy& h);
+
+} // namespace mrt

@@ -1,0 +1,31 @@
+#pragma once
+//! \file mesh.h
+//! \brief The output type: an OpenMesh half-edge triangle mesh with the ids of the method attached.
+//! \details Positions are double precision and relative to the cloud's origin (see point_cloud.h).
+//! Properties (read them with OpenMesh::getProperty / makePropertyManagerFromExisting):
+//!  - kVertexCluster  ("v:cluster", int): the hierarchy node whose tile the vertex belongs to.
+//!  - kFaceTile       ("f:tile", int): the tile (hierarchy node) of a T1 fan face, -1 for T2 gap faces.
+//!  - kFaceGap        ("f:gap", bool): true for gap-filling (T2) faces.
+//! Vertex normals use OpenMesh's standard property.
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+namespace mrt {
+
+struct MeshTraits : public OpenMesh::DefaultTraits
+{
+    using Point = OpenMesh::Vec3d;
+    using Normal = OpenMesh::Vec3d;
+    VertexAttributes(OpenMesh::Attributes::Normal | OpenMesh::Attributes::Status);
+    FaceAttributes(OpenMesh::Attributes::Normal | OpenMesh::Attributes::Status);
+    EdgeAttributes(OpenMesh::Attributes::Status);
+    HalfedgeAttributes(OpenMesh::Attributes::PrevHalfedge);
+};
+
+using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
+
+inline constexpr const char* kVertexCluster = "v:cluster";
+inline constexpr const char* kFaceTile = "f:tile";
+inline constexpr const char* kFaceGap = "f:gap";
+
+} // namespace mrt

@@ -1,0 +1,48 @@
+#pragma once
+//! \file pca.h
+//! \brief Exact, mergeable point statistics and the principal component analysis of paper §4.1.
+//! \details A cluster is summarised by its count, mean and M = ΔᵀΔ (eq. 2-3: the sum of outer products
+//! of the points' offsets from the mean, *not* divided by the count). Two summaries merge exactly
+//! (Chan et al.'s pairwise update), so a parent node's statistics follow from its children's without
+//! touching points, and every frontier cut of the tree has exact statistics.
+//! The eigen-decomposition of M gives the tile plane (§4.2): the normal is the eigenvector of the
+//! smallest eigenvalue, the plane is spanned by the other two.
+
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstdint>
+
+namespace mrt {
+
+struct Moments
+{
+    std::uint64_t count = 0;
+    Vec3 mean{0, 0, 0};
+    //! Upper triangle of M = ΔᵀΔ: xx, xy, xz, yy, yz, zz (model units squared).
+    std::array<double, 6> m2{0, 0, 0, 0, 0, 0};
+
+    void add(const Vec3& p);
+    //! Removes a point previously added (inverse of add; exact up to rounding).
+    void remove(const Vec3& p);
+    void merge(const Moments& other);
+    //! Sum of squared distances of the points to the mean (= trace of M).
+    double sum_squared_distances() const { return m2[0] + m2[3] + m2[5]; }
+};
+
+//! Statistics of a range of points (two-pass: mean first, then M, for accuracy).
+Moments compute_moments(const Vec3* points, std::size_t count);
+
+struct Eigen3x3
+{
+    //! Ascending: values[0] = smallest (= sum of squared plane distances, the paper's τ quantity).
+    std::array<double, 3> values{0, 0, 0};
+    //! Unit eigenvectors matching values; vectors[0] is the plane normal, vectors[2] the principal axis.
+    std::array<Vec3, 3> vectors{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
+};
+
+//! Eigen-decomposition of the symmetric matrix M of a Moments. Values are clamped to be >= 0.
+//! Vectors are sign-normalised (largest-magnitude component positive) so the result is deterministic.
+Eigen3x3 eigen_decomposition(const Moments& m);
+
+} // namespace mrt

@@ -1,0 +1,56 @@
+#pragma once
+//! \file point_cloud.h
+//! \brief The input of the pipeline: positions only (plus optional colours), with a double origin.
+//! \details Georeferenced scans have coordinates near 10^6..10^7. Every algorithm works on positions
+//! relative to `origin` (set to the bounding-box centre by recenter()), so that the same cloud far from
+//! the origin gives the same hierarchy and meshes as near it. Writers add `origin` back (or emit it as a
+//! transform).
+
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mrt {
+
+struct BoundingBox
+{
+    Vec3 min{0, 0, 0};
+    Vec3 max{0, 0, 0};
+
+    Vec3 centre() const { return (min + max) * 0.5; }
+    Vec3 size() const { return max - min; }
+    double largest_side() const;
+    double diagonal() const;
+};
+
+struct PointCloud
+{
+    //! Added to every position to get the input's coordinates.
+    Vec3 origin{0, 0, 0};
+    //! Positions relative to origin.
+    std::vector<Vec3> positions;
+    //! Optional per-point RGBA colour: empty, or one entry per position.
+    std::vector<std::array<std::uint8_t, 4>> colors;
+
+    std::size_t size() const { return positions.size(); }
+    bool empty() const { return positions.empty(); }
+    bool has_colors() const { return !colors.empty(); }
+};
+
+//! Bounding box of the positions (relative to origin). An empty cloud gives a zero box.
+BoundingBox bounding_box(const std::vector<Vec3>& positions);
+
+//! Moves the origin to the bounding-box centre of the absolute coordinates, rounded to a whole number
+//! so that the origin is exact in every output format; positions change by the same offset.
+void recenter(PointCloud& cloud);
+
+//! \brief Checks a cloud before building a hierarchy.
+//! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with
+//! its index), if colours do not match positions, or if the cloud is empty.
+void validate(const PointCloud& cloud, const std::string& what);
+
+} // namespace mrt

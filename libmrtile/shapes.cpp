@@ -1,0 +1,161 @@
+// Analytic sample clouds for the demo (the built-in default input), tests and benchmarks. Every
+// generator is seeded (std::mt19937) and uses only the raw generator output through our own
+// transforms, so results are identical on every standard library.
+#include "libmrtile/shapes.h"
+
+#include <cmath>
+#include <random>
+
+namespace mrt::shapes {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Uniform double in [0,1) from mt19937 bits; std::uniform_real_distribution is not specified
+// exactly and differs between libraries.
+double uniform(std::mt19937& rng)
+{
+    const double hi = static_cast<double>(rng() >> 5); // 27 bits
+    const double lo = static_cast<double>(rng() >> 6); // 26 bits
+    return (hi * 67108864.0 + lo) * (1.0 / 9007199254740992.0);
+}
+
+double gaussian(std::mt19937& rng)
+{
+    // Box-Muller on our own uniforms (deterministic across libraries).
+    double u1 = uniform(rng);
+    while (u1 <= 0.0)
+        u1 = uniform(rng);
+    const double u2 = uniform(rng);
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+}
+
+} // namespace
+
+PointCloud plane_grid(int n)
+{
+    PointCloud c;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            c.positions.push_back({i / double(n - 1), j / double(n - 1), 0.0});
+    return c;
+}
+
+PointCloud sphere(std::size_t count, double radius, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    while (c.positions.size() < count) {
+        const Vec3 g{gaussian(rng), gaussian(rng), gaussian(rng)};
+        const double n = norm(g);
+        if (n > 1e-9)
+            c.positions.push_back(g * (radius / n));
+    }
+    return c;
+}
+
+PointCloud torus(std::size_t count, double R, double r, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    while (c.positions.size() < count) {
+        const double u = 2 * kPi * uniform(rng), v = 2 * kPi * uniform(rng);
+        // Area element is proportional to R + r cos v: accept with that weight.
+        if (uniform(rng) * (R + r) > R + r * std::cos(v))
+            continue;
+        c.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+    return c;
+}
+
+PointCloud three_holes(std::size_t count, std::uint32_t seed)
+{
+    // Plate [-100,100] x [-40,40] x [-10,10] with three vertical holes of radius 18 at x = -60, 0, 60.
+    const double a = 100, b = 40, h = 10, hr = 18;
+    const double hx[3] = {-60, 0, 60};
+    const double area_top = 2 * (4 * a * b - 3 * kPi * hr * hr);
+    const double area_sides = 2 * (2 * a * 2 * h) + 2 * (2 * b * 2 * h);
+    const double area_holes = 3 * 2 * kPi * hr * 2 * h;
+    const double total = area_top + area_sides + area_holes;
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    while (c.positions.size() < count) {
+        const double pick = uniform(rng) * total;
+        if (pick < area_top) {
+            const double x = (2 * uniform(rng) - 1) * a, y = (2 * uniform(rng) - 1) * b;
+            bool in_hole = false;
+            for (double cx : hx)
+                in_hole = in_hole || (x - cx) * (x - cx) + y * y < hr * hr;
+            if (in_hole)
+                continue;
+            c.positions.push_back({x, y, uniform(rng) < 0.5 ? -h : h});
+        } else if (pick < area_top + area_sides) {
+            const double t = uniform(rng) * (4 * a + 4 * b), z = (2 * uniform(rng) - 1) * h;
+            if (t < 2 * a)
+                c.positions.push_back({t - a, -b, z});
+            else if (t < 4 * a)
+                c.positions.push_back({t - 3 * a, b, z});
+            else if (t < 4 * a + 2 * b)
+                c.positions.push_back({-a, t - 4 * a - b, z});
+            else
+                c.positions.push_back({a, t - 4 * a - 3 * b, z});
+        } else {
+            const int k = static_cast<int>(uniform(rng) * 3) % 3;
+            const double phi = 2 * kPi * uniform(rng), z = (2 * uniform(rng) - 1) * h;
+            c.positions.push_back({hx[k] + hr * std::cos(phi), hr * std::sin(phi), z});
+        }
+    }
+    return c;
+}
+
+PointCloud smooth_height_field(std::size_t count, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const double x = uniform(rng), y = uniform(rng);
+        c.positions.push_back({x, y, 0.1 * std::sin(2 * kPi * x) * std::cos(2 * kPi * y)});
+    }
+    return c;
+}
+
+PointCloud step_function(std::size_t count, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const double x = uniform(rng), y = uniform(rng);
+        c.positions.push_back({x, y, y >= x ? 1.0 : 0.0});
+    }
+    return c;
+}
+
+PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(2 * count);
+    for (std::size_t i = 0; i < 2 * count; ++i)
+        c.positions.push_back({uniform(rng), uniform(rng), (i % 2) ? gap : 0.0});
+    return c;
+}
+
+void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    for (Vec3& p : cloud.positions)
+        p += Vec3{gaussian(rng), gaussian(rng), gaussian(rng)} * sigma;
+}
+
+void translate(PointCloud& cloud, const Vec3& offset)
+{
+    for (Vec3& p : cloud.positions)
+        p += offset;
+}
+
+} // namespace mrt::shapes

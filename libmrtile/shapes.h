@@ -1,0 +1,30 @@
+#pragma once
+// Generated, seeded point clouds: analytic shapes whose right answers can be derived (plane, sphere,
+// torus, a genus-3 solid, height fields). Used by the demo, the tests and the benchmarks.
+#include "libmrtile/point_cloud.h"
+
+#include <cstdint>
+
+namespace mrt::shapes {
+
+//! n x n grid on the plane z = 0 over [0,1]^2 (exactly planar).
+PointCloud plane_grid(int n);
+//! Uniform samples on a sphere of the given radius centred at the origin.
+PointCloud sphere(std::size_t count, double radius = 1.0, std::uint32_t seed = 1);
+//! Uniform (by area) samples on a torus with major radius R and minor radius r, axis z.
+PointCloud torus(std::size_t count, double R = 1.0, double r = 0.35, std::uint32_t seed = 2);
+//! Uniform samples on the surface of a plate with three round through-holes (genus 3), about 208 wide
+//! like the paper's "3Holes" data set.
+PointCloud three_holes(std::size_t count, std::uint32_t seed = 3);
+//! Random samples of the height field z = 0.1 sin(2πx) cos(2πy) on [0,1]^2.
+PointCloud smooth_height_field(std::size_t count, std::uint32_t seed = 4);
+//! The paper's step function (Table 1, footnote 3): z = 1 for y >= x else 0, on [0,1]^2.
+PointCloud step_function(std::size_t count, std::uint32_t seed = 5);
+//! Two parallel planes z = 0 and z = gap over [0,1]^2, count points each (random).
+PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed = 6);
+//! Adds Gaussian noise of the given standard deviation along each axis.
+void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed = 7);
+//! Translates every position by `offset` (to test far-from-origin precision), keeping origin at zero.
+void translate(PointCloud& cloud, const Vec3& offset);
+
+} // namespace mrt::shapes
