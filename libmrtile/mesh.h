@@ -16,6 +16,8 @@ struct MeshTraits : public OpenMesh::DefaultTraits
 {
     using Point = OpenMesh::Vec3d;
     using Normal = OpenMesh::Vec3d;
+    //! RGBA; vertex colours are requested (mesh.request_vertex_colors()) only when the input had colours.
+    using Color = OpenMesh::Vec4uc;
     VertexAttributes(OpenMesh::Attributes::Normal | OpenMesh::Attributes::Status);
     FaceAttributes(OpenMesh::Attributes::Normal | OpenMesh::Attributes::Status);
     EdgeAttributes(OpenMesh::Attributes::Status);
