@@ -1,0 +1,467 @@
+// Quality measurement of the output meshes (paper §5 reports how close the approximations are and the
+// method promises manifold tiles): exact topology counts on a triangle soup, and exact point <-> surface
+// distances. The soup is the core so that a triangle set can be checked before OpenMesh, which refuses
+// non-manifold edges, ever sees it. This is the one file that includes CGAL's AABB and kd trees.
+#include "libmrtile/mesh_stats.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/point_cloud.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Orthogonal_k_neighbor_search.h>
+#include <CGAL/Search_traits_3.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <tuple>
+
+namespace mrt {
+namespace {
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+struct Soup
+{
+    std::vector<Vec3> positions;
+    std::vector<Triangle> triangles;
+};
+
+// Compacts away deleted elements, so that soup indices are dense.
+Soup mesh_to_soup(const Mesh& mesh)
+{
+    Soup soup;
+    std::vector<std::uint32_t> index(mesh.n_vertices(), 0);
+    soup.positions.reserve(mesh.n_vertices());
+    for (const auto vh : mesh.vertices()) {
+        index[vh.idx()] = static_cast<std::uint32_t>(soup.positions.size());
+        const auto& p = mesh.point(vh);
+        soup.positions.push_back({p[0], p[1], p[2]});
+    }
+    soup.triangles.reserve(mesh.n_faces());
+    for (const auto fh : mesh.faces()) {
+        Triangle t{};
+        int k = 0;
+        for (const auto vh : fh.vertices()) {
+            assert(k < 3);
+            t[k++] = index[vh.idx()];
+        }
+        assert(k == 3);
+        soup.triangles.push_back(t);
+    }
+    return soup;
+}
+
+class UnionFind
+{
+public:
+    explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }
+
+    std::uint32_t find(std::uint32_t i)
+    {
+        while (parent_[i] != i) {
+            parent_[i] = parent_[parent_[i]];  // path halving
+            i = parent_[i];
+        }
+        return i;
+    }
+    // The smaller index becomes the root, so roots do not depend on the order of the unions.
+    void unite(std::uint32_t a, std::uint32_t b)
+    {
+        a = find(a);
+        b = find(b);
+        if (a < b)
+            parent_[b] = a;
+        else if (b < a)
+            parent_[a] = b;
+    }
+
+private:
+    std::vector<std::uint32_t> parent_;
+};
+
+bool has_repeated_vertex(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
+
+// One directed use of an edge by a face: the face's corner k goes from t[k] to t[(k+1)%3].
+struct HalfEdge
+{
+    std::uint32_t lo, hi;  // the undirected edge
+    std::uint32_t corner;  // 3 * face + k
+    bool forward;          // t[k] == lo
+};
+
+constexpr std::uint32_t kNone = ~std::uint32_t{0};
+
+// Half-edges grouped by undirected edge: edge e owns half_edges[edge_start[e] .. edge_start[e+1]).
+struct EdgeTable
+{
+    std::vector<HalfEdge> half_edges;
+    std::vector<std::uint32_t> edge_start;
+    std::vector<std::uint32_t> corner_edge;  // 3 * face + k -> edge; kNone for faces left out
+
+    std::size_t size() const { return edge_start.size() - 1; }
+    std::uint32_t use_count(std::uint32_t e) const { return edge_start[e + 1] - edge_start[e]; }
+};
+
+EdgeTable build_edges(const std::vector<Triangle>& triangles, const std::vector<bool>& used_face)
+{
+    EdgeTable table;
+    table.corner_edge.assign(3 * triangles.size(), kNone);
+    for (std::uint32_t f = 0; f < triangles.size(); ++f) {
+        if (!used_face[f])
+            continue;
+        for (std::uint32_t k = 0; k < 3; ++k) {
+            const std::uint32_t a = triangles[f][k], b = triangles[f][(k + 1) % 3];
+            table.half_edges.push_back({std::min(a, b), std::max(a, b), 3 * f + k, a < b});
+        }
+    }
+    std::sort(table.half_edges.begin(), table.half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+        return std::tie(x.lo, x.hi, x.corner) < std::tie(y.lo, y.hi, y.corner);
+    });
+    for (std::uint32_t i = 0; i < table.half_edges.size(); ++i) {
+        const HalfEdge& h = table.half_edges[i];
+        if (i == 0 || h.lo != table.half_edges[i - 1].lo || h.hi != table.half_edges[i - 1].hi)
+            table.edge_start.push_back(i);
+        table.corner_edge[h.corner] = static_cast<std::uint32_t>(table.edge_start.size() - 1);
+    }
+    table.edge_start.push_back(static_cast<std::uint32_t>(table.half_edges.size()));
+    return table;
+}
+
+// The corner of face f at vertex v.
+std::uint32_t corner_at(const std::vector<Triangle>& triangles, std::uint32_t f, std::uint32_t v)
+{
+    const Triangle& t = triangles[f];
+    const std::uint32_t k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    assert(t[k] == v);
+    return 3 * f + k;
+}
+
+// Checks that the faces of each component can be oriented consistently: propagates a flip flag across
+// every two-face edge (all edges are such when this is called), and fails on a contradiction (Möbius).
+std::vector<bool> orientable_components(const std::vector<Triangle>& triangles, const EdgeTable& edges,
+                                        const std::vector<std::uint32_t>& face_component,
+                                        std::size_t component_count)
+{
+    std::vector<bool> orientable(component_count, true);
+    std::vector<signed char> flip(triangles.size(), -1);
+    std::vector<std::uint32_t> stack;
+    for (std::uint32_t seed = 0; seed < triangles.size(); ++seed) {
+        if (face_component[seed] == kNone || flip[seed] >= 0)
+            continue;
+        flip[seed] = 0;
+        stack.push_back(seed);
+        while (!stack.empty()) {
+            const std::uint32_t f = stack.back();
+            stack.pop_back();
+            for (std::uint32_t k = 0; k < 3; ++k) {
+                const std::uint32_t e = edges.corner_edge[3 * f + k];
+                if (edges.use_count(e) != 2)
+                    continue;
+                const HalfEdge& h0 = edges.half_edges[edges.edge_start[e]];
+                const HalfEdge& h1 = edges.half_edges[edges.edge_start[e] + 1];
+                const HalfEdge& mine = h0.corner / 3 == f ? h0 : h1;
+                const HalfEdge& other = h0.corner / 3 == f ? h1 : h0;
+                const std::uint32_t g = other.corner / 3;
+                // Same direction along the shared edge: exactly one of the two faces must be flipped.
+                const signed char want = static_cast<signed char>(flip[f] ^ (mine.forward == other.forward));
+                if (flip[g] < 0) {
+                    flip[g] = want;
+                    stack.push_back(g);
+                } else if (flip[g] != want) {
+                    orientable[face_component[f]] = false;
+                }
+            }
+        }
+    }
+    return orientable;
+}
+
+TopologyStats soup_topology(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles)
+{
+    TopologyStats s;
+    s.vertices = positions.size();
+    s.faces = triangles.size();
+    const std::size_t nf = triangles.size();
+    if (nf >= kNone / 3)
+        throw InvalidInput("topology_stats: " + std::to_string(nf) + " triangles are more than supported");
+    for (std::size_t f = 0; f < nf; ++f)
+        for (const std::uint32_t v : triangles[f])
+            if (v >= positions.size())
+                throw InvalidInput("topology_stats: triangle " + std::to_string(f) + " refers to vertex " +
+                                   std::to_string(v) + " but there are only " +
+                                   std::to_string(positions.size()) + " positions");
+
+    // Used vertices, duplicates and degenerate faces (over all faces).
+    std::vector<bool> vertex_used(positions.size(), false);
+    std::vector<bool> face_used(nf, false);
+    std::vector<Vec3> used_positions;
+    for (std::size_t f = 0; f < nf; ++f) {
+        face_used[f] = !has_repeated_vertex(triangles[f]);
+        for (const std::uint32_t v : triangles[f]) {
+            if (!vertex_used[v])
+                used_positions.push_back(positions[v]);
+            vertex_used[v] = true;
+        }
+    }
+    // A vertex only in faces with a repeated index has no edge: it counts as isolated.
+    std::vector<bool> vertex_in_face(positions.size(), false);
+    for (std::size_t f = 0; f < nf; ++f)
+        if (face_used[f])
+            for (const std::uint32_t v : triangles[f])
+                vertex_in_face[v] = true;
+    const std::size_t used_vertices =
+        static_cast<std::size_t>(std::count(vertex_in_face.begin(), vertex_in_face.end(), true));
+    s.isolated_vertices = positions.size() - used_vertices;
+
+    const double diagonal = bounding_box(used_positions).diagonal();
+    const double area_floor = 1e-14 * diagonal * diagonal;
+    std::vector<Triangle> sorted_faces(triangles);
+    for (std::size_t f = 0; f < nf; ++f) {
+        const Triangle& t = triangles[f];
+        const double area =
+            0.5 * norm(cross(positions[t[1]] - positions[t[0]], positions[t[2]] - positions[t[0]]));
+        if (!face_used[f] || area <= area_floor)
+            ++s.degenerate_faces;
+        std::sort(sorted_faces[f].begin(), sorted_faces[f].end());
+    }
+    std::sort(sorted_faces.begin(), sorted_faces.end());
+    s.duplicate_faces = static_cast<std::size_t>(
+        sorted_faces.end() - std::unique(sorted_faces.begin(), sorted_faces.end()));
+
+    // Edges, boundary, non-manifold edges, orientation.
+    const EdgeTable edges = build_edges(triangles, face_used);
+    s.edges = edges.size();
+    for (std::uint32_t e = 0; e < edges.size(); ++e) {
+        const std::uint32_t n = edges.use_count(e);
+        if (n == 1)
+            ++s.boundary_edges;
+        if (n > 2)
+            ++s.nonmanifold_edges;
+        std::uint32_t forward = 0;
+        for (std::uint32_t i = edges.edge_start[e]; i < edges.edge_start[e + 1]; ++i)
+            forward += edges.half_edges[i].forward ? 1 : 0;
+        if (n >= 2 && 2 * forward != n)
+            s.consistently_oriented = false;
+    }
+
+    // Fans: corners (face, vertex) joined across every two-face edge, at both of its end points. The
+    // fans around a vertex are the classes of its corners.
+    UnionFind fans(3 * nf);
+    for (std::uint32_t e = 0; e < edges.size(); ++e) {
+        if (edges.use_count(e) != 2)
+            continue;
+        const HalfEdge& h0 = edges.half_edges[edges.edge_start[e]];
+        const HalfEdge& h1 = edges.half_edges[edges.edge_start[e] + 1];
+        const std::uint32_t f0 = h0.corner / 3, f1 = h1.corner / 3;
+        for (const std::uint32_t v : {h0.lo, h0.hi})
+            fans.unite(corner_at(triangles, f0, v), corner_at(triangles, f1, v));
+    }
+    std::vector<std::uint32_t> fan_count(positions.size(), 0);
+    for (std::uint32_t c = 0; c < 3 * nf; ++c)
+        if (face_used[c / 3] && fans.find(c) == c)
+            ++fan_count[triangles[c / 3][c % 3]];
+    s.nonmanifold_vertices =
+        static_cast<std::size_t>(std::count_if(fan_count.begin(), fan_count.end(), [](auto n) { return n > 1; }));
+
+    // Boundary loops: at each end point, a boundary edge continues into the other boundary edge of its
+    // own fan (an open fan has exactly two ends). Chains of edges joined that way are the loops.
+    std::vector<std::uint32_t> boundary_index(edges.size(), kNone);
+    std::vector<std::uint32_t> boundary_edge_list;
+    for (std::uint32_t e = 0; e < edges.size(); ++e)
+        if (edges.use_count(e) == 1) {
+            boundary_index[e] = static_cast<std::uint32_t>(boundary_edge_list.size());
+            boundary_edge_list.push_back(e);
+        }
+    UnionFind loops(boundary_edge_list.size());
+    {
+        std::vector<std::uint32_t> fan_end_count(3 * nf, 0), fan_first_end(3 * nf, kNone);
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> fan_pairs;  // (fan root, boundary edge)
+        for (std::uint32_t b = 0; b < boundary_edge_list.size(); ++b) {
+            const HalfEdge& h = edges.half_edges[edges.edge_start[boundary_edge_list[b]]];
+            for (const std::uint32_t v : {h.lo, h.hi}) {
+                const std::uint32_t root = fans.find(corner_at(triangles, h.corner / 3, v));
+                if (fan_end_count[root]++ == 0)
+                    fan_first_end[root] = b;
+                else
+                    fan_pairs.push_back({root, b});
+            }
+        }
+        // Join only fans with exactly two boundary ends; a fan cut by a non-manifold edge may have one.
+        for (const auto& [root, b] : fan_pairs)
+            if (fan_end_count[root] == 2)
+                loops.unite(fan_first_end[root], b);
+    }
+
+    // Components: faces sharing a vertex.
+    UnionFind vertex_sets(positions.size());
+    for (std::size_t f = 0; f < nf; ++f)
+        if (face_used[f]) {
+            vertex_sets.unite(triangles[f][0], triangles[f][1]);
+            vertex_sets.unite(triangles[f][0], triangles[f][2]);
+        }
+    std::vector<std::uint32_t> vertex_component(positions.size(), kNone);
+    for (std::uint32_t v = 0; v < positions.size(); ++v) {
+        if (!vertex_in_face[v])
+            continue;
+        const std::uint32_t root = vertex_sets.find(v);
+        if (vertex_component[root] == kNone)
+            vertex_component[root] = static_cast<std::uint32_t>(s.components++);
+        vertex_component[v] = vertex_component[root];
+    }
+    std::vector<std::uint32_t> face_component(nf, kNone);
+    std::vector<long> chi(s.components, 0);
+    std::vector<long> component_loops(s.components, 0);
+    for (std::uint32_t v = 0; v < positions.size(); ++v)
+        if (vertex_in_face[v])
+            ++chi[vertex_component[v]];
+    for (std::size_t f = 0; f < nf; ++f)
+        if (face_used[f]) {
+            face_component[f] = vertex_component[triangles[f][0]];
+            ++chi[face_component[f]];
+        }
+    for (std::uint32_t e = 0; e < edges.size(); ++e)
+        --chi[face_component[edges.half_edges[edges.edge_start[e]].corner / 3]];
+    for (std::uint32_t b = 0; b < boundary_edge_list.size(); ++b)
+        if (loops.find(b) == b) {
+            ++s.boundary_loops;
+            const std::uint32_t e = boundary_edge_list[b];
+            ++component_loops[face_component[edges.half_edges[edges.edge_start[e]].corner / 3]];
+        }
+    s.euler_characteristic = std::accumulate(chi.begin(), chi.end(), 0L);
+
+    if (s.nonmanifold_edges > 0 || s.nonmanifold_vertices > 0) {
+        s.genus = -1;
+        return s;
+    }
+    const std::vector<bool> orientable = orientable_components(triangles, edges, face_component, s.components);
+    long genus = 0;
+    for (std::size_t c = 0; c < s.components; ++c) {
+        if (!orientable[c]) {
+            s.genus = -1;
+            return s;
+        }
+        const long twice = 2 - chi[c] - component_loops[c];
+        assert(twice >= 0 && twice % 2 == 0);
+        genus += twice / 2;
+    }
+    s.genus = static_cast<int>(genus);
+    return s;
+}
+
+// ---- distances ----------------------------------------------------------------------------------
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using CgalPoint = Kernel::Point_3;
+using CgalTriangle = Kernel::Triangle_3;
+
+CgalPoint to_cgal(const Vec3& p) { return {p.x, p.y, p.z}; }
+
+// Checks the points and returns their bounding-box diagonal, the unit of the reported distances.
+double checked_diagonal(const std::vector<Vec3>& points, const char* function)
+{
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!is_finite(points[i]))
+            throw InvalidInput(std::string(function) + ": point " + std::to_string(i) + " is not finite");
+    const double diagonal = bounding_box(points).diagonal();
+    if (!(diagonal > 0.0))
+        throw InvalidInput(std::string(function) + ": the points' bounding box has zero diagonal, so "
+                                                   "distances relative to it are undefined");
+    return diagonal;
+}
+
+// Sums in index order so that the result does not depend on how the distances were computed.
+DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal)
+{
+    DistanceStats stats;
+    stats.diagonal = diagonal;
+    if (squared_distances.empty())
+        return stats;
+    double sum = 0.0, sum_squares = 0.0, max = 0.0;
+    for (const double d2 : squared_distances) {
+        const double d = std::sqrt(d2);
+        sum += d;
+        sum_squares += d2;
+        max = std::max(max, d);
+    }
+    const double n = static_cast<double>(squared_distances.size());
+    stats.mean = sum / n / diagonal;
+    stats.max = max / diagonal;
+    stats.rms = std::sqrt(sum_squares / n) / diagonal;
+    return stats;
+}
+
+} // namespace
+
+TopologyStats topology_stats(const Mesh& mesh)
+{
+    const Soup soup = mesh_to_soup(mesh);
+    return soup_topology(soup.positions, soup.triangles);
+}
+
+TopologyStats topology_stats(const std::vector<Vec3>& positions, const std::vector<std::array<std::uint32_t, 3>>& triangles)
+{
+    return soup_topology(positions, triangles);
+}
+
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh)
+{
+    if (points.empty())
+        return {};
+    const double diagonal = checked_diagonal(points, "point_to_mesh_distance");
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.triangles.empty())
+        throw InvalidInput("point_to_mesh_distance: the mesh has no face to measure the distance to");
+
+    using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
+    using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+    std::vector<CgalTriangle> triangles;
+    triangles.reserve(soup.triangles.size());
+    for (const Triangle& t : soup.triangles)
+        triangles.emplace_back(to_cgal(soup.positions[t[0]]), to_cgal(soup.positions[t[1]]),
+                               to_cgal(soup.positions[t[2]]));
+    Tree tree(triangles.begin(), triangles.end());
+    tree.accelerate_distance_queries();
+
+    std::vector<double> squared(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        squared[i] = tree.squared_distance(to_cgal(points[i]));
+    return summarize(squared, diagonal);
+}
+
+DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points)
+{
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.positions.empty())
+        return {};
+    if (points.empty())
+        throw InvalidInput("mesh_to_point_distance: no points given to measure the mesh against");
+    const double diagonal = checked_diagonal(points, "mesh_to_point_distance");
+
+    using Traits = CGAL::Search_traits_3<Kernel>;
+    using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
+    std::vector<CgalPoint> cgal_points;
+    cgal_points.reserve(points.size());
+    for (const Vec3& p : points)
+        cgal_points.push_back(to_cgal(p));
+    Search::Tree tree(cgal_points.begin(), cgal_points.end());
+    tree.build();
+
+    std::vector<Vec3> samples(soup.positions);
+    samples.reserve(soup.positions.size() + soup.triangles.size());
+    for (const Triangle& t : soup.triangles)
+        samples.push_back((soup.positions[t[0]] + soup.positions[t[1]] + soup.positions[t[2]]) / 3.0);
+    std::vector<double> squared(samples.size());
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        const Search search(tree, to_cgal(samples[i]), 1);
+        squared[i] = search.begin()->second;
+    }
+    return summarize(squared, diagonal);
+}
+
+} // namespace mrt

@@ -1,0 +1,81 @@
+#pragma once
+//! \file mesh_stats.h
+//! \brief Measured quality of an output mesh: exact topology counts (manifoldness, orientation, genus,
+//! boundary loops) and exact point <-> surface distances.
+//! \details The topology counts are computed on a raw triangle soup, so a triangle set can be checked
+//! before it is given to OpenMesh (which refuses a non-manifold edge); the Mesh overload converts the
+//! mesh to a soup and gives the same numbers.
+
+#include "libmrtile/mesh.h"
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mrt {
+
+//! Topology of a triangle set. Faces whose three indices are not distinct are counted in `faces` and
+//! `degenerate_faces` but are left out of every other count (they have no well-defined edges); faces of
+//! zero area with distinct indices take part in the topology like any other face.
+struct TopologyStats
+{
+    std::size_t vertices = 0;        //!< all vertices, isolated ones included
+    std::size_t faces = 0;           //!< all faces
+    std::size_t edges = 0;           //!< undirected edges
+    std::size_t boundary_edges = 0;  //!< edges with exactly one incident face
+    //! Closed chains of boundary edges; at a pinched vertex a chain follows the fan it came from. On a
+    //! mesh with non-manifold edges a chain cut at such an edge is still counted as one loop.
+    std::size_t boundary_loops = 0;
+    //! Connected components of faces (faces sharing a vertex are connected).
+    std::size_t components = 0;
+    //! V - E + F over vertices that have a face and faces with three distinct vertices.
+    long euler_characteristic = 0;
+    //! Sum over components of (2 - χ_c - b_c) / 2; -1 if any component is non-manifold (a non-manifold
+    //! edge or vertex) or non-orientable, where this formula does not apply.
+    int genus = 0;
+    std::size_t nonmanifold_edges = 0;  //!< edges with more than two incident faces
+    //! Vertices whose incident faces, connected through edges with exactly two faces, form more than one
+    //! fan: bow-ties, pinches, and the end points of non-manifold edges.
+    std::size_t nonmanifold_vertices = 0;
+    //! Faces with the same vertex set as an earlier face (a face present twice counts once).
+    std::size_t duplicate_faces = 0;
+    //! Faces with a repeated vertex or with area <= 1e-14 * (bounding-box diagonal of the used vertices)^2.
+    std::size_t degenerate_faces = 0;
+    std::size_t isolated_vertices = 0;  //!< vertices with no face
+    //! Every edge with two or more faces is used equally often in each direction (once each way for an
+    //! interior edge). True for a mesh without such edges.
+    bool consistently_oriented = true;
+};
+
+//! \brief Topology of a mesh (deleted elements are ignored).
+TopologyStats topology_stats(const Mesh& mesh);
+
+//! \brief Topology of a triangle soup, without OpenMesh: can count non-manifold edges.
+//! \throw InvalidInput if a triangle refers to a vertex index >= positions.size().
+TopologyStats topology_stats(const std::vector<Vec3>& positions,
+                             const std::vector<std::array<std::uint32_t, 3>>& triangles);
+
+//! Distances as fractions of `diagonal`, the bounding-box diagonal of the points.
+struct DistanceStats
+{
+    double mean = 0.0;
+    double max = 0.0;
+    double rms = 0.0;
+    double diagonal = 0.0;  //!< absolute, in the units of the positions
+};
+
+//! \brief Distance from each point to the closest point of the mesh surface (exact: closest point on the
+//! triangles, not on the vertices). Deterministic.
+//! \throw InvalidInput if points are given but the mesh has no face, if a point is not finite, or if the
+//! points' bounding box has a zero diagonal (the fractions would be undefined). No points gives zeros.
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh);
+
+//! \brief The other one-sided distance: from the mesh (sampled at its vertices and face centroids) to
+//! the closest point of `points`. Deterministic.
+//! \throw InvalidInput if the mesh has vertices but no point is given, if a point is not finite, or if
+//! the points' bounding box has a zero diagonal. An empty mesh gives zeros.
+DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points);
+
+} // namespace mrt
