@@ -1,0 +1,87 @@
+#pragma once
+//! \file draco_encode.h
+//! \brief Draco compression of meshes: bare .drc files and the payload of KHR_draco_mesh_compression.
+//! \details The only place that includes Draco headers (draco_encode.cpp). Positions are quantized
+//! (lossy); normals are octahedral-quantized; RGBA colours are stored as exact 8-bit values (Draco
+//! quantizes float attributes only, so there is no colour quantization setting).
+
+#include "formats/mesh_buffers.h"
+#include "libmrtile/mesh.h"
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mrt {
+
+//! An explicit quantization cube [min, min + range] on every axis, in the mesh's frame (positions
+//! relative to the origin, input axes). Meshes encoded on the same grid with the same bits decode a
+//! shared vertex to bit-identical positions: give every tile of a tileset the same grid so that
+//! border vertices of adjacent tiles match exactly.
+struct QuantizationGrid
+{
+    Vec3 min{0, 0, 0};
+    double range = 0.0; //!< > 0; every position must lie inside the cube
+};
+
+struct DracoOptions
+{
+    int position_bits = 14;  //!< 1..30; quantization step = extent / (2^bits - 1)
+    int normal_bits = 10;    //!< 1..30
+    //! 0 (best compression) .. 10 (fastest). Default 3/3 = `draco_encoder`'s default -cl 7.
+    int encoding_speed = 3;
+    int decoding_speed = 3;
+    //! Default: none, Draco quantizes on the mesh's own bounding cube.
+    std::optional<QuantizationGrid> grid;
+};
+
+//! \brief Writes `mesh` as a bare Draco file, in the mesh's own axes (no rotation).
+//! Positions are stored relative to an offset (float precision); the absolute coordinates are
+//! decoded position + the double[3] geometry metadata entry "mrtile_origin" (= origin + offset).
+//! \throw InvalidInput for bad options, an empty mesh or positions outside `options.grid`;
+//! IoError naming `path` if it cannot be written (nothing is left behind).
+void write_drc(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
+               const DracoOptions& options = {});
+
+//! The output-frame offset to flatten a mesh with when `options.grid` is set (its min corner in that
+//! frame), so that the grid's origin is exactly 0 in the encoded coordinates; nullopt without a grid.
+std::optional<Vec3> draco_grid_offset(const DracoOptions& options, UpAxis up);
+
+//! What Draco actually encoded, read back by decoding the result.
+struct DracoEncoded
+{
+    std::string bytes;
+    int position_id = -1; //!< Draco attribute unique ids, -1 if absent
+    int normal_id = -1;
+    int color_id = -1;
+    std::size_t vertex_count = 0; //!< decoded points (Draco may split or reorder vertices)
+    std::size_t face_count = 0;
+    std::array<float, 3> min{};   //!< of the decoded (dequantized) positions
+    std::array<float, 3> max{};
+};
+
+//! \brief Encodes flattened buffers. With `options.grid`, the buffers must have been made with
+//! offset draco_grid_offset(options, up) (the grid origin is then local 0).
+//! \param metadata_origin if set, stored as the "mrtile_origin" geometry metadata entry.
+DracoEncoded encode_draco(const MeshBuffers& buffers, const DracoOptions& options,
+                          const std::optional<Vec3>& metadata_origin = std::nullopt);
+
+//! A decoded Draco mesh (used by tests and readers).
+struct DracoDecoded
+{
+    std::vector<float> positions;        //!< xyz per point
+    std::vector<float> normals;          //!< xyz per point, or empty
+    std::vector<std::uint8_t> colors;    //!< rgba per point, or empty
+    std::vector<std::uint32_t> indices;  //!< three per face
+    std::optional<Vec3> metadata_origin; //!< "mrtile_origin" if present
+};
+
+//! \throw IoError naming `what` if the bytes are not a Draco mesh.
+DracoDecoded decode_draco(const std::string& bytes, const std::string& what);
+
+} // namespace mrt

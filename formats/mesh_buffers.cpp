@@ -1,0 +1,159 @@
+// Output stage, common part of every mesh writer: the half-edge mesh becomes flat arrays in the
+// exporter's frame. Done once here so that glTF, Draco-in-glTF and bare .drc agree on vertex order,
+// normals and precision handling (float32 relative to a per-file double offset).
+#include "formats/mesh_buffers.h"
+
+#include "libmrtile/errors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace mrt {
+
+namespace {
+
+Vec3 to_vec3(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
+
+} // namespace
+
+Vec3 to_output_frame(const Vec3& v, UpAxis up)
+{
+    return up == UpAxis::Z ? Vec3{v.x, v.z, -v.y} : v;
+}
+
+Vec3 from_output_frame(const Vec3& v, UpAxis up)
+{
+    return up == UpAxis::Z ? Vec3{v.x, -v.z, v.y} : v;
+}
+
+MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options)
+{
+    constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
+    const bool has_status = mesh.has_vertex_status() && mesh.has_face_status();
+    auto face_deleted = [&](Mesh::FaceHandle f) { return has_status && mesh.status(f).deleted(); };
+    auto vertex_deleted = [&](Mesh::VertexHandle v) { return has_status && mesh.status(v).deleted(); };
+
+    // Number used vertices in the order of their first use by a face: deterministic, and keeps the
+    // index buffer local (good for caches and for Draco's sequential fallback).
+    std::vector<std::uint32_t> new_index(mesh.n_vertices(), kUnused);
+    std::vector<Mesh::VertexHandle> used;
+    MeshBuffers out;
+    out.indices.reserve(mesh.n_faces() * 3);
+    for (const auto f : mesh.faces()) {
+        if (face_deleted(f))
+            continue;
+        int corners = 0;
+        for (const auto v : mesh.fv_range(f)) {
+            if (vertex_deleted(v))
+                throw InvalidInput("mesh: face " + std::to_string(f.idx()) + " uses deleted vertex " +
+                                   std::to_string(v.idx()) + " (garbage-collect the mesh first)");
+            std::uint32_t& id = new_index[static_cast<std::size_t>(v.idx())];
+            if (id == kUnused) {
+                if (used.size() >= kUnused)
+                    throw InvalidInput("mesh: more than 4294967294 vertices");
+                id = static_cast<std::uint32_t>(used.size());
+                used.push_back(v);
+            }
+            out.indices.push_back(id);
+            ++corners;
+        }
+        if (corners != 3)
+            throw InvalidInput("mesh: face " + std::to_string(f.idx()) + " has " + std::to_string(corners) +
+                               " corners, expected a triangle");
+    }
+    if (out.indices.empty())
+        throw InvalidInput("mesh: no faces to write");
+
+    const UpAxis up = options.up_axis;
+    std::vector<Vec3> frame_positions(used.size());
+    Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity()};
+    Vec3 hi = -lo;
+    for (std::size_t i = 0; i < used.size(); ++i) {
+        const Vec3 p = to_vec3(mesh.point(used[i]));
+        if (!is_finite(p))
+            throw InvalidInput("mesh: vertex " + std::to_string(used[i].idx()) + " has a non-finite position");
+        frame_positions[i] = to_output_frame(p, up);
+        lo = min(lo, frame_positions[i]);
+        hi = max(hi, frame_positions[i]);
+    }
+    if (options.offset) {
+        out.offset = *options.offset;
+    } else {
+        const Vec3 c = (lo + hi) * 0.5;
+        out.offset = {std::round(c.x), std::round(c.y), std::round(c.z)};
+    }
+
+    out.positions.resize(used.size() * 3);
+    for (int k = 0; k < 3; ++k) {
+        out.min[static_cast<std::size_t>(k)] = std::numeric_limits<float>::infinity();
+        out.max[static_cast<std::size_t>(k)] = -std::numeric_limits<float>::infinity();
+    }
+    for (std::size_t i = 0; i < used.size(); ++i) {
+        const Vec3 local = frame_positions[i] - out.offset;
+        for (int k = 0; k < 3; ++k) {
+            const float value = static_cast<float>(local[k]);
+            const auto ku = static_cast<std::size_t>(k);
+            out.positions[i * 3 + ku] = value;
+            out.min[ku] = std::min(out.min[ku], value);
+            out.max[ku] = std::max(out.max[ku], value);
+        }
+    }
+
+    if (options.normals) {
+        // Area-weighted face normals (unnormalized cross products) of the non-deleted faces, computed
+        // only when some used vertex lacks a usable stored normal.
+        std::vector<Vec3> normals(used.size());
+        std::vector<char> needs_face_normal(used.size(), 0);
+        bool any_missing = false;
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            const Vec3 n = mesh.has_vertex_normals() ? to_vec3(mesh.normal(used[i])) : Vec3{};
+            const double length = norm(n);
+            if (std::isfinite(length) && length > 1e-300) {
+                normals[i] = n / length;
+            } else {
+                needs_face_normal[i] = 1;
+                any_missing = true;
+            }
+        }
+        if (any_missing) {
+            std::vector<Vec3> sums(used.size());
+            for (std::size_t t = 0; t < out.face_count(); ++t) {
+                const std::uint32_t a = out.indices[3 * t], b = out.indices[3 * t + 1], c = out.indices[3 * t + 2];
+                const Vec3 pa = to_vec3(mesh.point(used[a]));
+                const Vec3 n = cross(to_vec3(mesh.point(used[b])) - pa, to_vec3(mesh.point(used[c])) - pa);
+                sums[a] += n;
+                sums[b] += n;
+                sums[c] += n;
+            }
+            const Vec3 up_dir = up == UpAxis::Z ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
+            for (std::size_t i = 0; i < used.size(); ++i) {
+                if (!needs_face_normal[i])
+                    continue;
+                const double length = norm(sums[i]);
+                normals[i] = length > 0.0 && std::isfinite(length) ? sums[i] / length : up_dir;
+            }
+        }
+        out.normals.resize(used.size() * 3);
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            // Unit length in double, so within 1e-7 of unit in float (validators allow 5e-4).
+            const Vec3 n = to_output_frame(normals[i], up);
+            for (int k = 0; k < 3; ++k)
+                out.normals[i * 3 + static_cast<std::size_t>(k)] = static_cast<float>(n[k]);
+        }
+    }
+
+    if (options.colors && mesh.has_vertex_colors()) {
+        out.colors.resize(used.size() * 4);
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            const auto& c = mesh.color(used[i]);
+            for (std::size_t k = 0; k < 4; ++k)
+                out.colors[i * 4 + k] = c[static_cast<int>(k)];
+        }
+    }
+    return out;
+}
+
+} // namespace mrt

@@ -1,0 +1,63 @@
+#pragma once
+//! \file mesh_buffers.h
+//! \brief A mesh flattened into the float/index arrays that glTF and Draco store.
+//! \details Shared by write_gltf and draco_encode so that both see the same vertices in the same
+//! order. Deleted vertices and faces (a mesh that was not garbage-collected) are skipped; only vertices
+//! used by a face are kept. Positions are float32 relative to a per-file `offset` (double), so that a
+//! georeferenced mesh keeps its precision: the writer puts `offset` into a node translation or metadata.
+
+#include "libmrtile/mesh.h"
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace mrt {
+
+//! Which axis of the input points up. glTF is y-up.
+enum class UpAxis
+{
+    Y, //!< input is already y-up: written as is
+    Z, //!< input is z-up: (x, y, z) -> (x, z, -y)
+};
+
+//! Maps a point or direction of the input frame into the output (glTF) frame.
+Vec3 to_output_frame(const Vec3& v, UpAxis up);
+//! Inverse of to_output_frame.
+Vec3 from_output_frame(const Vec3& v, UpAxis up);
+
+struct MeshBufferOptions
+{
+    UpAxis up_axis = UpAxis::Z;    //!< default Z: rotate into glTF's y-up
+    bool normals = true;           //!< fill `normals` (stored ones if usable, otherwise computed)
+    bool colors = true;            //!< fill `colors` when the mesh has vertex colours
+    //! Subtracted (in the output frame) from every position. Default: the bounding-box centre of the
+    //! used vertices in the output frame, rounded to whole units.
+    std::optional<Vec3> offset;
+};
+
+struct MeshBuffers
+{
+    Vec3 offset;                       //!< output frame: position = float(frame(p) - offset)
+    std::vector<float> positions;      //!< xyz per vertex
+    std::vector<float> normals;        //!< unit xyz per vertex, or empty
+    std::vector<std::uint8_t> colors;  //!< rgba per vertex, or empty
+    std::vector<std::uint32_t> indices; //!< three per triangle
+    std::array<float, 3> min{};         //!< of positions
+    std::array<float, 3> max{};
+
+    std::size_t vertex_count() const { return positions.size() / 3; }
+    std::size_t face_count() const { return indices.size() / 3; }
+};
+
+//! \brief Flattens `mesh` (positions relative to some origin, in the input frame).
+//! Normals: a vertex's stored normal is used when it is finite and non-zero (normalized); otherwise
+//! the area-weighted normal of its faces, or the up axis if all its faces are degenerate.
+//! \throw InvalidInput if the mesh has no (non-deleted) face, a used position is not finite, or a
+//! face refers to a deleted vertex.
+MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options = {});
+
+} // namespace mrt

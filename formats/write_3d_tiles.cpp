@@ -1,0 +1,232 @@
+// Output stage, streaming format: a cut of the hierarchy per level, split into tiles, becomes a 3D Tiles
+// 1.1 tileset (REPLACE refinement: a finer tile replaces its parent once the parent's geometric error
+// is too large on screen), which Cesium and other clients stream. Serialization only; the tile tree is
+// the caller's. The directory is built aside and swapped into place so that a reader never sees a
+// half-written tileset and a failure never destroys the previous one.
+#include "formats/write_3d_tiles.h"
+
+#include "libmrtile/atomic_file.h"
+#include "libmrtile/errors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <string>
+#include <system_error>
+#include <unistd.h>
+
+namespace mrt {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+namespace fs = std::filesystem;
+
+// Input frame -> tileset frame (z-up): through the glTF y-up frame, then the y-up -> z-up rotation
+// that clients apply to glTF content.
+Vec3 to_tileset_frame(const Vec3& v, UpAxis up)
+{
+    return from_output_frame(to_output_frame(v, up), UpAxis::Z);
+}
+
+void validate_tree(const std::vector<TilesetTile>& tiles)
+{
+    if (tiles.empty())
+        throw InvalidInput("write_3d_tiles: no tiles (tiles[0] must be the root)");
+    std::vector<char> seen(tiles.size(), 0);
+    std::vector<std::size_t> stack{0};
+    seen[0] = 1;
+    while (!stack.empty()) {
+        const std::size_t t = stack.back();
+        stack.pop_back();
+        const TilesetTile& tile = tiles[t];
+        const std::string name = "write_3d_tiles: tile " + std::to_string(t);
+        if (!std::isfinite(tile.geometric_error) || tile.geometric_error < 0.0)
+            throw InvalidInput(name + ": geometric_error must be finite and >= 0");
+        if (!is_finite(tile.box.min) || !is_finite(tile.box.max) || tile.box.min.x > tile.box.max.x ||
+            tile.box.min.y > tile.box.max.y || tile.box.min.z > tile.box.max.z)
+            throw InvalidInput(name + ": box must be finite with min <= max");
+        for (const std::size_t c : tile.children) {
+            if (c >= tiles.size())
+                throw InvalidInput(name + ": child index " + std::to_string(c) + " out of range");
+            if (seen[c])
+                throw InvalidInput(name + ": child " + std::to_string(c) + " has two parents or closes a cycle");
+            if (tiles[c].geometric_error > tile.geometric_error)
+                throw InvalidInput(name + ": child " + std::to_string(c) +
+                                   " has a larger geometric_error than its parent (REPLACE refinement needs "
+                                   "errors that never grow towards the leaves)");
+            seen[c] = 1;
+            stack.push_back(c);
+        }
+    }
+    for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (!seen[t])
+            throw InvalidInput("write_3d_tiles: tile " + std::to_string(t) + " is not reachable from the root");
+}
+
+Json box_json(const BoundingBox& box, UpAxis up)
+{
+    const Vec3 a = to_tileset_frame(box.min, up), b = to_tileset_frame(box.max, up);
+    const Vec3 lo = min(a, b), hi = max(a, b);
+    const Vec3 c = (lo + hi) * 0.5, h = (hi - lo) * 0.5;
+    return Json::array({c.x, c.y, c.z, h.x, 0.0, 0.0, 0.0, h.y, 0.0, 0.0, 0.0, h.z});
+}
+
+std::string content_uri(std::size_t tile) { return "tiles/" + std::to_string(tile) + ".glb"; }
+
+Json tile_json(const std::vector<TilesetTile>& tiles, std::size_t t, UpAxis up)
+{
+    const TilesetTile& tile = tiles[t];
+    Json out;
+    out["boundingVolume"] = Json{{"box", box_json(tile.box, up)}};
+    out["geometricError"] = tile.geometric_error;
+    if (tile.mesh != nullptr)
+        out["content"] = Json{{"uri", content_uri(t)}};
+    if (!tile.children.empty()) {
+        Json children = Json::array();
+        for (const std::size_t c : tile.children)
+            children.push_back(tile_json(tiles, c, up));
+        out["children"] = std::move(children);
+    }
+    return out;
+}
+
+void remove_quietly(const fs::path& path)
+{
+    std::error_code ec;
+    fs::remove_all(path, ec);
+}
+
+// Puts the finished `built` directory at `dir`, replacing an existing one only now.
+void swap_into_place(const fs::path& built, const fs::path& dir)
+{
+    std::error_code ec;
+    if (!fs::exists(dir, ec)) {
+        fs::rename(built, dir, ec);
+        if (ec)
+            throw IoError(dir.string() + ": cannot move the tileset into place (" + ec.message() + ")");
+        return;
+    }
+    // Atomic exchange where the file system supports it; otherwise two renames with a roll-back.
+    if (::renameat2(AT_FDCWD, built.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) == 0) {
+        remove_quietly(built); // now holds the previous tileset
+        return;
+    }
+    fs::path old = dir;
+    old += ".old." + std::to_string(static_cast<long>(::getpid()));
+    fs::rename(dir, old, ec);
+    if (ec)
+        throw IoError(dir.string() + ": cannot replace the existing tileset (" + ec.message() + ")");
+    fs::rename(built, dir, ec);
+    if (ec) {
+        std::error_code ignored;
+        fs::rename(old, dir, ignored);
+        throw IoError(dir.string() + ": cannot move the tileset into place (" + ec.message() + ")");
+    }
+    remove_quietly(old);
+}
+
+} // namespace
+
+void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, const fs::path& dir,
+                    const TilesetOptions& options)
+{
+    validate_tree(tiles);
+    const UpAxis up = options.gltf.up_axis;
+    if (options.root_transform)
+        for (const double v : *options.root_transform)
+            if (!std::isfinite(v))
+                throw InvalidInput("TilesetOptions::root_transform: non-finite entry");
+
+    // Refuse to replace anything that is not a tileset: the target is removed as a whole.
+    std::error_code ec;
+    if (fs::exists(dir, ec)) {
+        if (!fs::is_directory(dir, ec))
+            throw IoError(dir.string() + ": exists and is not a directory");
+        if (!fs::is_empty(dir, ec) && !fs::exists(dir / "tileset.json", ec))
+            throw IoError(dir.string() + ": exists and is not a tileset (no tileset.json); refusing to replace it");
+    }
+    fs::path built = dir;
+    built += ".tmp." + std::to_string(static_cast<long>(::getpid()));
+    remove_quietly(built); // a stale leftover of a killed run with the same pid
+    if (!fs::create_directory(built, ec) || ec)
+        throw IoError(dir.string() + ": cannot create the directory (" +
+                      (ec ? ec.message() : std::string("already exists")) + ")");
+    try {
+        ensure_directory(built / "tiles");
+        for (std::size_t t = 0; t < tiles.size(); ++t) {
+            if (tiles[t].mesh == nullptr)
+                continue;
+            try {
+                // Origin 0: the positions stay relative to the tileset origin, which the root
+                // transform carries; the per-file offset keeps float precision inside the tile.
+                write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), options.gltf);
+            } catch (const InvalidInput& e) {
+                throw InvalidInput("write_3d_tiles: tile " + std::to_string(t) + ": " + e.what());
+            }
+        }
+
+        Json root = tile_json(tiles, 0, up);
+        std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        if (options.root_transform) {
+            transform = *options.root_transform;
+        } else {
+            const Vec3 t = to_tileset_frame(origin, up);
+            transform[12] = t.x;
+            transform[13] = t.y;
+            transform[14] = t.z;
+        }
+        Json ordered_root;
+        ordered_root["boundingVolume"] = root["boundingVolume"];
+        ordered_root["geometricError"] = root["geometricError"];
+        ordered_root["refine"] = "REPLACE";
+        ordered_root["transform"] = transform;
+        for (const char* key : {"content", "children"})
+            if (root.contains(key))
+                ordered_root[key] = root[key];
+
+        const TilesetTile& r = tiles[0];
+        const double top_error = options.tileset_geometric_error
+                                     ? *options.tileset_geometric_error
+                                     : std::max(r.geometric_error, r.box.diagonal());
+        if (!std::isfinite(top_error) || top_error < r.geometric_error)
+            throw InvalidInput("TilesetOptions::tileset_geometric_error: must be finite and >= the root's error");
+        Json tileset;
+        tileset["asset"] = Json{{"version", "1.1"}, {"generator", "libmrtile"}};
+        tileset["geometricError"] = top_error;
+        tileset["root"] = std::move(ordered_root);
+        write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n");
+        swap_into_place(built, dir);
+    } catch (...) {
+        remove_quietly(built);
+        throw;
+    }
+}
+
+std::array<double, 16> enu_to_ecef_transform(double longitude_deg, double latitude_deg, double height)
+{
+    if (!std::isfinite(longitude_deg) || !std::isfinite(latitude_deg) || !std::isfinite(height) ||
+        std::fabs(latitude_deg) > 90.0)
+        throw InvalidInput("enu_to_ecef_transform: longitude/latitude/height must be finite, |latitude| <= 90");
+    // WGS84 ellipsoid.
+    constexpr double a = 6378137.0;
+    constexpr double f = 1.0 / 298.257223563;
+    constexpr double e2 = f * (2.0 - f);
+    constexpr double deg = M_PI / 180.0;
+    const double lambda = longitude_deg * deg, phi = latitude_deg * deg;
+    const double sl = std::sin(lambda), cl = std::cos(lambda), sp = std::sin(phi), cp = std::cos(phi);
+    const double n = a / std::sqrt(1.0 - e2 * sp * sp); // prime vertical radius of curvature
+    const Vec3 east{-sl, cl, 0.0};
+    const Vec3 north{-sp * cl, -sp * sl, cp};
+    const Vec3 up{cp * cl, cp * sl, sp};
+    const Vec3 position{(n + height) * cp * cl, (n + height) * cp * sl, (n * (1.0 - e2) + height) * sp};
+    return {east.x,  east.y,  east.z,  0.0, north.x,    north.y,    north.z,    0.0,
+            up.x,    up.y,    up.z,    0.0, position.x, position.y, position.z, 1.0};
+}
+
+} // namespace mrt

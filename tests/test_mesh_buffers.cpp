@@ -1,0 +1,121 @@
+// Tests of mesh_buffers.h: axis mapping, per-file offset, deleted elements, normals and colours.
+// OpenMesh copies a default-constructed (uninitialized) VectorT when a vertex is added; the fixtures set
+// every value they use right after, so GCC's warning about that copy does not apply.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "formats/mesh_buffers.h"
+#include "libmrtile/errors.h"
+#include "mesh_fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace mrt {
+namespace {
+
+using testing::grid_mesh;
+using testing::uv_sphere;
+
+TEST(MeshBuffers, z_up_rotates_into_y_up_and_back)
+{
+    const Vec3 p{1, 2, 3};
+    EXPECT_EQ(to_output_frame(p, UpAxis::Z), (Vec3{1, 3, -2}));
+    EXPECT_EQ(to_output_frame(p, UpAxis::Y), p);
+    EXPECT_EQ(from_output_frame(to_output_frame(p, UpAxis::Z), UpAxis::Z), p);
+    // A proper rotation (determinant +1): x cross y still gives z, so faces keep their winding.
+    const Vec3 x = to_output_frame({1, 0, 0}, UpAxis::Z), y = to_output_frame({0, 1, 0}, UpAxis::Z);
+    EXPECT_EQ(cross(x, y), to_output_frame({0, 0, 1}, UpAxis::Z));
+}
+
+TEST(MeshBuffers, positions_relative_to_rounded_centre)
+{
+    const Mesh mesh = uv_sphere(8, 12, 2.0, {10.4, -3.6, 7.0});
+    const MeshBuffers b = make_mesh_buffers(mesh);
+    EXPECT_EQ(b.offset, (Vec3{10, 7, 4})); // centre (10.4, -3.6, 7) in y-up is (10.4, 7, 3.6)
+    ASSERT_EQ(b.vertex_count(), mesh.n_vertices());
+    ASSERT_EQ(b.face_count(), mesh.n_faces());
+    std::array<float, 3> lo{1e9f, 1e9f, 1e9f}, hi{-1e9f, -1e9f, -1e9f};
+    // Vertices are numbered by first use, so compare as sets via the face corners.
+    for (std::size_t f = 0; f < b.face_count(); ++f) {
+        std::size_t k = 0;
+        for (const auto v : mesh.fv_range(mesh.face_handle(static_cast<int>(f)))) {
+            const auto& p = mesh.point(v);
+            const Vec3 expected = to_output_frame({p[0], p[1], p[2]}, UpAxis::Z) - b.offset;
+            const std::uint32_t i = b.indices[3 * f + k++];
+            for (int c = 0; c < 3; ++c)
+                EXPECT_EQ(b.positions[3 * i + static_cast<std::size_t>(c)], static_cast<float>(expected[c]));
+        }
+    }
+    for (std::size_t i = 0; i < b.positions.size(); ++i) {
+        lo[i % 3] = std::min(lo[i % 3], b.positions[i]);
+        hi[i % 3] = std::max(hi[i % 3], b.positions[i]);
+    }
+    EXPECT_EQ(b.min, lo);
+    EXPECT_EQ(b.max, hi);
+}
+
+TEST(MeshBuffers, computes_missing_normals_and_keeps_stored_ones)
+{
+    Mesh mesh = grid_mesh(3, 3, 0.0, 0.0, 1.0, [](double, double) { return 0.0; });
+    const auto custom = mesh.vertex_handle(5);
+    mesh.set_normal(custom, Mesh::Normal(0, 3, 4)); // stored, not unit: used after normalization
+    MeshBufferOptions options;
+    options.offset = Vec3{};
+    const MeshBuffers b = make_mesh_buffers(mesh, options);
+    ASSERT_EQ(b.normals.size(), b.positions.size());
+    std::size_t customs = 0;
+    for (std::size_t i = 0; i < b.vertex_count(); ++i) {
+        const Vec3 n{b.normals[3 * i], b.normals[3 * i + 1], b.normals[3 * i + 2]};
+        const Vec3 p = from_output_frame({b.positions[3 * i], b.positions[3 * i + 1], b.positions[3 * i + 2]}, UpAxis::Z);
+        if (p == Vec3{mesh.point(custom)[0], mesh.point(custom)[1], mesh.point(custom)[2]}) {
+            ++customs;
+            EXPECT_NEAR(n.x, 0.0, 1e-7);
+            EXPECT_NEAR(n.y, 0.8, 1e-7); // (0, 3, 4)/5 -> y-up (0, 0.8, -0.6)
+            EXPECT_NEAR(n.z, -0.6, 1e-7);
+        } else {
+            EXPECT_EQ(n, (Vec3{0, 1, 0})); // the plane's up normal, rotated to y-up
+        }
+    }
+    EXPECT_EQ(customs, 1u);
+}
+
+TEST(MeshBuffers, skips_deleted_faces_and_their_vertices)
+{
+    Mesh mesh = grid_mesh(2, 1, 0.0, 0.0, 1.0, [](double, double) { return 0.0; });
+    ASSERT_EQ(mesh.n_faces(), 4u);
+    // Deleting the two faces of the right cell isolates vertices 2 and 5, which are deleted too.
+    mesh.delete_face(mesh.face_handle(2), true);
+    mesh.delete_face(mesh.face_handle(3), true);
+    const MeshBuffers b = make_mesh_buffers(mesh);
+    EXPECT_EQ(b.face_count(), 2u);
+    EXPECT_EQ(b.vertex_count(), 4u);
+    for (const std::uint32_t i : b.indices)
+        EXPECT_LT(i, 4u);
+    for (std::size_t i = 0; i < b.vertex_count(); ++i)
+        EXPECT_LE(b.positions[3 * i] + b.offset.x, 1.0f); // no vertex of the deleted cell (x = 2)
+}
+
+TEST(MeshBuffers, copies_colours_only_when_present_and_wanted)
+{
+    const Mesh coloured = uv_sphere(4, 6, 1.0, {}, true);
+    const MeshBuffers b = make_mesh_buffers(coloured);
+    ASSERT_EQ(b.colors.size(), 4 * b.vertex_count());
+    EXPECT_EQ(b.colors[3], 255);
+    MeshBufferOptions no_colors;
+    no_colors.colors = false;
+    EXPECT_TRUE(make_mesh_buffers(coloured, no_colors).colors.empty());
+    EXPECT_TRUE(make_mesh_buffers(uv_sphere(4, 6, 1.0)).colors.empty());
+}
+
+TEST(MeshBuffers, rejects_empty_and_non_finite_meshes)
+{
+    Mesh empty;
+    empty.add_vertex(Mesh::Point(0, 0, 0));
+    EXPECT_THROW(make_mesh_buffers(empty), InvalidInput);
+    Mesh bad = grid_mesh(1, 1, 0.0, 0.0, 1.0, [](double, double) { return 0.0; });
+    bad.set_point(bad.vertex_handle(0), Mesh::Point(std::nan(""), 0, 0));
+    EXPECT_THROW(make_mesh_buffers(bad), InvalidInput);
+}
+
+} // namespace
+} // namespace mrt
