@@ -1,0 +1,99 @@
+// Delaunay step of the gap triangulation (paper §4.3): the paper triangulates the pseudo-tile boundary
+// points with Delaunay, in 2D on the x-y projection for functional data and in 3D otherwise, and then
+// removes "undesired" triangles. CGAL's exact-predicate triangulations give the same, robustly, for
+// degenerate (cospherical, coplanar) input; this file only wraps them and lists the triangles.
+#include "libmrtile/gap_triangulation.h"
+
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+
+#include <algorithm>
+#include <numeric>
+#include <utility>
+
+namespace mrt {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb3 = CGAL::Triangulation_vertex_base_with_info_3<std::uint32_t, Kernel>;
+using Tds3 = CGAL::Triangulation_data_structure_3<Vb3>;
+using Delaunay3 = CGAL::Delaunay_triangulation_3<Kernel, Tds3>;
+using Vb2 = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Kernel>;
+using Tds2 = CGAL::Triangulation_data_structure_2<Vb2>;
+using Delaunay2 = CGAL::Delaunay_triangulation_2<Kernel, Tds2>;
+using Triangle = std::array<std::uint32_t, 3>;
+
+Triangle sorted(std::uint32_t a, std::uint32_t b, std::uint32_t c)
+{
+    Triangle t{a, b, c};
+    std::sort(t.begin(), t.end());
+    return t;
+}
+
+// Duplicates are merged by the triangulation in an order that depends on its spatial sort; we merge
+// them ourselves first so that the kept point is always the one with the smallest index.
+std::vector<std::uint32_t> representatives(const std::vector<std::array<double, 3>>& coords)
+{
+    std::vector<std::uint32_t> order(coords.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return coords[a] != coords[b] ? coords[a] < coords[b] : a < b;
+    });
+    std::vector<std::uint32_t> rep(coords.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+        rep[order[i]] = (i > 0 && coords[order[i]] == coords[order[i - 1]]) ? rep[order[i - 1]] : order[i];
+    return rep;
+}
+
+} // namespace
+
+DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const DelaunayOptions& options)
+{
+    DelaunayTriangles out;
+    std::vector<std::array<double, 3>> coords(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vec3& p = points[i];
+        coords[i] = options.projected ? std::array<double, 3>{dot(p, options.axis_u), dot(p, options.axis_v), 0.0}
+                                      : std::array<double, 3>{p.x, p.y, p.z};
+    }
+    out.representative = representatives(coords);
+
+    if (options.projected) {
+        std::vector<std::pair<Kernel::Point_2, std::uint32_t>> input;
+        for (std::uint32_t i = 0; i < points.size(); ++i)
+            if (out.representative[i] == i)
+                input.emplace_back(Kernel::Point_2(coords[i][0], coords[i][1]), i);
+        Delaunay2 dt(input.begin(), input.end());
+        if (dt.dimension() == 2)
+            for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
+                out.triangles.push_back(sorted(f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()));
+    } else {
+        std::vector<std::pair<Kernel::Point_3, std::uint32_t>> input;
+        for (std::uint32_t i = 0; i < points.size(); ++i)
+            if (out.representative[i] == i)
+                input.emplace_back(Kernel::Point_3(coords[i][0], coords[i][1], coords[i][2]), i);
+        Delaunay3 dt(input.begin(), input.end());
+        if (dt.dimension() == 3) {
+            for (auto f = dt.finite_facets_begin(); f != dt.finite_facets_end(); ++f) {
+                const int i = f->second;
+                const auto& c = f->first;
+                out.triangles.push_back(sorted(c->vertex((i + 1) & 3)->info(), c->vertex((i + 2) & 3)->info(),
+                                               c->vertex((i + 3) & 3)->info()));
+            }
+        } else if (dt.dimension() == 2) {
+            // Coplanar points: the triangulation is planar and its facets are the cells' faces.
+            for (auto f = dt.finite_facets_begin(); f != dt.finite_facets_end(); ++f) {
+                const auto& c = f->first;
+                out.triangles.push_back(sorted(c->vertex(0)->info(), c->vertex(1)->info(), c->vertex(2)->info()));
+            }
+        }
+    }
+    std::sort(out.triangles.begin(), out.triangles.end());
+    out.triangles.erase(std::unique(out.triangles.begin(), out.triangles.end()), out.triangles.end());
+    return out;
+}
+
+} // namespace mrt

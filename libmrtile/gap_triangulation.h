@@ -1,0 +1,37 @@
+#pragma once
+//! \file gap_triangulation.h
+//! \brief The Delaunay step of the gap triangulation (paper §4.3, Algorithm 2): all Delaunay
+//! triangles of the tile boundary points, in 3D, or in 2D on a projection plane for functional data.
+//! \details This is the one file that includes CGAL's triangulations. The pruning of the triangles
+//! (one-tile triangles, local alpha radius) and the manifold extraction live in surface.cpp.
+
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace mrt {
+
+struct DelaunayOptions
+{
+    //! false: 3D Delaunay tetrahedralisation, every finite facet is a triangle. true: 2D Delaunay
+    //! triangulation of the points projected onto the plane spanned by `axis_u`, `axis_v`.
+    bool projected = false;
+    Vec3 axis_u{1, 0, 0}; //!< first projection axis (projected mode only)
+    Vec3 axis_v{0, 1, 0}; //!< second projection axis (projected mode only)
+};
+
+struct DelaunayTriangles
+{
+    //! Triangles as point indices, each sorted ascending; the list is sorted and has no repeats.
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    //! representative[i] = i, or the index of an earlier point at the same (projected) position,
+    //! which Delaunay keeps in its place; such duplicates appear in no triangle.
+    std::vector<std::uint32_t> representative;
+};
+
+//! Delaunay triangles of the points. Deterministic: the same points give the same result.
+DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const DelaunayOptions& options = {});
+
+} // namespace mrt

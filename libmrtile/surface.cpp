@@ -1,0 +1,1224 @@
+// Reconstruction, paper §4.3 (Algorithm 2), made to always output a valid oriented 2-manifold (the
+// paper's §6 "future work": remove all tetrahedra, insert no holes).
+//
+// Pipeline:
+//  1. T1 fans and ε-splitting: every tile with a fan gets a centre vertex and its boundary loop, with
+//     long edges split so that gap triangles are not long and skinny (§4.3).
+//  2. Delaunay of the boundary points (gap_triangulation.h), 2D for height fields, 3D otherwise; a
+//     triangle is pruned when all its vertices lie in one tile, when one of its edges joins two
+//     non-adjacent points of a tile (it would cross the fan), or when it does not fit in a sphere of the
+//     local alpha radius b (§4.3).
+//  3. Manifold extraction: the Delaunay triangles left are only candidates. An advancing front, seeded
+//     with one tile fan, accepts a candidate across a front edge only if every half-edge is new (edges
+//     keep <= 2 faces with opposite orientation) and every vertex stays a set of fans whose union can
+//     still become a disk (never a closed fan plus another one); among valid candidates the one with the
+//     smallest radius relative to b and the least turn from its neighbour wins (like Cohen-Steiner & Da's
+//     advancing front). A tile's fan is placed when the front first reaches one of its points, oriented
+//     like the triangle that reached it, so orientation propagates over the surface instead of trusting
+//     the sign of PCA normals.
+//  4. Holes whose perimeter is small next to their tiles are gaps between tiles: they are filled with a
+//     minimum-area triangulation of the loop (every face checked as in 3). Larger loops are the sample's
+//     borders and stay open. Vertices still pinched (two fans touching) are duplicated per fan.
+//  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
+//     attaches to an existing boundary; closed components are flipped to positive volume.
+//
+// GCC 12 at -O2 warns inside OpenMesh's PropertyT<Vec3d>::push_back that it copies a default,
+// deliberately uninitialised normal; harmless, and attributed to a standard header, so it can only be
+// silenced before the first include.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include "libmrtile/surface.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/gap_triangulation.h"
+#include "libmrtile/pca.h"
+
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
+
+#include <algorithm>
+#include <cassert>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+namespace mrt {
+namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr double kPi = 3.14159265358979323846;
+using Tri = std::array<std::uint32_t, 3>;
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b)
+{
+    return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+std::uint64_t undirected_key(std::uint32_t a, std::uint32_t b)
+{
+    return a < b ? edge_key(a, b) : edge_key(b, a);
+}
+
+Vec3 triangle_cross(const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    return cross(b - a, c - a);
+}
+
+// Circumradius of a triangle (infinite when degenerate).
+double circumradius(const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const double la = distance(b, c), lb = distance(a, c), lc = distance(a, b);
+    const double twice_area = norm(triangle_cross(a, b, c));
+    if (!(twice_area > 0.0))
+        return std::numeric_limits<double>::infinity();
+    return la * lb * lc / (2.0 * twice_area);
+}
+
+struct SurfaceVertex
+{
+    Vec3 position;
+    std::int32_t tile = -1;      // index into the tiles vector
+    std::uint32_t loop_pos = kNone; // position in the tile's boundary loop; kNone for centres and fanless tiles
+};
+
+struct TileLoop
+{
+    std::uint32_t centre = kNone;     // centre vertex, kNone for fanless tiles
+    std::vector<std::uint32_t> loop;  // boundary loop (counter-clockwise seen from the tile normal)
+    double perimeter = 0.0;
+    double edge_length = 0.0;         // mean loop edge length (0 for fanless tiles)
+    bool placed = false;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Step 1: vertices, loops, ε-splitting.
+
+struct Layout
+{
+    std::vector<SurfaceVertex> vertices;
+    std::vector<TileLoop> tiles;
+    std::size_t split_points = 0;
+    double mean_edge = 0.0;
+};
+
+Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
+{
+    Layout out;
+    out.tiles.resize(tiles.size());
+    double total_length = 0.0;
+    std::size_t total_edges = 0;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        const Tile& tile = tiles[t];
+        TileLoop& tl = out.tiles[t];
+        const auto ti = static_cast<std::int32_t>(t);
+        if (!tile.has_fan()) {
+            for (std::uint32_t p : tile.boundary)
+                out.vertices.push_back({h.cloud.positions[p], ti, kNone});
+            continue;
+        }
+        tl.centre = static_cast<std::uint32_t>(out.vertices.size());
+        out.vertices.push_back({tile.centre, ti, kNone});
+        double perimeter = 0.0;
+        const std::size_t n = tile.boundary.size();
+        for (std::size_t i = 0; i < n; ++i)
+            perimeter += distance(h.cloud.positions[tile.boundary[i]], h.cloud.positions[tile.boundary[(i + 1) % n]]);
+        double eps = std::numeric_limits<double>::infinity();
+        if (options.split_length > 0.0)
+            eps = options.split_length;
+        else if (options.split_length == 0.0)
+            eps = options.split_factor * std::sqrt(tile.area / std::max<double>(1.0, tile.points));
+        // Never more than 1024 points per tile, whatever ε says (a needle-thin tile has a tiny spacing).
+        eps = std::max(eps, perimeter / 1024.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            const Vec3 a = h.cloud.positions[tile.boundary[i]];
+            const Vec3 b = h.cloud.positions[tile.boundary[(i + 1) % n]];
+            tl.loop.push_back(static_cast<std::uint32_t>(out.vertices.size()));
+            out.vertices.push_back({a, ti, static_cast<std::uint32_t>(tl.loop.size() - 1)});
+            const double len = distance(a, b);
+            const auto pieces = static_cast<std::size_t>(std::ceil(len / eps - 1e-9));
+            for (std::size_t k = 1; k < pieces; ++k) {
+                const double s = static_cast<double>(k) / static_cast<double>(pieces);
+                tl.loop.push_back(static_cast<std::uint32_t>(out.vertices.size()));
+                out.vertices.push_back({a + (b - a) * s, ti, static_cast<std::uint32_t>(tl.loop.size() - 1)});
+                ++out.split_points;
+            }
+        }
+        tl.perimeter = perimeter;
+        tl.edge_length = perimeter / static_cast<double>(tl.loop.size());
+        total_length += perimeter;
+        total_edges += tl.loop.size();
+    }
+    out.mean_edge = total_edges ? total_length / static_cast<double>(total_edges) : 0.0;
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2a: height-field test.
+
+struct Projection
+{
+    bool used = false;
+    Vec3 axis{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0};
+};
+
+// The dominant normal axis: the principal eigenvector of sum(area * n nᵀ), which ignores normal signs.
+Vec3 dominant_normal_axis(const std::vector<Tile>& tiles)
+{
+    Moments m;
+    m.count = 1;
+    for (const Tile& t : tiles) {
+        if (!t.has_fan())
+            continue;
+        const double w = t.area;
+        const Vec3& n = t.normal;
+        m.m2[0] += w * n.x * n.x;
+        m.m2[1] += w * n.x * n.y;
+        m.m2[2] += w * n.x * n.z;
+        m.m2[3] += w * n.y * n.y;
+        m.m2[4] += w * n.y * n.z;
+        m.m2[5] += w * n.z * n.z;
+    }
+    const Eigen3x3 e = eigen_decomposition(m);
+    return e.vectors[2];
+}
+
+bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, double y)
+{
+    // Counter-clockwise or clockwise convex polygon: inside when all turns have the same strict sign.
+    int sign = 0;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const auto& a = poly[i];
+        const auto& b = poly[(i + 1) % poly.size()];
+        const double c = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+        const int s = c > 0 ? 1 : (c < 0 ? -1 : 0);
+        if (s == 0)
+            return false;
+        if (sign == 0)
+            sign = s;
+        else if (s != sign)
+            return false;
+    }
+    return true;
+}
+
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
+{
+    Projection p;
+    if (options.height_field == HeightField::Off)
+        return p;
+    p.axis = normalized(dominant_normal_axis(tiles));
+    if (squared_norm(p.axis) == 0.0)
+        p.axis = {0, 0, 1};
+    // Face the axis to the positive side of its largest component (deterministic "up").
+    int big = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::abs(p.axis[i]) > std::abs(p.axis[big]))
+            big = i;
+    if (p.axis[big] < 0)
+        p.axis = -p.axis;
+    const Vec3 helper = std::abs(p.axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    p.u = normalized(cross(helper, p.axis));
+    p.v = cross(p.axis, p.u);
+    if (options.height_field == HeightField::On) {
+        p.used = true;
+        return p;
+    }
+    const double min_cos = std::cos(options.max_tilt_degrees * kPi / 180.0);
+    for (const Tile& t : tiles)
+        if (t.has_fan() && std::abs(dot(t.normal, p.axis)) < min_cos)
+            return p;
+    // Overlap test: bucket projected tile centres in a grid, test each against the outlines whose
+    // bounding boxes cover its cell.
+    struct Outline
+    {
+        std::vector<std::array<double, 2>> poly;
+        double x0, y0, x1, y1;
+    };
+    std::vector<Outline> outlines;
+    std::vector<std::array<double, 2>> centres;
+    double mean_size = 0.0;
+    for (const Tile& t : tiles) {
+        if (!t.has_fan())
+            continue;
+        Outline o;
+        o.x0 = o.y0 = std::numeric_limits<double>::infinity();
+        o.x1 = o.y1 = -o.x0;
+        for (std::uint32_t i : t.boundary) {
+            const Vec3& q = h.cloud.positions[i];
+            const double x = dot(q, p.u), y = dot(q, p.v);
+            o.poly.push_back({x, y});
+            o.x0 = std::min(o.x0, x);
+            o.y0 = std::min(o.y0, y);
+            o.x1 = std::max(o.x1, x);
+            o.y1 = std::max(o.y1, y);
+        }
+        mean_size += std::max(o.x1 - o.x0, o.y1 - o.y0);
+        outlines.push_back(std::move(o));
+        centres.push_back({dot(t.centre, p.u), dot(t.centre, p.v)});
+    }
+    if (outlines.empty())
+        return p;
+    mean_size /= static_cast<double>(outlines.size());
+    if (!(mean_size > 0.0)) {
+        p.used = true;
+        return p;
+    }
+    const double cell = mean_size;
+    auto cell_of = [&](double x, double y) {
+        return std::pair<std::int64_t, std::int64_t>{static_cast<std::int64_t>(std::floor(x / cell)),
+                                                     static_cast<std::int64_t>(std::floor(y / cell))};
+    };
+    std::vector<std::pair<std::pair<std::int64_t, std::int64_t>, std::uint32_t>> grid;
+    for (std::uint32_t i = 0; i < centres.size(); ++i)
+        grid.push_back({cell_of(centres[i][0], centres[i][1]), i});
+    std::sort(grid.begin(), grid.end());
+    for (std::uint32_t k = 0; k < outlines.size(); ++k) {
+        const Outline& o = outlines[k];
+        const auto c0 = cell_of(o.x0, o.y0), c1 = cell_of(o.x1, o.y1);
+        for (std::int64_t cx = c0.first; cx <= c1.first; ++cx) {
+            auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(std::make_pair(cx, c0.second), 0u));
+            for (; it != grid.end() && it->first.first == cx && it->first.second <= c1.second; ++it)
+                if (it->second != k && point_in_convex(o.poly, centres[it->second][0], centres[it->second][1]))
+                    return p;
+        }
+    }
+    p.used = true;
+    return p;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 3: the manifold surface under construction.
+
+class Surface
+{
+public:
+    explicit Surface(std::size_t vertex_count) : vertex_faces_(vertex_count) {}
+
+    const std::vector<Tri>& faces() const { return faces_; }
+    const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
+    const std::vector<std::uint32_t>& faces_at(std::uint32_t v) const { return vertex_faces_[v]; }
+    bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return halfedges_.count(edge_key(a, b)) != 0; }
+    std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
+    {
+        const auto it = halfedges_.find(edge_key(a, b));
+        return it == halfedges_.end() ? kNone : it->second;
+    }
+    bool on_surface(std::uint32_t v) const { return !vertex_faces_[v].empty(); }
+
+    //! Whether face (a, b, c) can be added keeping the surface an oriented manifold-in-progress.
+    bool can_add(std::uint32_t a, std::uint32_t b, std::uint32_t c) const
+    {
+        if (a == b || b == c || c == a)
+            return false;
+        if (has_halfedge(a, b) || has_halfedge(b, c) || has_halfedge(c, a))
+            return false;
+        return link_ok(a, b, c) && link_ok(b, c, a) && link_ok(c, a, b);
+    }
+
+    bool alive(std::uint32_t f) const { return alive_[f]; }
+
+    void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::int32_t tile)
+    {
+        const auto f = static_cast<std::uint32_t>(faces_.size());
+        faces_.push_back({a, b, c});
+        face_tile_.push_back(tile);
+        alive_.push_back(true);
+        halfedges_[edge_key(a, b)] = f;
+        halfedges_[edge_key(b, c)] = f;
+        halfedges_[edge_key(c, a)] = f;
+        vertex_faces_[a].push_back(f);
+        vertex_faces_[b].push_back(f);
+        vertex_faces_[c].push_back(f);
+    }
+
+    //! Removes the most recently added face (used to roll back a hole fill).
+    void pop()
+    {
+        const Tri t = faces_.back();
+        faces_.pop_back();
+        face_tile_.pop_back();
+        alive_.pop_back();
+        for (int i = 0; i < 3; ++i) {
+            halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
+            vertex_faces_[t[i]].pop_back();
+        }
+    }
+
+    //! Removes face f (it stays in faces() as a dead entry).
+    void remove(std::uint32_t f)
+    {
+        assert(alive_[f]);
+        alive_[f] = false;
+        const Tri& t = faces_[f];
+        for (int i = 0; i < 3; ++i) {
+            halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
+            auto& fs = vertex_faces_[t[i]];
+            fs.erase(std::find(fs.begin(), fs.end(), f));
+        }
+    }
+
+    //! Link arcs of v: (first, last) link vertex of each maximal path, counter-clockwise order unknown.
+    //! A closed link (interior vertex) gives no arc.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
+    {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> link; // directed link edges
+        for (std::uint32_t f : vertex_faces_[v])
+            link.push_back(link_edge(f, v));
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+        for (const auto& e : link) {
+            const bool has_in = std::any_of(link.begin(), link.end(), [&](const auto& o) { return o.second == e.first; });
+            if (has_in)
+                continue;
+            std::uint32_t end = e.second;
+            for (bool moved = true; moved;) {
+                moved = false;
+                for (const auto& o : link)
+                    if (o.first == end) {
+                        end = o.second;
+                        moved = true;
+                        break;
+                    }
+            }
+            out.push_back({e.first, end});
+        }
+        return out;
+    }
+
+    std::pair<std::uint32_t, std::uint32_t> link_edge(std::uint32_t f, std::uint32_t v) const
+    {
+        const Tri& t = faces_[f];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+        return {t[(k + 1) % 3], t[(k + 2) % 3]};
+    }
+
+    //! Replaces vertex `from` by `to` in face f (only used after the construction, for pinch splits).
+    void relabel(std::uint32_t f, std::uint32_t from, std::uint32_t to)
+    {
+        for (auto& x : faces_[f])
+            if (x == from)
+                x = to;
+    }
+
+    //! Duplicates every vertex whose faces form more than one fan: each extra fan gets a new vertex id
+    //! (appended after the existing ones). Returns origin[k] = the vertex new id `first_new + k` copies.
+    std::vector<std::uint32_t> split_pinches()
+    {
+        std::vector<std::uint32_t> origin;
+        const auto n = static_cast<std::uint32_t>(vertex_faces_.size());
+        for (std::uint32_t v = 0; v < n; ++v) {
+            const auto fans = arcs(v);
+            for (std::size_t k = 1; k < fans.size(); ++k) {
+                const auto copy = static_cast<std::uint32_t>(vertex_faces_.size());
+                vertex_faces_.emplace_back();
+                origin.push_back(v);
+                // Walk the fan from its first link vertex, moving its faces to the copy.
+                for (std::uint32_t x = fans[k].first; x != fans[k].second;) {
+                    std::uint32_t found = kNone;
+                    for (std::uint32_t f : vertex_faces_[v])
+                        if (link_edge(f, v).first == x)
+                            found = f;
+                    assert(found != kNone);
+                    x = link_edge(found, v).second;
+                    const Tri t = faces_[found];
+                    for (int i = 0; i < 3; ++i)
+                        halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
+                    relabel(found, v, copy);
+                    const Tri u = faces_[found];
+                    for (int i = 0; i < 3; ++i)
+                        halfedges_[edge_key(u[i], u[(i + 1) % 3])] = found;
+                    auto& fs = vertex_faces_[v];
+                    fs.erase(std::find(fs.begin(), fs.end(), found));
+                    vertex_faces_[copy].push_back(found);
+                }
+            }
+        }
+        return origin;
+    }
+
+private:
+    // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
+    // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
+    bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
+    {
+        const auto& fs = vertex_faces_[v];
+        if (fs.empty())
+            return true;
+        if (is_closed(v))
+            return false; // an interior vertex takes no more faces
+        // Half-edge uniqueness already guarantees in/out degree <= 1 in the link; the only failure is a
+        // cycle while other link edges remain outside it.
+        std::uint32_t end = y;
+        std::size_t steps = 1;
+        for (bool moved = true; moved && end != x;) {
+            moved = false;
+            for (std::uint32_t f : fs) {
+                const auto e = link_edge(f, v);
+                if (e.first == end) {
+                    end = e.second;
+                    ++steps;
+                    moved = true;
+                    break;
+                }
+            }
+        }
+        if (end != x)
+            return true; // no cycle through the new edge
+        return steps == fs.size() + 1;
+    }
+
+    // Every edge at v has two faces: v's fan is a closed disk.
+    bool is_closed(std::uint32_t v) const
+    {
+        for (std::uint32_t f : vertex_faces_[v])
+            if (!has_halfedge(link_edge(f, v).first, v))
+                return false;
+        return true;
+    }
+
+    std::vector<Tri> faces_;
+    std::vector<std::int32_t> face_tile_;
+    std::vector<bool> alive_;
+    std::unordered_map<std::uint64_t, std::uint32_t> halfedges_;
+    std::vector<std::vector<std::uint32_t>> vertex_faces_;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Step 3: advancing front over the candidate triangles.
+
+struct Candidate
+{
+    double priority;
+    std::uint32_t a, b, c; // front half-edge a -> b (in an existing face), new face (b, a, c)
+    bool operator>(const Candidate& o) const
+    {
+        if (priority != o.priority)
+            return priority > o.priority;
+        return std::tie(a, b, c) > std::tie(o.a, o.b, o.c);
+    }
+};
+
+class Front
+{
+public:
+    //! `relative_radius[i]`: radius of candidate i divided by its local alpha radius b (<= 1).
+    Front(const Layout& layout, const std::vector<Tile>& tiles, Surface& surface, const Projection& projection,
+          const std::vector<Tri>& candidates, const std::vector<double>& relative_radius, double max_turn_degrees)
+        : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), candidates_(candidates),
+          relative_radius_(relative_radius), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
+          placed_(layout.tiles.size(), false), neighbours_(layout.vertices.size())
+    {
+        for (std::uint32_t i = 0; i < candidates.size(); ++i) {
+            const Tri& t = candidates[i];
+            for (int k = 0; k < 3; ++k) {
+                edge_candidates_.push_back({undirected_key(t[k], t[(k + 1) % 3]), i});
+                neighbours_[t[k]].push_back(t[(k + 1) % 3]);
+                neighbours_[t[(k + 1) % 3]].push_back(t[k]);
+            }
+        }
+        std::sort(edge_candidates_.begin(), edge_candidates_.end());
+    }
+
+    //! Grows from every tile in seed order until no candidate can be added.
+    void run()
+    {
+        std::vector<std::uint32_t> order;
+        for (std::uint32_t t = 0; t < layout_.tiles.size(); ++t)
+            if (layout_.tiles[t].centre != kNone)
+                order.push_back(t);
+        // Largest tiles first: their normals are the most reliable orientation seeds.
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::uint32_t a, std::uint32_t b) { return tiles_[a].points > tiles_[b].points; });
+        for (std::uint32_t t : order) {
+            if (placed_[t])
+                continue;
+            place(t, seed_orientation(t));
+            grow();
+        }
+    }
+
+private:
+    Vec3 position(std::uint32_t v) const { return layout_.vertices[v].position; }
+
+    Vec3 face_normal(std::uint32_t a, std::uint32_t b, std::uint32_t c) const
+    {
+        return normalized(triangle_cross(position(a), position(b), position(c)));
+    }
+
+    Vec3 vertex_normal(std::uint32_t v) const
+    {
+        Vec3 n;
+        for (std::uint32_t f : surface_.faces_at(v)) {
+            const Tri& t = surface_.faces()[f];
+            n += triangle_cross(position(t[0]), position(t[1]), position(t[2]));
+        }
+        return normalized(n);
+    }
+
+    // +1: fan counter-clockwise about the tile normal. A new seed copies the orientation of the placed
+    // surface it is a candidate neighbour of, so a surface reached from two seeds still agrees.
+    int seed_orientation(std::uint32_t t) const
+    {
+        const Vec3& n = tiles_[t].normal;
+        if (projection_.used)
+            return dot(n, projection_.axis) >= 0 ? 1 : -1;
+        double vote = 0.0;
+        for (std::uint32_t v : layout_.tiles[t].loop)
+            for (std::uint32_t w : neighbours_[v])
+                if (surface_.on_surface(w))
+                    vote += dot(vertex_normal(w), n);
+        return vote >= 0 ? 1 : -1;
+    }
+
+    void place(std::uint32_t t, int orientation)
+    {
+        placed_[t] = true;
+        const TileLoop& tl = layout_.tiles[t];
+        const std::size_t n = tl.loop.size();
+        const auto node_tile = static_cast<std::int32_t>(t);
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t p = tl.loop[i], q = tl.loop[(i + 1) % n];
+            if (orientation > 0)
+                surface_.add(tl.centre, p, q, node_tile);
+            else
+                surface_.add(tl.centre, q, p, node_tile);
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t p = tl.loop[i], q = tl.loop[(i + 1) % n];
+            if (orientation > 0)
+                push_best(p, q);
+            else
+                push_best(q, p);
+        }
+    }
+
+    // Best valid candidate for the front half-edge a -> b, or priority = inf.
+    Candidate best(std::uint32_t a, std::uint32_t b) const
+    {
+        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone};
+        const std::uint32_t f = surface_.face_of(a, b);
+        if (f == kNone || surface_.has_halfedge(b, a))
+            return out;
+        const Tri& s = surface_.faces()[f];
+        const Vec3 ns = face_normal(s[0], s[1], s[2]);
+        const std::uint64_t key = undirected_key(a, b);
+        auto it = std::lower_bound(edge_candidates_.begin(), edge_candidates_.end(), std::make_pair(key, 0u));
+        for (; it != edge_candidates_.end() && it->first == key; ++it) {
+            const Tri& cand = candidates_[it->second];
+            const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
+            if (!surface_.can_add(b, a, c))
+                continue;
+            const Vec3 nt = face_normal(b, a, c);
+            if (squared_norm(nt) == 0.0)
+                continue;
+            // A height field is a graph: every face looks up the axis, so faces never overlap in projection.
+            if (projection_.used && !(dot(nt, projection_.axis) > 0.0))
+                continue;
+            const double turn = dot(ns, nt);
+            if (turn < min_cos_)
+                continue;
+            if (!folds_ok(a, c, nt) || !folds_ok(c, b, nt))
+                continue;
+            if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
+                continue;
+            const double p = relative_radius_[it->second] * (2.0 - turn);
+            if (p < out.priority || (p == out.priority && c < out.c)) {
+                out.priority = p;
+                out.c = c;
+            }
+        }
+        return out;
+    }
+
+    // New edge x -> y of a candidate with normal nt: if the opposite half-edge y -> x has a face, the two
+    // faces must not fold onto each other.
+    bool folds_ok(std::uint32_t x, std::uint32_t y, const Vec3& nt) const
+    {
+        const std::uint32_t g = surface_.face_of(y, x);
+        if (g == kNone)
+            return true;
+        const Tri& t = surface_.faces()[g];
+        return dot(face_normal(t[0], t[1], t[2]), nt) >= min_cos_;
+    }
+
+    void push_best(std::uint32_t a, std::uint32_t b)
+    {
+        const Candidate c = best(a, b);
+        if (c.c != kNone)
+            queue_.push(c);
+    }
+
+    // Re-examines the front edges around v (their candidates may have become valid or invalid).
+    void refresh(std::uint32_t v)
+    {
+        for (std::uint32_t f : surface_.faces_at(v)) {
+            const Tri& t = surface_.faces()[f];
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+                if ((a == v || b == v) && !surface_.has_halfedge(b, a))
+                    push_best(a, b);
+            }
+        }
+    }
+
+    void grow()
+    {
+        while (!queue_.empty()) {
+            const Candidate top = queue_.top();
+            queue_.pop();
+            const Candidate now = best(top.a, top.b);
+            if (now.c == kNone)
+                continue;
+            if (now.c != top.c || now.priority != top.priority) {
+                queue_.push(now);
+                continue;
+            }
+            const std::uint32_t a = top.a, b = top.b, c = top.c;
+            const std::int32_t ct = layout_.vertices[c].tile;
+            if (ct >= 0 && layout_.tiles[static_cast<std::size_t>(ct)].centre != kNone && !placed_[static_cast<std::size_t>(ct)]) {
+                const Vec3 nt = face_normal(b, a, c);
+                place(static_cast<std::uint32_t>(ct), dot(nt, tiles_[static_cast<std::size_t>(ct)].normal) >= 0 ? 1 : -1);
+                if (!surface_.can_add(b, a, c))
+                    continue; // cannot happen: the fan only touches its own points
+            }
+            surface_.add(b, a, c, -1);
+            push_best(a, c);
+            push_best(c, b);
+            refresh(a);
+            refresh(b);
+            refresh(c);
+        }
+    }
+
+    const Layout& layout_;
+    const std::vector<Tile>& tiles_;
+    Surface& surface_;
+    const Projection& projection_;
+    const std::vector<Tri>& candidates_;
+    const std::vector<double>& relative_radius_;
+    double min_cos_;
+    std::vector<bool> placed_;
+    std::vector<std::vector<std::uint32_t>> neighbours_;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
+    std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2b: pruning of the Delaunay triangles (paper §4.3's removal rules, plus chords).
+
+struct Candidates
+{
+    std::vector<Tri> triangles;
+    std::vector<double> relative_radius; // radius / local b, in (0, 1]
+};
+
+Candidates prune(const Layout& layout, const DelaunayTriangles& dt, const std::vector<std::uint32_t>& vertex_of,
+                 const Projection& projection, double alpha, double mean_edge, const SurfaceOptions& options)
+{
+    Candidates out;
+    auto same_tile_chord = [&](std::uint32_t a, std::uint32_t b) {
+        const SurfaceVertex& va = layout.vertices[a];
+        const SurfaceVertex& vb = layout.vertices[b];
+        if (va.tile != vb.tile || va.loop_pos == kNone || vb.loop_pos == kNone)
+            return false;
+        const auto n = static_cast<std::uint32_t>(layout.tiles[static_cast<std::size_t>(va.tile)].loop.size());
+        const std::uint32_t d = va.loop_pos > vb.loop_pos ? va.loop_pos - vb.loop_pos : vb.loop_pos - va.loop_pos;
+        return d != 1 && d != n - 1;
+    };
+    auto scale = [&](std::uint32_t v) {
+        const double e = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].edge_length;
+        return e > 0.0 ? e : mean_edge;
+    };
+    auto flat = [&](const Vec3& p) {
+        return projection.used ? Vec3{dot(p, projection.u), dot(p, projection.v), 0.0} : p;
+    };
+    for (const auto& d : dt.triangles) {
+        const Tri t{vertex_of[d[0]], vertex_of[d[1]], vertex_of[d[2]]};
+        const SurfaceVertex& a = layout.vertices[t[0]];
+        const SurfaceVertex& b = layout.vertices[t[1]];
+        const SurfaceVertex& c = layout.vertices[t[2]];
+        if (a.tile == b.tile && b.tile == c.tile)
+            continue;
+        if (same_tile_chord(t[0], t[1]) || same_tile_chord(t[1], t[2]) || same_tile_chord(t[0], t[2]))
+            continue;
+        const double local_b = alpha * std::max({scale(t[0]), scale(t[1]), scale(t[2])}) / mean_edge;
+        const double r = circumradius(flat(a.position), flat(b.position), flat(c.position));
+        if (!(r <= local_b))
+            continue;
+        if (projection.used && !options.bridge_steps) {
+            const double limit = options.step_height > 0.0 ? options.step_height : local_b;
+            const double ha = dot(a.position, projection.axis), hb = dot(b.position, projection.axis),
+                         hc = dot(c.position, projection.axis);
+            if (std::max({ha, hb, hc}) - std::min({ha, hb, hc}) > limit)
+                continue;
+        }
+        out.triangles.push_back(t);
+        out.relative_radius.push_back(r / local_b);
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 4: boundary loops and hole filling.
+
+// Boundary loops as vertex sequences v0 -> v1 -> ... (each step a half-edge without a face). At a
+// pinched vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around
+// the vertex normal), so a loop never crosses itself.
+std::vector<std::vector<std::uint32_t>> boundary_loops(const Surface& s, const std::vector<Vec3>& positions)
+{
+    std::vector<std::uint64_t> free_halfedges;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+        if (!s.alive(f))
+            continue;
+        const Tri& t = s.faces()[f];
+        for (int k = 0; k < 3; ++k)
+            if (!s.has_halfedge(t[(k + 1) % 3], t[k]))
+                free_halfedges.push_back(edge_key(t[(k + 1) % 3], t[k]));
+    }
+    std::sort(free_halfedges.begin(), free_halfedges.end());
+
+    auto next_vertex = [&](std::uint32_t u, std::uint32_t v) {
+        auto fans = s.arcs(v);
+        if (fans.size() == 1)
+            return fans[0].second;
+        Vec3 n;
+        for (std::uint32_t f : s.faces_at(v)) {
+            const Tri& t = s.faces()[f];
+            n += triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+        }
+        n = normalized(n);
+        const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
+        auto angle = [&](std::uint32_t x) {
+            const Vec3 d = positions[x] - positions[v];
+            return std::atan2(dot(d, e2), dot(d, e1));
+        };
+        std::sort(fans.begin(), fans.end(), [&](const auto& a, const auto& b) {
+            const double aa = angle(a.first), ab = angle(b.first);
+            return aa != ab ? aa < ab : a.first < b.first;
+        });
+        for (std::size_t j = 0; j < fans.size(); ++j)
+            if (fans[j].first == u)
+                return fans[(j + fans.size() - 1) % fans.size()].second;
+        assert(false);
+        return fans[0].second;
+    };
+
+    std::vector<std::vector<std::uint32_t>> loops;
+    std::vector<bool> used(free_halfedges.size(), false);
+    auto index_of = [&](std::uint64_t key) {
+        return static_cast<std::size_t>(std::lower_bound(free_halfedges.begin(), free_halfedges.end(), key) -
+                                        free_halfedges.begin());
+    };
+    for (std::size_t i = 0; i < free_halfedges.size(); ++i) {
+        if (used[i])
+            continue;
+        std::vector<std::uint32_t> loop;
+        std::uint32_t u = static_cast<std::uint32_t>(free_halfedges[i] >> 32);
+        std::uint32_t v = static_cast<std::uint32_t>(free_halfedges[i] & 0xffffffffu);
+        std::size_t k = i;
+        while (!used[k]) {
+            used[k] = true;
+            loop.push_back(u);
+            const std::uint32_t w = next_vertex(u, v);
+            u = v;
+            v = w;
+            k = index_of(edge_key(u, v));
+            assert(k < free_halfedges.size() && free_halfedges[k] == edge_key(u, v));
+        }
+        loops.push_back(std::move(loop));
+    }
+    return loops;
+}
+
+// Minimum-area triangulation of a boundary loop (dynamic programming over sub-polygons), refusing
+// triangles that repeat a vertex and diagonals that already are mesh edges. Faces are oriented like
+// the loop's free half-edges, so they continue the surface's orientation. Empty when impossible.
+std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& loop,
+                                    const Projection& projection)
+{
+    const std::size_t n = loop.size();
+    if (n < 3)
+        return {};
+    const double inf = std::numeric_limits<double>::infinity();
+    auto diagonal_ok = [&](std::size_t i, std::size_t j) {
+        if (j == i + 1 || (i == 0 && j == n - 1))
+            return true;
+        const std::uint32_t a = loop[i], b = loop[j];
+        return a != b && !s.has_halfedge(a, b) && !s.has_halfedge(b, a);
+    };
+    std::vector<double> cost(n * n, inf);
+    std::vector<std::uint32_t> split(n * n, kNone);
+    for (std::size_t i = 0; i + 1 < n; ++i)
+        cost[i * n + i + 1] = 0.0;
+    for (std::size_t len = 2; len < n; ++len) {
+        for (std::size_t i = 0; i + len < n; ++i) {
+            const std::size_t j = i + len;
+            if (!diagonal_ok(i, j))
+                continue;
+            for (std::size_t k = i + 1; k < j; ++k) {
+                const double c0 = cost[i * n + k], c1 = cost[k * n + j];
+                if (c0 == inf || c1 == inf)
+                    continue;
+                const std::uint32_t a = loop[i], b = loop[k], c = loop[j];
+                if (a == b || b == c || a == c)
+                    continue;
+                const Vec3 normal = triangle_cross(positions[a], positions[b], positions[c]);
+                const double area = norm(normal);
+                if (!(area > 0.0) || (projection.used && !(dot(normal, projection.axis) > 0.0)))
+                    continue;
+                const double total = c0 + c1 + area;
+                if (total < cost[i * n + j]) {
+                    cost[i * n + j] = total;
+                    split[i * n + j] = static_cast<std::uint32_t>(k);
+                }
+            }
+        }
+    }
+    if (cost[n - 1] == inf)
+        return {};
+    std::vector<Tri> out;
+    std::vector<std::pair<std::size_t, std::size_t>> stack{{0, n - 1}};
+    while (!stack.empty()) {
+        const auto [i, j] = stack.back();
+        stack.pop_back();
+        if (j <= i + 1)
+            continue;
+        const std::size_t k = split[i * n + j];
+        out.push_back({loop[i], loop[k], loop[j]});
+        stack.push_back({i, k});
+        stack.push_back({k, j});
+    }
+    return out;
+}
+
+// Splits a loop at repeated vertices (a loop through a pinch twice bounds two holes that touch there).
+std::vector<std::vector<std::uint32_t>> simple_loops(const std::vector<std::uint32_t>& loop)
+{
+    std::vector<std::vector<std::uint32_t>> out;
+    std::vector<std::vector<std::uint32_t>> work{loop};
+    while (!work.empty()) {
+        std::vector<std::uint32_t> l = std::move(work.back());
+        work.pop_back();
+        bool split = false;
+        for (std::size_t i = 0; i < l.size() && !split; ++i)
+            for (std::size_t j = i + 1; j < l.size() && !split; ++j)
+                if (l[i] == l[j]) {
+                    std::vector<std::uint32_t> a(l.begin() + static_cast<std::ptrdiff_t>(i), l.begin() + static_cast<std::ptrdiff_t>(j));
+                    std::vector<std::uint32_t> b(l.begin() + static_cast<std::ptrdiff_t>(j), l.end());
+                    b.insert(b.end(), l.begin(), l.begin() + static_cast<std::ptrdiff_t>(i));
+                    work.push_back(std::move(a));
+                    work.push_back(std::move(b));
+                    split = true;
+                }
+        if (!split)
+            out.push_back(std::move(l));
+    }
+    return out;
+}
+
+struct FillResult
+{
+    std::size_t holes = 0;
+    std::size_t faces = 0;
+};
+
+FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>& positions, const Projection& projection,
+                      const SurfaceOptions& options)
+{
+    FillResult result;
+    // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
+    std::vector<bool> widened(positions.size(), false);
+    constexpr int kPasses = 4;
+    for (int pass = 0; pass < kPasses; ++pass) {
+        bool changed = false;
+        std::vector<std::vector<std::uint32_t>> loops;
+        for (const auto& traced : boundary_loops(s, positions))
+            for (auto& l : simple_loops(traced))
+                loops.push_back(std::move(l));
+        for (const auto& loop : loops) {
+            const std::size_t n = loop.size();
+            if (n > options.max_hole_edges || n < 3)
+                continue;
+            // Skip loops that an earlier fill or widening of this pass changed.
+            bool current = true;
+            for (std::size_t i = 0; i < n && current; ++i)
+                current = !s.has_halfedge(loop[i], loop[(i + 1) % n]) && s.has_halfedge(loop[(i + 1) % n], loop[i]);
+            if (!current)
+                continue;
+            std::vector<std::int32_t> loop_tiles;
+            double perimeter = 0.0, largest_tile = 0.0;
+            bool was_widened = false;
+            for (std::size_t i = 0; i < n; ++i) {
+                perimeter += distance(positions[loop[i]], positions[loop[(i + 1) % n]]);
+                const std::int32_t t = layout.vertices[loop[i]].tile;
+                loop_tiles.push_back(t);
+                largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
+                was_widened = was_widened || widened[loop[i]];
+            }
+            std::sort(loop_tiles.begin(), loop_tiles.end());
+            loop_tiles.erase(std::unique(loop_tiles.begin(), loop_tiles.end()), loop_tiles.end());
+            // A widened hole was small before we opened it: it may be up to three times as large.
+            const double limit = options.hole_factor * largest_tile * (was_widened ? 3.0 : 1.0);
+            if (loop_tiles.size() < 2 || perimeter > limit)
+                continue;
+            const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
+            std::size_t added = 0;
+            for (const Tri& t : patch) {
+                if (!s.can_add(t[0], t[1], t[2]))
+                    break;
+                s.add(t[0], t[1], t[2], -1);
+                ++added;
+            }
+            if (!patch.empty() && added == patch.size()) {
+                ++result.holes;
+                result.faces += patch.size();
+                changed = true;
+                continue;
+            }
+            for (; added > 0; --added)
+                s.pop();
+            if (pass + 1 == kPasses)
+                continue;
+            // The loop cannot be triangulated as it is (a diagonal it needs is already an edge, or a vertex
+            // would close around it twice): remove the gap faces at its vertices and try the larger hole.
+            std::vector<std::uint32_t> doomed;
+            for (std::uint32_t v : loop)
+                for (std::uint32_t f : s.faces_at(v))
+                    if (s.face_tile()[f] < 0)
+                        doomed.push_back(f);
+            std::sort(doomed.begin(), doomed.end());
+            doomed.erase(std::unique(doomed.begin(), doomed.end()), doomed.end());
+            for (std::uint32_t f : doomed) {
+                for (std::uint32_t v : s.faces()[f])
+                    widened[v] = true;
+                s.remove(f);
+            }
+            changed = changed || !doomed.empty();
+        }
+        if (!changed)
+            break;
+    }
+    return result;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 5: components, orientation, OpenMesh.
+
+struct UnionFind
+{
+    std::vector<std::uint32_t> parent;
+    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+    std::uint32_t find(std::uint32_t x)
+    {
+        while (parent[x] != x)
+            x = parent[x] = parent[parent[x]];
+        return x;
+    }
+    void unite(std::uint32_t a, std::uint32_t b)
+    {
+        a = find(a);
+        b = find(b);
+        if (a != b)
+            parent[std::max(a, b)] = std::min(a, b);
+    }
+};
+
+} // namespace
+
+Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options, SurfaceStats* stats)
+{
+    const auto start = std::chrono::steady_clock::now();
+    if (tiles.empty())
+        throw InvalidInput("build_surface: the cut has no tiles");
+    if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
+        !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
+        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length))
+        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor must be >= 0 and alpha_factor, "
+                           "split_factor, max_turn_degrees, max_tilt_degrees > 0");
+    std::size_t fan_tiles = 0;
+    for (const Tile& t : tiles) {
+        if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
+            throw InvalidInput("build_surface: tile of node " + std::to_string(t.node) + " is not in the hierarchy");
+        for (std::uint32_t p : t.boundary)
+            if (p >= h.cloud.positions.size())
+                throw InvalidInput("build_surface: tile of node " + std::to_string(t.node) + " names point " +
+                                   std::to_string(p) + " beyond the cloud");
+        fan_tiles += t.has_fan() ? 1 : 0;
+    }
+    if (fan_tiles == 0)
+        throw InvalidInput("build_surface: no tile has three non-collinear points; choose a coarser cut");
+
+    const Layout layout = make_layout(h, tiles, options);
+    const Projection projection = choose_projection(h, tiles, options);
+    const double alpha = options.alpha > 0.0 ? options.alpha : options.alpha_factor * layout.mean_edge;
+
+    // T2 input: every vertex but the fan centres.
+    std::vector<Vec3> gap_points;
+    std::vector<std::uint32_t> vertex_of;
+    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v)
+        if (!(layout.vertices[v].loop_pos == kNone && layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].centre == v)) {
+            gap_points.push_back(layout.vertices[v].position);
+            vertex_of.push_back(v);
+        }
+    DelaunayOptions dopt;
+    dopt.projected = projection.used;
+    dopt.axis_u = projection.u;
+    dopt.axis_v = projection.v;
+    const DelaunayTriangles dt = delaunay_triangles(gap_points, dopt);
+    const Candidates candidates = prune(layout, dt, vertex_of, projection, alpha, layout.mean_edge, options);
+
+    Surface surface(layout.vertices.size());
+    {
+        Front front(layout, tiles, surface, projection, candidates.triangles, candidates.relative_radius,
+                    options.max_turn_degrees);
+        front.run();
+    }
+    std::vector<Vec3> positions;
+    for (const SurfaceVertex& v : layout.vertices)
+        positions.push_back(v.position);
+    FillResult filled;
+    if (options.fill_holes)
+        filled = fill_holes(surface, layout, positions, projection, options);
+
+    // Pinched vertices become one vertex per fan.
+    const std::vector<std::uint32_t> copies = surface.split_pinches();
+    std::vector<std::uint32_t> origin(layout.vertices.size());
+    std::iota(origin.begin(), origin.end(), 0u);
+    origin.insert(origin.end(), copies.begin(), copies.end());
+
+    std::vector<Tri> faces;
+    std::vector<std::int32_t> face_tile;
+    for (std::uint32_t f = 0; f < surface.faces().size(); ++f)
+        if (surface.alive(f)) {
+            faces.push_back(surface.faces()[f]);
+            face_tile.push_back(surface.face_tile()[f]);
+        }
+    auto pos = [&](std::uint32_t v) { return layout.vertices[origin[v]].position; };
+
+    // Components over shared edges.
+    const auto face_count = static_cast<std::uint32_t>(faces.size());
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_faces;
+    edge_faces.reserve(3 * faces.size());
+    for (std::uint32_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            edge_faces.push_back({undirected_key(faces[f][k], faces[f][(k + 1) % 3]), f});
+    std::sort(edge_faces.begin(), edge_faces.end());
+    UnionFind components(faces.size());
+    std::vector<bool> open_face(faces.size(), false);
+    std::vector<std::vector<std::uint32_t>> adjacent(faces.size());
+    for (std::size_t i = 0; i < edge_faces.size();) {
+        std::size_t j = i;
+        while (j < edge_faces.size() && edge_faces[j].first == edge_faces[i].first)
+            ++j;
+        assert(j - i <= 2);
+        if (j - i == 1)
+            open_face[edge_faces[i].second] = true;
+        else {
+            components.unite(edge_faces[i].second, edge_faces[i + 1].second);
+            adjacent[edge_faces[i].second].push_back(edge_faces[i + 1].second);
+            adjacent[edge_faces[i + 1].second].push_back(edge_faces[i].second);
+        }
+        i = j;
+    }
+    std::vector<std::uint32_t> roots;
+    std::vector<double> volume(faces.size(), 0.0), up(faces.size(), 0.0);
+    std::vector<bool> closed(faces.size(), true);
+    for (std::uint32_t f = 0; f < face_count; ++f) {
+        const std::uint32_t r = components.find(f);
+        if (r == f)
+            roots.push_back(f);
+        const Vec3 a = pos(faces[f][0]), b = pos(faces[f][1]), c = pos(faces[f][2]);
+        volume[r] += dot(a, cross(b, c));
+        up[r] += dot(triangle_cross(a, b, c), projection.axis);
+        if (open_face[f])
+            closed[r] = false;
+    }
+    for (std::uint32_t f = 0; f < face_count; ++f) {
+        const std::uint32_t r = components.find(f);
+        const bool flip = closed[r] ? volume[r] < 0.0 : (projection.used && up[r] < 0.0);
+        if (flip)
+            std::swap(faces[f][1], faces[f][2]);
+    }
+
+    Mesh mesh;
+    auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster);
+    auto tile_of_face = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+    auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+    std::vector<Mesh::VertexHandle> handle(origin.size());
+    std::vector<bool> used(origin.size(), false);
+    for (const Tri& t : faces)
+        for (std::uint32_t v : t)
+            used[v] = true;
+    for (std::uint32_t v = 0; v < origin.size(); ++v) {
+        if (!used[v])
+            continue;
+        const Vec3 p = pos(v);
+        handle[v] = mesh.add_vertex(Mesh::Point(p.x, p.y, p.z));
+        cluster[handle[v]] = tiles[static_cast<std::size_t>(layout.vertices[origin[v]].tile)].node;
+    }
+    SurfaceStats st;
+    // Breadth-first per component: each face after the first shares an edge with an added one.
+    std::vector<bool> queued(faces.size(), false);
+    std::vector<std::uint32_t> order;
+    for (std::uint32_t root : roots) {
+        std::size_t head = order.size();
+        order.push_back(root);
+        queued[root] = true;
+        for (; head < order.size(); ++head)
+            for (std::uint32_t g : adjacent[order[head]])
+                if (!queued[g]) {
+                    queued[g] = true;
+                    order.push_back(g);
+                }
+    }
+    for (std::uint32_t f : order) {
+        const Tri& t = faces[f];
+        const auto fh = mesh.add_face(handle[t[0]], handle[t[1]], handle[t[2]]);
+        if (!fh.is_valid()) {
+            ++st.refused_faces;
+            continue;
+        }
+        const std::int32_t ti = face_tile[f];
+        tile_of_face[fh] = ti >= 0 ? tiles[static_cast<std::size_t>(ti)].node : -1;
+        gap[fh] = ti < 0;
+        if (ti >= 0)
+            ++st.fan_faces;
+        else
+            ++st.gap_faces;
+    }
+    mesh.update_normals();
+
+    st.tiles = tiles.size();
+    st.fan_tiles = fan_tiles;
+    st.boundary_points = gap_points.size();
+    st.split_points = layout.split_points;
+    st.candidates = candidates.triangles.size();
+    st.holes_filled = filled.holes;
+    st.hole_faces = filled.faces;
+    st.split_vertices = copies.size();
+    st.components = roots.size();
+    st.height_field_used = projection.used;
+    st.alpha = alpha;
+    {
+        auto visited = OpenMesh::makeTemporaryProperty<OpenMesh::HalfedgeHandle, bool>(mesh);
+        for (auto heh : mesh.halfedges()) {
+            if (!mesh.is_boundary(heh) || visited[heh])
+                continue;
+            ++st.boundary_loops;
+            for (auto x = heh; !visited[x]; x = mesh.next_halfedge_handle(x))
+                visited[x] = true;
+        }
+    }
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (stats)
+        *stats = st;
+    return mesh;
+}
+
+} // namespace mrt

@@ -1,0 +1,94 @@
+#pragma once
+//! \file surface.h
+//! \brief Reconstruction (paper §4.3, Algorithm 2), extended to always give a valid 2-manifold.
+//! \details T1: every tile with a fan is triangulated from its centre (a new vertex at the node mean) to
+//! its pseudo-tile boundary. T2: tile boundary edges longer than ε are split, the boundary points are
+//! Delaunay-triangulated (2D on the projection plane for height fields, 3D otherwise), and triangles
+//! with all vertices in one tile, with an edge crossing a tile (a chord), or not fitting in a sphere of
+//! the local alpha radius b are removed. Beyond the paper, the remaining Delaunay triangles are only
+//! *candidates*: an advancing front seeded by the T1 fans accepts them one at a time (best-shaped
+//! first) only if the surface stays an oriented 2-manifold, gaps left between tiles are filled, and the
+//! sample's own borders stay open. See surface.cpp for the rules.
+//! Properties on the mesh (names in mesh.h): "f:tile", "f:gap", "v:cluster"; vertex normals.
+
+#include "libmrtile/hierarchy.h"
+#include "libmrtile/mesh.h"
+#include "libmrtile/tiles.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace mrt {
+
+enum class HeightField
+{
+    Auto, //!< use 2D Delaunay when the tiles form a graph over a plane (see SurfaceOptions::max_tilt_degrees)
+    On,   //!< always project onto the plane across the dominant tile normal direction
+    Off,  //!< always 3D Delaunay
+};
+
+struct SurfaceOptions
+{
+    //! Functional-data mode (paper §4.3, 2D Delaunay on a projection). Auto switches it on when every
+    //! tile normal is within max_tilt_degrees of the dominant normal axis and no tile's projected centre
+    //! lies inside another tile's projected outline (the tiles do not overlap along the axis).
+    HeightField height_field = HeightField::Auto;
+    //! Largest angle between a tile normal and the axis for Auto to choose height-field mode.
+    double max_tilt_degrees = 65.0;
+    //! Height-field mode: true = triangulate continuously across jumps (paper Fig. 9c); false = keep
+    //! discontinuities open (Fig. 9b) by rejecting gap triangles with an edge rising more than step_height.
+    bool bridge_steps = true;
+    //! Largest rise along the axis of a gap edge when bridge_steps is false; 0 = the local alpha radius b.
+    double step_height = 0.0;
+    //! Global alpha (model units). 0 = automatic: alpha_factor × the mean tile boundary edge length.
+    //! The local radius b of a gap triangle is alpha × (largest mean boundary edge length of its tiles /
+    //! the global mean), so it follows the local tile size.
+    double alpha = 0.0;
+    //! Factor of the automatic alpha.
+    double alpha_factor = 2.5;
+    //! ε: boundary edges longer than this are split (model units). 0 = automatic: split_factor × the
+    //! tile's point spacing sqrt(area / points). Negative: never split.
+    double split_length = 0.0;
+    //! Factor of the automatic ε.
+    double split_factor = 2.0;
+    //! Largest turn between a new gap triangle and an existing neighbour across an edge (folds beyond it
+    //! are rejected).
+    double max_turn_degrees = 120.0;
+    //! Fill holes left between tiles.
+    bool fill_holes = true;
+    //! A hole is filled when its perimeter is at most hole_factor × the largest perimeter of the tiles
+    //! on its loop (and it touches at least two tiles and has at most max_hole_edges edges); larger loops
+    //! are the sample's borders and stay open.
+    double hole_factor = 1.0;
+    //! Largest number of edges of a hole that is filled.
+    std::size_t max_hole_edges = 300;
+};
+
+struct SurfaceStats
+{
+    std::size_t tiles = 0;           //!< tiles given
+    std::size_t fan_tiles = 0;       //!< tiles with a fan (>= 3 hull points)
+    std::size_t boundary_points = 0; //!< points in the gap triangulation, split points included
+    std::size_t split_points = 0;    //!< points inserted on long boundary edges
+    std::size_t candidates = 0;      //!< Delaunay triangles left after pruning
+    std::size_t fan_faces = 0;       //!< T1 faces in the mesh
+    std::size_t gap_faces = 0;       //!< T2 faces in the mesh (hole fills included)
+    std::size_t refused_faces = 0;   //!< faces OpenMesh's add_face refused (should be 0)
+    std::size_t holes_filled = 0;
+    std::size_t hole_faces = 0;      //!< faces added by hole filling (part of gap_faces)
+    std::size_t boundary_loops = 0;  //!< boundary loops left open
+    std::size_t split_vertices = 0;  //!< pinched vertices duplicated to keep the mesh manifold
+    std::size_t components = 0;
+    bool height_field_used = false;
+    double alpha = 0.0;              //!< global alpha used (model units)
+    double seconds = 0.0;
+};
+
+//! \brief Meshes the tiles of a cut (from make_tiles) into an oriented 2-manifold.
+//! \details Deterministic. Closed components are oriented outward (positive signed volume); open ones
+//! in height-field mode face along the axis.
+//! \throw InvalidInput if there are no tiles, a tile does not belong to `h`, or an option is out of range.
+Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options = {},
+                   SurfaceStats* stats = nullptr);
+
+} // namespace mrt
