@@ -2,6 +2,15 @@
 //! \file read_points.h
 //! \brief Point readers: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, OBJ (v lines), OFF,
 //! each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
+//! \details What is read from each format:
+//!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
+//!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
+//!    element instance per line (as every writer produces it).
+//!  - XYZ/PTS/TXT/CSV: the first three columns of each line (separated by spaces, tabs, commas or
+//!    semicolons). Blank lines and lines starting with '#' are skipped, so is a first line holding a
+//!    single integer (the point count of PTS files) and, for .csv, a first line of column names.
+//!  - OBJ: `v x y z [w]` lines; `v x y z r g b` colours (0..1) are kept when every v line has them.
+//!  - OFF (also COFF, NOFF, STOFF...): the vertices; faces, normals and colours are ignored.
 
 #include "libmrtile/point_cloud.h"
 
@@ -11,7 +20,7 @@ namespace mrt {
 
 struct ReadOptions
 {
-    //! Keep per-vertex colours (PLY red/green/blue[/alpha]) when the file has them.
+    //! Keep per-vertex colours (PLY red/green/blue[/alpha], OBJ v x y z r g b) when the file has them.
     bool keep_colors = true;
     //! Refuse files that declare (or turn out to hold) more points than this; guards against absurd
     //! headers. 0 = no limit beyond what memory allows (the reader still never trusts a header
@@ -22,8 +31,10 @@ struct ReadOptions
 //! \brief Reads the points of a file, picking the format by extension (case-insensitive, after
 //! stripping ".gz").
 //! \details Returns absolute coordinates recentred (see recenter()) and validated (finite, at least one
-//! point). \throw IoError for missing/unreadable/truncated files, InvalidInput for malformed content;
-//! messages start with the file name and give the line number for text formats.
+//! point). Degenerate clouds (one point, duplicates, collinear points) are returned as they are.
+//! \throw IoError for missing/unreadable/truncated files, InvalidInput for malformed content, an unknown
+//! extension or too many points; messages start with the file name and give the line number for text
+//! formats.
 PointCloud read_points(const std::filesystem::path& path, const ReadOptions& options = {});
 
 } // namespace mrt
