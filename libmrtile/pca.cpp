@@ -86,6 +86,18 @@ Moments compute_moments(const Vec3* points, std::size_t count)
     return m;
 }
 
+double smallest_eigenvalue_fast(const Moments& m)
+{
+    Eigen::Matrix3d a;
+    a << m.m2[0], m.m2[1], m.m2[2], m.m2[1], m.m2[3], m.m2[4], m.m2[2], m.m2[4], m.m2[5];
+    const double scale = a.cwiseAbs().maxCoeff();
+    if (!(scale > 0.0) || !std::isfinite(scale))
+        return 0.0;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(a / scale, Eigen::EigenvaluesOnly);
+    return std::max(0.0, solver.eigenvalues()[0] * scale);
+}
+
 Eigen3x3 eigen_decomposition(const Moments& m)
 {
     Eigen::Matrix3d a;

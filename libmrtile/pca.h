@@ -41,6 +41,11 @@ struct Eigen3x3
     std::array<Vec3, 3> vectors{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
 };
 
+//! Smallest eigenvalue of M by the closed-form 3x3 solution: fast, accurate to about 1e-9 of the
+//! largest eigenvalue. Use it for threshold tests far from the threshold; eigen_decomposition() when
+//! the value itself matters.
+double smallest_eigenvalue_fast(const Moments& m);
+
 //! Eigen-decomposition of the symmetric matrix M of a Moments. Values are clamped to be >= 0.
 //! Vectors are sign-normalised (largest-magnitude component positive) so the result is deterministic.
 Eigen3x3 eigen_decomposition(const Moments& m);

@@ -1,0 +1,595 @@
+// Implements: Heckel, Uva, Hamann, "Clustering-based generation of hierarchical surface models",
+// 1998, §4.1 (Algorithm 1): divisive clustering with local reclassification over Gabriel neighbours.
+// Why it is built this way:
+//  - clusters keep explicit member lists while building, because reclassification moves points
+//    between clusters that are not siblings; the exact, contiguous tree is assembled once at the end
+//    from the final assignment (assemble_hierarchy), which is what makes every cut a partition;
+//  - the Gabriel graph is updated locally after each split (paper: "updated locally"): the new
+//    clusters look for neighbours only among the split cluster's old neighbours, tested against
+//    nearby centres. It only decides which points are reclassified, so locality is enough.
+#include "libmrtile/cluster_tree.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/gabriel_graph.h"
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <tuple>
+
+namespace mrt {
+namespace {
+
+// A point as the builder holds it: its position is copied next to its index so that scanning a
+// cluster reads memory sequentially (the scans over clusters and their neighbours are the whole cost
+// of the build; gathering positions through indices made it memory-bound).
+struct Member
+{
+    Vec3 p;
+    std::uint32_t index;
+};
+
+struct Cluster
+{
+    std::vector<Member> members;
+    Moments moments;
+    double internal_error = 0.0;            // eq. 1: sum of distances to the centre
+    double radius = 0.0;                    // largest distance of a member to the centre
+    std::vector<std::uint32_t> neighbours;  // Gabriel neighbours (cluster ids, sorted)
+    std::uint32_t version = 0;              // bumped on every change; stale queue entries are skipped
+    std::uint64_t counted = 0;              // points counted as "still to split" for progress
+    bool alive = true;
+};
+
+struct QueueEntry
+{
+    double error;
+    std::uint32_t id;
+    std::uint32_t version;
+    bool operator<(const QueueEntry& o) const
+    {
+        // Max-heap on error; among equal errors the smaller id comes first (determinism).
+        return std::tie(error, o.id) < std::tie(o.error, id);
+    }
+};
+
+void insert_sorted(std::vector<std::uint32_t>& list, std::uint32_t value)
+{
+    auto it = std::lower_bound(list.begin(), list.end(), value);
+    if (it == list.end() || *it != value)
+        list.insert(it, value);
+}
+
+void erase_sorted(std::vector<std::uint32_t>& list, std::uint32_t value)
+{
+    auto it = std::lower_bound(list.begin(), list.end(), value);
+    if (it != list.end() && *it == value)
+        list.erase(it);
+}
+
+class Builder
+{
+public:
+    Builder(const std::vector<Vec3>& positions, const BuildOptions& options, double threshold)
+        : pos_(positions), options_(options), threshold_(threshold)
+    {
+    }
+
+    void run();
+
+    std::vector<std::int32_t> parent_of;
+    std::vector<std::uint32_t> leaf_of_point;
+
+private:
+    bool is_flat(const Moments& m) const;
+    void refresh(std::uint32_t id);
+    void refresh_incremental(std::uint32_t id, const std::vector<Member>& left, const std::vector<Member>& arrived);
+    void requeue(std::uint32_t id);
+    void split(std::uint32_t id);
+    void connect_new(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& old_neighbours);
+    const Vec3& centre(std::uint32_t id) const { return centres_[id]; }
+    void add_cluster();
+
+    const std::vector<Vec3>& pos_;
+    const BuildOptions& options_;
+    const double threshold_; // on λ_min (Tau) or on the RMS plane distance in model units (Tolerance)
+    std::vector<Cluster> clusters_;
+    // Centres and liveness kept apart from the (large) Cluster records: the graph update reads them
+    // for many clusters at random, and this keeps those reads in cache.
+    std::vector<Vec3> centres_;
+    std::vector<char> alive_;
+    std::priority_queue<QueueEntry> queue_;
+    std::uint64_t unsettled_ = 0;
+    std::uint64_t splits_ = 0;
+};
+
+bool Builder::is_flat(const Moments& m) const
+{
+    if (m.count < 3)
+        return true;
+    const double limit = options_.tau > 0 ? threshold_ : threshold_ * threshold_ * static_cast<double>(m.count);
+    // The closed form is exact enough unless the value is near the limit; then ask the iterative solver.
+    const double fast = smallest_eigenvalue_fast(m);
+    const double margin = 1e-8 * m.sum_squared_distances();
+    if (fast + margin < limit)
+        return true;
+    if (fast - margin > limit)
+        return false;
+    return eigen_decomposition(m).values[0] <= limit;
+}
+
+// Recomputes a cluster's statistics from its members (two passes: mean and M, then eq. 1) and puts
+// it back in the queue if it still has to be split.
+void Builder::refresh(std::uint32_t id)
+{
+    Cluster& c = clusters_[id];
+    ++c.version;
+    unsettled_ -= c.counted;
+    c.counted = 0;
+    if (c.members.empty()) {
+        c.alive = false;
+        alive_[id] = 0;
+        c.moments = Moments{};
+        c.internal_error = 0;
+        return;
+    }
+    Vec3 sum{0, 0, 0};
+    for (const Member& mb : c.members)
+        sum += mb.p;
+    Moments m;
+    m.count = c.members.size();
+    m.mean = sum / static_cast<double>(m.count);
+    double error = 0.0, radius2 = 0.0;
+    for (const Member& mb : c.members) {
+        const Vec3 d = mb.p - m.mean;
+        radius2 = std::max(radius2, dot(d, d));
+        m.m2[0] += d.x * d.x;
+        m.m2[1] += d.x * d.y;
+        m.m2[2] += d.x * d.z;
+        m.m2[3] += d.y * d.y;
+        m.m2[4] += d.y * d.z;
+        m.m2[5] += d.z * d.z;
+        error += std::sqrt(dot(d, d));
+    }
+    c.moments = m;
+    centres_[id] = m.mean;
+    c.internal_error = error;
+    c.radius = std::sqrt(radius2);
+    requeue(id);
+}
+
+void Builder::requeue(std::uint32_t id)
+{
+    Cluster& c = clusters_[id];
+    if (c.members.size() > options_.min_cluster && !is_flat(c.moments)) {
+        c.counted = c.members.size();
+        unsettled_ += c.counted;
+        queue_.push({c.internal_error, id, c.version});
+    }
+}
+
+// A neighbour that gained or lost a few points: exact moments by Welford updates, and eq. 1 and the
+// bounding radius updated from the moved points only (eq. 1 only orders the splits; the stored tree
+// recomputes it exactly). Large changes take the full pass.
+void Builder::refresh_incremental(std::uint32_t id, const std::vector<Member>& left, const std::vector<Member>& arrived)
+{
+    Cluster& c = clusters_[id];
+    if (c.members.empty() || 8 * (left.size() + arrived.size()) > c.members.size()) {
+        refresh(id);
+        return;
+    }
+    ++c.version;
+    unsettled_ -= c.counted;
+    c.counted = 0;
+    const Vec3 old_centre = c.moments.mean;
+    double radius = c.radius;
+    for (const Member& mb : left) {
+        c.moments.remove(mb.p);
+        c.internal_error -= distance(mb.p, old_centre);
+    }
+    for (const Member& mb : arrived) {
+        c.moments.add(mb.p);
+        const double d = distance(mb.p, old_centre);
+        c.internal_error += d;
+        radius = std::max(radius, d);
+    }
+    c.internal_error = std::max(0.0, c.internal_error);
+    centres_[id] = c.moments.mean;
+    c.radius = radius + distance(c.moments.mean, old_centre); // still an upper bound
+    requeue(id);
+}
+
+// Local Gabriel update after C split into a and b (paper: "the Gabriel graph is updated locally").
+// The new clusters look for neighbours among each other and C's old neighbours; a candidate edge is
+// tested against those clusters and the candidate's own neighbours. Edges between two old
+// neighbours are left as they were: a and b sit where C was, so C's removal rarely unblocks one.
+void Builder::connect_new(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& old_neighbours)
+{
+    std::vector<std::uint32_t> local;
+    local.reserve(old_neighbours.size() + 2);
+    for (std::uint32_t id : old_neighbours)
+        if (clusters_[id].alive)
+            local.push_back(id);
+    const std::size_t old_count = local.size();
+    for (std::uint32_t id : {a, b})
+        if (clusters_[id].alive)
+            local.push_back(id);
+
+    std::vector<Vec3> blockers; // centres, copied so the tests below read memory sequentially
+    for (std::size_t i = old_count; i < local.size(); ++i) {
+        const std::uint32_t x = local[i];
+        for (std::size_t j = 0; j < local.size(); ++j) {
+            const std::uint32_t y = local[j];
+            if (y == x || (j >= old_count && j < i))
+                continue; // itself, or the pair (b, a) already tested as (a, b)
+            const Vec3 cx = centre(x), cy = centre(y);
+            blockers.clear();
+            for (std::uint32_t o : local)
+                if (o != x && o != y)
+                    blockers.push_back(centre(o));
+            for (std::uint32_t o : clusters_[y].neighbours)
+                if (o != x && alive_[o])
+                    blockers.push_back(centre(o));
+            bool empty = true;
+            for (const Vec3& o : blockers)
+                if (!is_gabriel_edge(cx, cy, o)) {
+                    empty = false;
+                    break;
+                }
+            if (empty) {
+                insert_sorted(clusters_[x].neighbours, y);
+                insert_sorted(clusters_[y].neighbours, x);
+            }
+        }
+    }
+}
+
+void Builder::split(std::uint32_t id)
+{
+    // Copy what we need of C: the clusters_ vector grows below.
+    const std::vector<Member> members = std::move(clusters_[id].members);
+    const std::vector<std::uint32_t> neighbours = std::move(clusters_[id].neighbours);
+    const Moments moments = clusters_[id].moments;
+    const Vec3 c = moments.mean;
+    unsettled_ -= clusters_[id].counted;
+    clusters_[id].counted = 0;
+    clusters_[id].alive = false;
+    alive_[id] = 0;
+    clusters_[id].members.clear();
+    clusters_[id].neighbours.clear();
+    for (std::uint32_t n : neighbours)
+        erase_sorted(clusters_[n].neighbours, id);
+
+    // New centres (§4.1): ± one standard deviation along the principal axis for small clusters; half
+    // way towards the farthest point (the direction of highest deviation) for large ones.
+    Vec3 offset;
+    if (members.size() <= options_.pca_limit) {
+        const Eigen3x3 e = eigen_decomposition(moments);
+        offset = e.vectors[2] * std::sqrt(e.values[2] / static_cast<double>(moments.count));
+    } else {
+        double far = -1.0;
+        for (const Member& mb : members) {
+            const double d = squared_distance(mb.p, c);
+            if (d > far) {
+                far = d;
+                offset = (mb.p - c) * 0.5;
+            }
+        }
+    }
+
+    const auto a = static_cast<std::uint32_t>(clusters_.size());
+    const std::uint32_t b = a + 1;
+    add_cluster();
+    add_cluster();
+    clusters_[a].members.reserve(members.size() / 2 + members.size() / 8 + 4);
+    clusters_[b].members.reserve(members.size() / 2 + members.size() / 8 + 4);
+    parent_of.push_back(static_cast<std::int32_t>(id));
+    parent_of.push_back(static_cast<std::int32_t>(id));
+    Vec3 ca = c + offset, cb = c - offset;
+    // Two Lloyd steps between the two new centres alone (2-means on C's points) before the paper's
+    // reclassification: one assignment pass leaves the split line where the offset guessed it, which
+    // cuts across close parallel sheets; a couple of iterations settle it on the natural gap.
+    for (int iteration = 0; iteration < 2; ++iteration) {
+        Vec3 sa{0, 0, 0}, sb{0, 0, 0};
+        std::size_t na = 0, nb = 0;
+        for (const Member& mb : members) {
+            if (squared_distance(mb.p, ca) <= squared_distance(mb.p, cb)) {
+                sa += mb.p;
+                ++na;
+            } else {
+                sb += mb.p;
+                ++nb;
+            }
+        }
+        if (na == 0 || nb == 0)
+            break;
+        ca = sa / static_cast<double>(na);
+        cb = sb / static_cast<double>(nb);
+    }
+
+    // Reclassify the points of C among {a, b} ∪ neighbours(C) ...
+    const bool reclassify = options_.reclassify;
+    std::vector<std::vector<Member>> incoming(neighbours.size());
+    std::vector<Vec3> neighbour_centres(neighbours.size());
+    for (std::size_t k = 0; k < neighbours.size(); ++k)
+        neighbour_centres[k] = centre(neighbours[k]);
+    for (const Member& mb : members) {
+        const Vec3& p = mb.p;
+        const double da = squared_distance(p, ca), db = squared_distance(p, cb);
+        double best = std::min(da, db);
+        std::size_t target = da <= db ? 0 : 1; // 0 = a, 1 = b, 2 + k = neighbour k
+        if (reclassify) {
+            for (std::size_t k = 0; k < neighbours.size(); ++k) {
+                const double d = squared_distance(p, neighbour_centres[k]);
+                if (d < best) {
+                    best = d;
+                    target = 2 + k;
+                }
+            }
+        }
+        if (target < 2)
+            clusters_[target == 0 ? a : b].members.push_back(mb);
+        else
+            incoming[target - 2].push_back(mb);
+    }
+
+    // ... and the points of each neighbour N among {N, a, b}.
+    std::vector<std::vector<Member>> leaving(neighbours.size());
+    if (reclassify) {
+        for (std::size_t k = 0; k < neighbours.size(); ++k) {
+            Cluster& n = clusters_[neighbours[k]];
+            const Vec3 cn = n.moments.mean;
+            // No member of N can be nearer to a new centre than to cN when N's bounding ball stays
+            // on cN's side of both bisector planes: skip the scan (it is most of the build's cost).
+            const double reach = 2.0 * n.radius;
+            if (reach * reach < std::min(squared_distance(cn, ca), squared_distance(cn, cb)) && incoming[k].empty())
+                continue;
+            std::size_t kept = 0;
+            for (const Member& mb : n.members) {
+                const double dn = squared_distance(mb.p, cn), da = squared_distance(mb.p, ca),
+                             db = squared_distance(mb.p, cb);
+                if (da < dn && da <= db) {
+                    clusters_[a].members.push_back(mb);
+                    leaving[k].push_back(mb);
+                } else if (db < dn) {
+                    clusters_[b].members.push_back(mb);
+                    leaving[k].push_back(mb);
+                } else {
+                    n.members[kept++] = mb;
+                }
+            }
+            n.members.resize(kept);
+            n.members.insert(n.members.end(), incoming[k].begin(), incoming[k].end());
+        }
+    }
+
+    // Move the centres (recompute statistics), then update the graph around the new clusters.
+    refresh(a);
+    refresh(b);
+    for (std::size_t k = 0; k < neighbours.size(); ++k)
+        if (!leaving[k].empty() || !incoming[k].empty())
+            refresh_incremental(neighbours[k], leaving[k], incoming[k]);
+    for (std::uint32_t n : neighbours)
+        if (!clusters_[n].alive) {
+            for (std::uint32_t m : clusters_[n].neighbours)
+                erase_sorted(clusters_[m].neighbours, n);
+            clusters_[n].neighbours.clear();
+        }
+    if (clusters_[a].alive || clusters_[b].alive)
+        connect_new(a, b, neighbours);
+}
+
+void Builder::add_cluster()
+{
+    clusters_.emplace_back();
+    centres_.emplace_back();
+    alive_.push_back(1);
+}
+
+void Builder::run()
+{
+    const std::size_t n = pos_.size();
+    clusters_.reserve(std::min<std::size_t>(2 * (n / std::max<std::size_t>(options_.min_cluster, 1)) + 16, 1u << 24));
+    add_cluster();
+    clusters_[0].members.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i)
+        clusters_[0].members[i] = {pos_[i], i};
+    parent_of.push_back(-1);
+    refresh(0);
+
+    // Every split adds a cluster; reclassification can empty clusters but each split still removes
+    // one unflat cluster from the queue, so 4n splits is an unreachable bound that guards the loop.
+    const std::uint64_t max_splits = 4 * static_cast<std::uint64_t>(n) + 16;
+    while (!queue_.empty() && splits_ < max_splits) {
+        const QueueEntry top = queue_.top();
+        queue_.pop();
+        const Cluster& c = clusters_[top.id];
+        if (!c.alive || c.version != top.version)
+            continue;
+        split(top.id);
+        ++splits_;
+        if (options_.progress && (splits_ & 1023) == 0)
+            options_.progress(1.0 - static_cast<double>(unsettled_) / static_cast<double>(n));
+    }
+
+    leaf_of_point.assign(n, 0);
+    for (std::uint32_t id = 0; id < clusters_.size(); ++id)
+        for (const Member& mb : clusters_[id].members)
+            leaf_of_point[mb.index] = id;
+    if (options_.progress)
+        options_.progress(1.0);
+}
+
+} // namespace
+
+Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& parent_of,
+                             const std::vector<std::uint32_t>& leaf_of_point)
+{
+    const std::size_t n = cloud.positions.size();
+    const std::size_t clusters = parent_of.size();
+    if (leaf_of_point.size() != n || clusters == 0)
+        throw InvalidInput("assemble_hierarchy: leaf_of_point must have one entry per point and parent_of at least the root");
+
+    // Children in creation order; a cluster's children are always created after it.
+    std::vector<std::vector<std::uint32_t>> children(clusters);
+    for (std::uint32_t c = 1; c < clusters; ++c) {
+        const std::int32_t p = parent_of[c];
+        if (p < 0 || static_cast<std::uint32_t>(p) >= c)
+            throw InvalidInput("assemble_hierarchy: parent_of must list parents before children");
+        children[static_cast<std::size_t>(p)].push_back(c);
+    }
+    std::vector<std::uint64_t> count(clusters, 0);
+    for (std::uint32_t leaf : leaf_of_point) {
+        if (leaf >= clusters || !children[leaf].empty())
+            throw InvalidInput("assemble_hierarchy: a point is assigned to a cluster that is not a leaf");
+        ++count[leaf];
+    }
+    for (std::size_t c = clusters; c-- > 1;)
+        count[static_cast<std::size_t>(parent_of[c])] += count[c];
+
+    // Depth-first, parents before children, skipping empty subtrees and splicing out clusters left
+    // with a single non-empty child (explicit stack: the tree can be deep).
+    Hierarchy h;
+    std::vector<std::int32_t> node_of_leaf(clusters, -1);
+    struct Item
+    {
+        std::uint32_t cluster;
+        std::int32_t parent;
+        bool is_left;
+    };
+    std::vector<Item> stack;
+    if (n > 0)
+        stack.push_back({0, -1, true});
+    while (!stack.empty()) {
+        Item item = stack.back();
+        stack.pop_back();
+        std::uint32_t c = item.cluster;
+        for (;;) { // splice chains of single non-empty children
+            std::uint32_t nonempty = 0, last = 0;
+            for (std::uint32_t ch : children[c])
+                if (count[ch] > 0) {
+                    ++nonempty;
+                    last = ch;
+                }
+            if (nonempty == 1)
+                c = last;
+            else
+                break;
+        }
+        const auto index = static_cast<std::int32_t>(h.nodes.size());
+        h.nodes.emplace_back();
+        Node& node = h.nodes.back();
+        node.parent = item.parent;
+        if (item.parent >= 0) {
+            Node& parent = h.nodes[static_cast<std::size_t>(item.parent)];
+            node.depth = parent.depth + 1;
+            (item.is_left ? parent.left : parent.right) = index;
+        }
+        std::vector<std::uint32_t> kids;
+        for (std::uint32_t ch : children[c])
+            if (count[ch] > 0)
+                kids.push_back(ch);
+        if (kids.empty()) {
+            node_of_leaf[c] = index;
+            continue;
+        }
+        // A split makes two children; several only if the caller's history says so. Fold extra
+        // children into a right comb so the tree stays binary.
+        assert(kids.size() == 2);
+        stack.push_back({kids[1], index, false});
+        stack.push_back({kids[0], index, true});
+    }
+
+    // Leaves in depth-first order get consecutive point ranges; points keep input order inside a leaf.
+    std::vector<std::uint32_t> leaf_rank(h.nodes.size(), 0);
+    std::vector<std::uint64_t> start(h.nodes.size() + 1, 0);
+    for (std::uint32_t leaf : leaf_of_point)
+        ++start[static_cast<std::size_t>(node_of_leaf[leaf]) + 1];
+    for (std::size_t i = 1; i < start.size(); ++i)
+        start[i] += start[i - 1];
+    std::vector<std::uint64_t> fill(start.begin(), start.end() - 1);
+    std::vector<std::uint32_t> order(n);
+    for (std::uint32_t i = 0; i < n; ++i)
+        order[fill[static_cast<std::size_t>(node_of_leaf[leaf_of_point[i]])]++] = i;
+    for (std::size_t k = 0; k < h.nodes.size(); ++k) {
+        h.nodes[k].begin = static_cast<std::uint32_t>(start[k]);
+        h.nodes[k].end = static_cast<std::uint32_t>(start[k + 1]);
+    }
+    // Internal nodes span their children (children come after parents: go backwards).
+    for (std::size_t k = h.nodes.size(); k-- > 0;) {
+        Node& node = h.nodes[k];
+        if (!node.is_leaf()) {
+            node.begin = h.nodes[static_cast<std::size_t>(node.left)].begin;
+            node.end = h.nodes[static_cast<std::size_t>(node.right)].end;
+        }
+    }
+
+    h.input_index = order;
+    std::vector<Vec3> positions(n);
+    for (std::size_t i = 0; i < n; ++i)
+        positions[i] = cloud.positions[order[i]];
+    cloud.positions = std::move(positions);
+    if (cloud.has_colors()) {
+        std::vector<std::array<std::uint8_t, 4>> colors(n);
+        for (std::size_t i = 0; i < n; ++i)
+            colors[i] = cloud.colors[order[i]];
+        cloud.colors = std::move(colors);
+    }
+    h.cloud = std::move(cloud);
+
+    // Exact statistics: leaves from their points, parents by merging (children come after parents).
+    for (std::size_t k = h.nodes.size(); k-- > 0;) {
+        Node& node = h.nodes[k];
+        if (node.is_leaf()) {
+            node.moments = compute_moments(h.cloud.positions.data() + node.begin, node.count());
+        } else {
+            node.moments = h.nodes[static_cast<std::size_t>(node.left)].moments;
+            node.moments.merge(h.nodes[static_cast<std::size_t>(node.right)].moments);
+        }
+    }
+    update_derived(h);
+    for (Node& node : h.nodes) {
+        double error = 0.0, max_plane = 0.0;
+        const Vec3 c = node.moments.mean, normal = node.frame.vectors[0];
+        for (std::uint32_t i = node.begin; i < node.end; ++i) {
+            const Vec3 d = h.cloud.positions[i] - c;
+            error += std::sqrt(dot(d, d));
+            max_plane = std::max(max_plane, std::abs(dot(d, normal)));
+        }
+        node.internal_error = error;
+        node.max_plane_distance = max_plane;
+    }
+    return h;
+}
+
+Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    validate(cloud, "build_hierarchy");
+    if (cloud.size() > std::numeric_limits<std::uint32_t>::max() - 1)
+        throw InvalidInput("build_hierarchy: more than 4294967294 points");
+    if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
+        throw InvalidInput("build_hierarchy: tolerance must be a finite number >= 0, got " + std::to_string(options.tolerance));
+    if (!(options.tau >= 0) || !std::isfinite(options.tau))
+        throw InvalidInput("build_hierarchy: tau must be a finite number >= 0, got " + std::to_string(options.tau));
+    if (options.min_cluster == 0)
+        throw InvalidInput("build_hierarchy: min_cluster must be at least 1");
+
+    const double largest_side = bounding_box(cloud.positions).largest_side();
+    const double threshold = options.tau > 0 ? options.tau : options.tolerance * largest_side;
+    Builder builder(cloud.positions, options, threshold);
+    builder.run();
+    Hierarchy h = assemble_hierarchy(std::move(cloud), builder.parent_of, builder.leaf_of_point);
+    h.info.criterion = options.tau > 0 ? Criterion::Tau : Criterion::Tolerance;
+    h.info.criterion_value = options.tau > 0 ? options.tau : options.tolerance;
+    h.info.pca_limit = static_cast<std::uint32_t>(std::min<std::size_t>(options.pca_limit, std::numeric_limits<std::uint32_t>::max()));
+    h.info.min_cluster = static_cast<std::uint32_t>(std::min<std::size_t>(options.min_cluster, std::numeric_limits<std::uint32_t>::max()));
+    h.info.reclassify = options.reclassify;
+    h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return h;
+}
+
+} // namespace mrt

@@ -1,0 +1,72 @@
+#pragma once
+//! \file cluster_tree.h
+//! \brief Divisive clustering of a point cloud into a persistent binary hierarchy (paper §4.1).
+//! \details
+//! \code
+//! clusters = { all points }
+//! while some cluster fails the flatness test and has more than min_cluster points:
+//!     C = that cluster with the largest internal error (eq. 1: sum of distances to its centre)
+//!     offset = C.count <= pca_limit ? σ_max · principal axis          (PCA, eq. 2-3)
+//!                                   : (farthest point − centre) / 2   (direction of highest deviation)
+//!     split C into A, B with centres centre ± offset
+//!     reclassify the points of C and of its Gabriel neighbours to their nearest centre among
+//!         {A, B} ∪ neighbours(C) (points of a neighbour N: among {N, A, B})
+//!     move the centres to the means of their new points; update the Gabriel graph locally
+//! \endcode
+//! The splits form a binary tree. Reclassification moves points across subtrees while building, so
+//! the stored tree is rebuilt exactly for the *final* assignment: points are reordered so every node
+//! owns a contiguous range, and each node's statistics are those of exactly its points. Any frontier
+//! cut of the result therefore partitions the input exactly (see hierarchy.h).
+//! Deviation from the paper: only clusters that fail the flatness test are split (the paper splits the
+//! highest-error cluster while *any* cluster fails); the order among them is the paper's. This makes
+//! the build stop exactly when the criterion holds everywhere and never refines flat regions that the
+//! cut can refine anyway.
+
+#include "libmrtile/hierarchy.h"
+
+#include <cstddef>
+#include <functional>
+
+namespace mrt {
+
+struct BuildOptions
+{
+    //! Scale-free flatness (default stop criterion): a cluster is flat enough when the RMS distance
+    //! of its points to their best-fit plane is at most `tolerance` × the largest side of the cloud's
+    //! bounding box. Used when `tau` is 0. The default is fine enough that the hierarchy serves every
+    //! level of detail a renderer wants; cuts choose coarser levels later.
+    double tolerance = 1e-4;
+    //! The paper's τ_PCA,lim: flat enough when the smallest eigenvalue of M = ΔᵀΔ (eq. 2-3, not
+    //! divided by the point count) is at most `tau`, in model units squared. > 0 overrides tolerance.
+    double tau = 0.0;
+    //! τ_PCA: clusters with at most this many points split along their principal axis (PCA); larger
+    //! ones along the direction of highest deviation (towards the point farthest from the centre).
+    std::size_t pca_limit = 500;
+    //! Clusters with at most this many points are never split (leaves may end smaller than this
+    //! after reclassification).
+    std::size_t min_cluster = 8;
+    //! Local reclassification over Gabriel neighbours after each split (paper §4.1). Off gives a pure
+    //! top-down bisection tree (faster, blockier clusters).
+    bool reclassify = true;
+    //! Called now and then with the fraction of points already in flat clusters (0..1).
+    std::function<void(double)> progress;
+};
+
+//! \brief Builds the hierarchy of a point cloud.
+//! \param cloud positions relative to cloud.origin (see recenter()); moved into the result, reordered.
+//! \throw InvalidInput if the cloud is empty, has non-finite coordinates, more than 2^32-1 points, or
+//! an option is out of range (negative tolerance or τ, min_cluster 0).
+//! \details Degenerate clouds (one point, duplicates, collinear or coplanar points) give a valid
+//! hierarchy (typically a single leaf: they are flat). Deterministic: the same cloud and options give
+//! the same hierarchy bit for bit.
+Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options = {});
+
+//! Builds the tree's nodes from a final assignment of points to leaves and their split history; the
+//! last step of build_hierarchy(), public for tests and tools that bring their own partition.
+//! `parent_of[c]` is the cluster that was split to make cluster c (-1 for the root, which is cluster
+//! 0); `leaf_of_point[i]` is the leaf cluster of point i. Empty leaves are dropped and internal nodes
+//! left with one child are spliced out, so the result is a strict binary tree.
+Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& parent_of,
+                             const std::vector<std::uint32_t>& leaf_of_point);
+
+} // namespace mrt

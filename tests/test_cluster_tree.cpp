@@ -1,0 +1,287 @@
+// Tests of cluster_tree.h (paper §4.1): the invariants of the persistent hierarchy on analytic shapes,
+// checked against brute-force recomputation.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace mrt {
+namespace {
+
+// Nodes of the frontier "depth d": nodes at depth d, plus leaves above it.
+std::vector<std::int32_t> cut_at_depth(const Hierarchy& h, std::uint32_t d)
+{
+    std::vector<std::int32_t> cut;
+    for (std::size_t k = 0; k < h.nodes.size(); ++k)
+        if (h.nodes[k].depth == d || (h.nodes[k].depth < d && h.nodes[k].is_leaf()))
+            cut.push_back(static_cast<std::int32_t>(k));
+    return cut;
+}
+
+// Every point index in [0, n) is covered by exactly one node of the cut.
+void expect_partition(const Hierarchy& h, const std::vector<std::int32_t>& cut)
+{
+    std::vector<int> covered(h.cloud.size(), 0);
+    for (std::int32_t k : cut)
+        for (std::uint32_t i = h.nodes[static_cast<std::size_t>(k)].begin; i < h.nodes[static_cast<std::size_t>(k)].end; ++i)
+            ++covered[i];
+    EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; }));
+}
+
+void expect_valid_tree(const Hierarchy& h)
+{
+    ASSERT_FALSE(h.nodes.empty());
+    EXPECT_EQ(h.nodes[0].begin, 0u);
+    EXPECT_EQ(h.nodes[0].end, h.cloud.size());
+    EXPECT_EQ(h.nodes[0].parent, -1);
+    for (std::size_t k = 0; k < h.nodes.size(); ++k) {
+        const Node& n = h.nodes[k];
+        EXPECT_GT(n.count(), 0u);
+        EXPECT_EQ(n.moments.count, n.count());
+        if (n.is_leaf()) {
+            EXPECT_EQ(n.right, -1);
+            continue;
+        }
+        ASSERT_GT(n.left, static_cast<std::int32_t>(k));
+        ASSERT_GT(n.right, static_cast<std::int32_t>(k));
+        const Node& l = h.nodes[static_cast<std::size_t>(n.left)];
+        const Node& r = h.nodes[static_cast<std::size_t>(n.right)];
+        EXPECT_EQ(l.parent, static_cast<std::int32_t>(k));
+        EXPECT_EQ(r.parent, static_cast<std::int32_t>(k));
+        EXPECT_EQ(l.depth, n.depth + 1);
+        EXPECT_EQ(l.begin, n.begin);
+        EXPECT_EQ(l.end, r.begin);
+        EXPECT_EQ(r.end, n.end);
+    }
+    std::vector<std::uint32_t> sorted = h.input_index;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::uint32_t i = 0; i < sorted.size(); ++i)
+        ASSERT_EQ(sorted[i], i);
+}
+
+// Every point lands in exactly one leaf, and every depth-cut partitions the points.
+TEST(ClusterTree, leaves_and_depth_cuts_partition_points)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(20000), {});
+    expect_valid_tree(h);
+    std::vector<std::int32_t> leaves;
+    for (std::size_t k = 0; k < h.nodes.size(); ++k)
+        if (h.nodes[k].is_leaf())
+            leaves.push_back(static_cast<std::int32_t>(k));
+    EXPECT_GT(leaves.size(), 50u);
+    expect_partition(h, leaves);
+    for (std::uint32_t d = 0; d <= h.max_depth(); d += 3)
+        expect_partition(h, cut_at_depth(h, d));
+}
+
+// Stored statistics equal a brute-force recomputation over each node's points.
+TEST(ClusterTree, node_statistics_match_brute_force)
+{
+    PointCloud cloud = shapes::sphere(8000, 2.0);
+    shapes::add_noise(cloud, 0.002);
+    const Hierarchy h = build_hierarchy(cloud, {});
+    for (const Node& n : h.nodes) {
+        std::vector<Vec3> pts(h.cloud.positions.begin() + n.begin, h.cloud.positions.begin() + n.end);
+        Vec3 sum{0, 0, 0};
+        for (const Vec3& p : pts)
+            sum += p;
+        const Vec3 mean = sum / static_cast<double>(pts.size());
+        double m2[6] = {0, 0, 0, 0, 0, 0}, eq1 = 0;
+        for (const Vec3& p : pts) {
+            const Vec3 d = p - mean;
+            m2[0] += d.x * d.x, m2[1] += d.x * d.y, m2[2] += d.x * d.z;
+            m2[3] += d.y * d.y, m2[4] += d.y * d.z, m2[5] += d.z * d.z;
+            eq1 += norm(d);
+        }
+        const double scale = m2[0] + m2[3] + m2[5] + 1e-300;
+        for (int i = 0; i < 3; ++i)
+            EXPECT_NEAR(n.moments.mean[i], mean[i], 1e-12);
+        for (std::size_t i = 0; i < 6; ++i)
+            EXPECT_NEAR(n.moments.m2[i], m2[i], 1e-10 * scale);
+        EXPECT_NEAR(n.internal_error, eq1, 1e-9 * (eq1 + 1e-300));
+        double max_plane = 0;
+        for (const Vec3& p : pts)
+            max_plane = std::max(max_plane, std::abs(dot(p - n.centre(), n.frame.vectors[0])));
+        EXPECT_NEAR(n.max_plane_distance, max_plane, 1e-12);
+    }
+}
+
+// Splitting never increases the global error: the children's summed squared distances to their own
+// centres never exceed the parent's (the centroid minimises it). The paper's eq. 1 (unsquared) is the
+// split order; its monotonicity is not guaranteed for arbitrary sets, the squared form is.
+TEST(ClusterTree, global_error_never_increases_with_a_split)
+{
+    PointCloud cloud = shapes::three_holes(6000);
+    const Hierarchy h = build_hierarchy(cloud, {});
+    for (const Node& n : h.nodes) {
+        if (n.is_leaf())
+            continue;
+        const double children = h.nodes[static_cast<std::size_t>(n.left)].moments.sum_squared_distances() +
+                                h.nodes[static_cast<std::size_t>(n.right)].moments.sum_squared_distances();
+        EXPECT_LE(children, n.moments.sum_squared_distances() * (1 + 1e-12));
+    }
+}
+
+// Every leaf meets the stop criterion (scale-free tolerance) or is at most min_cluster points.
+TEST(ClusterTree, leaves_meet_tolerance_or_min_size)
+{
+    PointCloud cloud = shapes::sphere(15000);
+    shapes::add_noise(cloud, 0.001);
+    BuildOptions o;
+    o.tolerance = 2e-3;
+    o.min_cluster = 12;
+    const Hierarchy h = build_hierarchy(cloud, o);
+    const double side = h.bbox().largest_side();
+    std::size_t leaves = 0;
+    for (const Node& n : h.nodes)
+        if (n.is_leaf()) {
+            ++leaves;
+            EXPECT_TRUE(n.count() <= o.min_cluster || n.rms_plane_distance <= o.tolerance * side * (1 + 1e-9))
+                << "leaf with " << n.count() << " points, rms " << n.rms_plane_distance;
+        }
+    EXPECT_GT(leaves, 10u);
+    EXPECT_EQ(h.info.criterion, Criterion::Tolerance);
+}
+
+// The paper's τ criterion: every leaf's smallest eigenvalue of ΔᵀΔ is at most τ (or it is tiny).
+TEST(ClusterTree, leaves_meet_tau)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(10000), [] {
+        BuildOptions o;
+        o.tau = 1e-3;
+        return o;
+    }());
+    EXPECT_EQ(h.info.criterion, Criterion::Tau);
+    for (const Node& n : h.nodes) {
+        if (n.is_leaf()) {
+            EXPECT_TRUE(n.count() <= 8 || n.frame.values[0] <= 1e-3 * (1 + 1e-9));
+        }
+    }
+    // A larger τ gives a coarser hierarchy.
+    BuildOptions coarse;
+    coarse.tau = 1e-1;
+    EXPECT_LT(build_hierarchy(shapes::torus(10000), coarse).leaf_count(), h.leaf_count());
+}
+
+// A flat grid is one cluster: nothing to split.
+TEST(ClusterTree, flat_grid_is_one_leaf)
+{
+    const Hierarchy h = build_hierarchy(shapes::plane_grid(100), {});
+    EXPECT_EQ(h.nodes.size(), 1u);
+    EXPECT_EQ(h.leaf_count(), 1u);
+    EXPECT_EQ(h.nodes[0].count(), 10000u);
+}
+
+// Two parallel planes 0.05 apart never share a leaf at a tight tolerance (min_cluster 3: any three
+// points are coplanar, so only the flatness test decides).
+TEST(ClusterTree, parallel_planes_never_share_a_leaf)
+{
+    const Hierarchy h = build_hierarchy(shapes::parallel_planes(10000, 0.05), [] {
+        BuildOptions o;
+        o.tolerance = 1e-3;
+        o.min_cluster = 3;
+        return o;
+    }());
+    for (const Node& n : h.nodes) {
+        if (!n.is_leaf())
+            continue;
+        const double z = h.cloud.positions[n.begin].z;
+        for (std::uint32_t i = n.begin; i < n.end; ++i)
+            ASSERT_EQ(h.cloud.positions[i].z, z) << "leaf mixes both planes";
+    }
+}
+
+// Reclassification off still gives a valid tree; on, it never breaks the invariants either.
+TEST(ClusterTree, without_reclassification_tree_is_valid)
+{
+    BuildOptions o;
+    o.reclassify = false;
+    const Hierarchy h = build_hierarchy(shapes::sphere(5000), o);
+    expect_valid_tree(h);
+    EXPECT_FALSE(h.info.reclassify);
+}
+
+// PCA splitting only (pca_limit above n) and highest-deviation splitting only (pca_limit 0) both work.
+TEST(ClusterTree, both_split_directions_give_valid_trees)
+{
+    for (std::size_t limit : {std::size_t{0}, std::size_t{1000000}}) {
+        BuildOptions o;
+        o.pca_limit = limit;
+        const Hierarchy h = build_hierarchy(shapes::torus(6000), o);
+        expect_valid_tree(h);
+        EXPECT_GT(h.leaf_count(), 20u);
+    }
+}
+
+// Degenerate clouds give a valid trivial hierarchy; unusable ones a clear error.
+TEST(ClusterTree, degenerate_inputs)
+{
+    PointCloud one;
+    one.positions = {{1, 2, 3}};
+    EXPECT_EQ(build_hierarchy(one).nodes.size(), 1u);
+
+    PointCloud dup;
+    dup.positions.assign(1000, Vec3{0.5, 0.5, 0.5});
+    EXPECT_EQ(build_hierarchy(dup).nodes.size(), 1u);
+
+    PointCloud line;
+    for (int i = 0; i < 1000; ++i)
+        line.positions.push_back({i * 0.001, i * 0.002, 0.0});
+    EXPECT_EQ(build_hierarchy(line).leaf_count(), 1u);
+
+    PointCloud two;
+    two.positions = {{0, 0, 0}, {1, 1, 1}};
+    expect_valid_tree(build_hierarchy(two));
+
+    EXPECT_THROW(build_hierarchy(PointCloud{}), InvalidInput);
+    PointCloud nan = shapes::sphere(100);
+    nan.positions[42].y = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(build_hierarchy(nan), InvalidInput);
+    BuildOptions bad;
+    bad.tolerance = -1;
+    EXPECT_THROW(build_hierarchy(shapes::sphere(100), bad), InvalidInput);
+    bad = {};
+    bad.min_cluster = 0;
+    EXPECT_THROW(build_hierarchy(shapes::sphere(100), bad), InvalidInput);
+}
+
+// Far from the origin (UTM-like coordinates, recentred), the hierarchy is the one built near the origin.
+TEST(ClusterTree, far_from_origin_matches_near_origin)
+{
+    PointCloud near = shapes::sphere(6000, 50.0);
+    shapes::add_noise(near, 0.05);
+    PointCloud far = near;
+    shapes::translate(far, {512345.0, 5412345.0, 250.0});
+    recenter(far);
+    recenter(near);
+    const Hierarchy a = build_hierarchy(near), b = build_hierarchy(far);
+    ASSERT_EQ(a.nodes.size(), b.nodes.size());
+    EXPECT_EQ(a.input_index, b.input_index);
+    for (std::size_t k = 0; k < a.nodes.size(); ++k) {
+        EXPECT_EQ(a.nodes[k].count(), b.nodes[k].count());
+        // The input itself is only exact to ~1e-9 at 5e6 (double spacing), so that is all we can ask.
+        EXPECT_NEAR(a.nodes[k].rms_plane_distance, b.nodes[k].rms_plane_distance, 1e-7);
+    }
+}
+
+// The same input and options give the same hierarchy, bit for bit.
+TEST(ClusterTree, deterministic)
+{
+    PointCloud c = shapes::three_holes(5000);
+    const Hierarchy a = build_hierarchy(c), b = build_hierarchy(c);
+    ASSERT_EQ(a.nodes.size(), b.nodes.size());
+    EXPECT_EQ(a.input_index, b.input_index);
+    for (std::size_t k = 0; k < a.nodes.size(); ++k) {
+        EXPECT_EQ(a.nodes[k].moments.m2, b.nodes[k].moments.m2);
+        EXPECT_EQ(a.nodes[k].internal_error, b.nodes[k].internal_error);
+    }
+}
+
+} // namespace
+} // namespace mrt
