@@ -1,0 +1,50 @@
+#pragma once
+//! \file model_file.h
+//! \brief The `.mrt` model file: a built hierarchy, saved once and cut many times.
+//! \details Layout (version 1, every number little-endian whatever the host):
+//! \code
+//!   header   104 bytes: magic "MRTILE\r\n", u32 version, u32 endian marker 0x01020304, u32 header size,
+//!            u32 flags (1 = colours, 2 = build time recorded), u64 points, u64 nodes, f64 origin[3],
+//!            u32 criterion, u32 pca_limit, u32 min_cluster, u32 reclassify, f64 criterion value,
+//!            f64 build seconds, u64 payload size
+//!   payload  positions (points × 3 f64, relative to origin, tree order), colours (points × 4 u8, if
+//!            flagged), input index (points × u32), nodes (nodes × 120 bytes: begin, end, parent, left,
+//!            right, depth as 32-bit, count u64, mean 3 f64, M 6 f64, eq. 1 error f64, max plane
+//!            distance f64), then optional tagged sections (u32 tag, u64 size, bytes)
+//!   trailer  u32 CRC-32 of everything before it, magic "MEND"
+//! \endcode
+//! The file holds only exact statistics; PCA frames are recomputed on load, so load → save is
+//! byte-identical. Loading checks sizes against the file before allocating, the checksum, and the
+//! tree's structure, so a truncated or corrupted file is rejected with an IoError, never half-loaded.
+//! The build time is stored only when asked for (SaveOptions::record_build_time): the same input
+//! and options otherwise give byte-identical files.
+
+#include "libmrtile/hierarchy.h"
+
+#include <filesystem>
+#include <string>
+
+namespace mrt {
+
+inline constexpr std::uint32_t kModelFormatVersion = 1;
+
+struct SaveOptions
+{
+    //! Store Hierarchy::info.build_seconds (makes two builds of the same input differ in 8 bytes).
+    bool record_build_time = false;
+};
+
+//! Serialises a hierarchy into the bytes of a `.mrt` file.
+std::string serialize_model(const Hierarchy& h, const SaveOptions& options = {});
+
+//! Parses the bytes of a `.mrt` file. `name` is used in error messages (usually the path).
+//! \throw IoError if the bytes are truncated, corrupted or of an unsupported version.
+Hierarchy deserialize_model(const std::string& bytes, const std::string& name);
+
+//! Writes atomically (temporary file + rename). \throw IoError naming the path on failure.
+void save_model(const Hierarchy& h, const std::filesystem::path& path, const SaveOptions& options = {});
+
+//! \throw IoError naming the path if it is missing, unreadable, truncated or corrupted.
+Hierarchy load_model(const std::filesystem::path& path);
+
+} // namespace mrt

@@ -1,0 +1,131 @@
+// Tests of model_file.h: .mrt round trips are exact, and every kind of damage is rejected cleanly.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/model_file.h"
+#include "libmrtile/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace mrt {
+namespace {
+
+namespace fs = std::filesystem;
+
+Hierarchy sample(bool colors = false)
+{
+    PointCloud c = shapes::torus(3000);
+    shapes::translate(c, {654321.0, 4321987.0, 120.0});
+    recenter(c);
+    if (colors)
+        for (std::size_t i = 0; i < c.size(); ++i)
+            c.colors.push_back({static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(i * 7), 9, 255});
+    return build_hierarchy(c);
+}
+
+fs::path temp_dir()
+{
+    const fs::path dir = fs::path(MRTILE_BINARY_DIR) / "test_model_file";
+    fs::create_directories(dir);
+    return dir;
+}
+
+// Serialise → parse → serialise gives the same bytes, and the parsed tree equals the original.
+TEST(ModelFile, round_trip_is_byte_identical)
+{
+    for (bool colors : {false, true}) {
+        const Hierarchy h = sample(colors);
+        const std::string bytes = serialize_model(h);
+        const Hierarchy back = deserialize_model(bytes, "memory");
+        EXPECT_EQ(serialize_model(back), bytes);
+        ASSERT_EQ(back.nodes.size(), h.nodes.size());
+        EXPECT_EQ(back.cloud.origin, h.cloud.origin);
+        EXPECT_EQ(back.input_index, h.input_index);
+        EXPECT_EQ(back.cloud.colors, h.cloud.colors);
+        for (std::size_t k = 0; k < h.nodes.size(); ++k) {
+            EXPECT_EQ(back.nodes[k].moments.m2, h.nodes[k].moments.m2);
+            EXPECT_EQ(back.nodes[k].frame.values, h.nodes[k].frame.values);
+        }
+        EXPECT_EQ(back.info.criterion, h.info.criterion);
+        EXPECT_EQ(back.info.criterion_value, h.info.criterion_value);
+    }
+}
+
+// Files on disk: save → load → save is byte-identical; two builds give identical files; the build
+// time is stored only when asked for.
+TEST(ModelFile, save_load_and_determinism)
+{
+    const fs::path a = temp_dir() / "a.mrt", b = temp_dir() / "b.mrt", c = temp_dir() / "c.mrt";
+    save_model(sample(), a);
+    save_model(sample(), b);
+    save_model(load_model(a), c);
+    auto read = [](const fs::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(read(a), read(b));
+    EXPECT_EQ(read(a), read(c));
+    EXPECT_TRUE(std::isnan(load_model(a).info.build_seconds));
+    SaveOptions timed;
+    timed.record_build_time = true;
+    Hierarchy h = sample();
+    h.info.build_seconds = 1.25;
+    save_model(h, c, timed);
+    EXPECT_EQ(load_model(c).info.build_seconds, 1.25);
+}
+
+// Every truncation and every single flipped byte (sampled) is rejected with an IoError.
+TEST(ModelFile, truncated_or_corrupted_is_rejected)
+{
+    const std::string bytes = serialize_model(sample());
+    for (std::size_t len : {std::size_t{0}, std::size_t{7}, std::size_t{50}, std::size_t{104}, bytes.size() / 2, bytes.size() - 1})
+        EXPECT_THROW(deserialize_model(bytes.substr(0, len), "cut.mrt"), IoError) << len;
+    for (std::size_t at = 0; at < bytes.size(); at += 997) {
+        std::string damaged = bytes;
+        damaged[at] = static_cast<char>(damaged[at] ^ 0x5a);
+        EXPECT_THROW(deserialize_model(damaged, "bad.mrt"), IoError) << at;
+    }
+    try {
+        deserialize_model(bytes.substr(0, bytes.size() - 3), "short.mrt");
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("short.mrt"), std::string::npos);
+    }
+}
+
+// A header that declares absurd sizes is rejected before anything is allocated.
+TEST(ModelFile, absurd_declared_sizes_are_rejected)
+{
+    std::string bytes = serialize_model(sample());
+    for (int i = 0; i < 8; ++i)
+        bytes[24 + static_cast<std::size_t>(i)] = static_cast<char>(0xff); // point count = 2^64 - 1
+    EXPECT_THROW(deserialize_model(bytes, "huge.mrt"), IoError);
+    std::string version = serialize_model(sample());
+    version[8] = 99;
+    try {
+        deserialize_model(version, "v99.mrt");
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos);
+    }
+}
+
+// Missing files and unwritable destinations give IoErrors naming the path and leave nothing behind.
+TEST(ModelFile, io_errors_name_the_path)
+{
+    EXPECT_THROW(load_model(temp_dir() / "missing.mrt"), IoError);
+    EXPECT_THROW(load_model(temp_dir()), IoError);
+    const fs::path bad = temp_dir() / "no_such_dir" / "x.mrt";
+    try {
+        save_model(sample(), bad);
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("x.mrt"), std::string::npos);
+    }
+    EXPECT_FALSE(fs::exists(bad.parent_path()));
+}
+
+} // namespace
+} // namespace mrt
