@@ -2,6 +2,7 @@
 // the real scans in shared/data, and every kind of bad input (typed error naming the file, never a crash).
 #include "formats/read_points.h"
 #include "libmrtile/errors.h"
+#include "tests/test_dir.h"
 
 #include <gtest/gtest.h>
 #include <zlib.h>
@@ -23,16 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh directory per test, inside the build tree (tests run in parallel processes).
-fs::path test_dir()
-{
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(MRTILE_BINARY_DIR) / "test_tmp" / "read_points" /
-                         (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+fs::path test_dir() { return testing::fresh_test_dir("read_points"); }
 
 // Rewrites by unlink + create: truncating an existing file makes ext4 flush it on close (slow).
 fs::path write_file(const fs::path& path, const std::string& bytes)
