@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace mrt::testing {
@@ -67,13 +68,46 @@ inline nlohmann::json run_node_script(const std::string& script, const std::vect
     return nlohmann::json::parse(run_command(command));
 }
 
-//! Runs the gltf-transform CLI's `validate` on one file; returns its report text (throws if it fails).
-inline std::string gltf_transform_validate(const std::string& file)
+//! Runs the gltf-transform CLI's `inspect` (glTF-Transform's own reader, with its Draco decoder) on
+//! one file; returns its Markdown report (throws if it cannot read the file).
+inline std::string gltf_transform_inspect(const std::string& file)
 {
     const std::filesystem::path cli = npm_dir() / "node_modules" / ".bin" / "gltf-transform";
     if (!std::filesystem::exists(cli))
-        throw std::runtime_error(cli.string() + " is missing: run `bash tools/setup.sh`");
-    return run_command(shell_quote(cli.string()) + " validate " + shell_quote(file) + " --format md");
+        throw std::runtime_error(cli.string() + " is missing: run `bash tools/setup.sh` (npm ci in tests/npm)");
+    return run_command(shell_quote(cli.string()) + " inspect " + shell_quote(file) + " --format md");
+}
+
+//! The cells of the first Markdown table row of `report` that follows the header containing `column`
+//! and starts with `first_cell` (e.g. "0").
+inline std::vector<std::string> markdown_row(const std::string& report, const std::string& column,
+                                             const std::string& first_cell)
+{
+    std::size_t pos = report.find("| " + column + " ");
+    if (pos == std::string::npos)
+        pos = report.find(" " + column + " |");
+    while (pos != std::string::npos) {
+        pos = report.find('\n', pos);
+        if (pos == std::string::npos)
+            break;
+        const std::size_t end = report.find('\n', pos + 1);
+        const std::string line = report.substr(pos + 1, end == std::string::npos ? std::string::npos : end - pos - 1);
+        if (line.empty() || line[0] != '|')
+            break;
+        std::vector<std::string> cells;
+        std::size_t start = 1;
+        for (std::size_t bar = line.find('|', start); bar != std::string::npos; bar = line.find('|', start)) {
+            std::string cell = line.substr(start, bar - start);
+            cell.erase(0, cell.find_first_not_of(' '));
+            cell.erase(cell.find_last_not_of(' ') + 1);
+            cells.push_back(cell);
+            start = bar + 1;
+        }
+        if (!cells.empty() && cells[0] == first_cell)
+            return cells;
+        pos = end;
+    }
+    return {};
 }
 
 } // namespace mrt::testing
