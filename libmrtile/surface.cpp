@@ -80,6 +80,13 @@ double circumradius(const Vec3& a, const Vec3& b, const Vec3& c)
     return la * lb * lc / (2.0 * twice_area);
 }
 
+// A triangle so thin that its area vanishes against its longest edge: it would be a zero-area face.
+bool is_sliver(const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const double longest = std::max({squared_distance(a, b), squared_distance(b, c), squared_distance(a, c)});
+    return !(norm(triangle_cross(a, b, c)) > 1e-9 * longest);
+}
+
 struct SurfaceVertex
 {
     Vec3 position;
@@ -624,6 +631,9 @@ private:
                 continue;
             if (!folds_ok(a, c, nt) || !folds_ok(c, b, nt))
                 continue;
+            if (!merge_in_order(b, a, c) || !merge_in_order(a, c, b) || !merge_in_order(c, b, a))
+                continue;
+            // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
             const double p = relative_radius_[it->second] * (2.0 - turn);
@@ -633,6 +643,49 @@ private:
             }
         }
         return out;
+    }
+
+    // The new face adds link edge x -> y at v. When that joins the end of one fan of v to the start of
+    // another and v has three or more fans, the two must be neighbours counter-clockwise around v;
+    // joining fans out of their angular order makes the surface wind twice around v (a handle).
+    bool merge_in_order(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
+    {
+        if (surface_.faces_at(v).size() < 2)
+            return true;
+        const auto fans = surface_.arcs(v);
+        if (fans.size() < 3)
+            return true;
+        std::size_t from = kNone, to = kNone;
+        for (std::size_t k = 0; k < fans.size(); ++k) {
+            if (fans[k].second == x)
+                from = k;
+            if (fans[k].first == y)
+                to = k;
+        }
+        if (from == kNone || to == kNone || from == to)
+            return true;
+        const Vec3 n = vertex_normal(v);
+        const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
+        auto angle = [&](std::uint32_t w) {
+            const Vec3 d = position(w) - position(v);
+            return std::atan2(dot(d, e2), dot(d, e1));
+        };
+        const double start = angle(x);
+        std::size_t next = kNone;
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < fans.size(); ++k) {
+            if (k == from)
+                continue;
+            double delta = angle(fans[k].first) - start;
+            while (delta < 0.0)
+                delta += 2.0 * kPi;
+            if (delta < best) {
+                best = delta;
+                next = k;
+            }
+        }
+        return next == to;
     }
 
     // New edge x -> y of a candidate with normal nt: if the opposite half-edge y -> x has a face, the two
@@ -743,6 +796,8 @@ Candidates prune(const Layout& layout, const DelaunayTriangles& dt, const std::v
         const SurfaceVertex& b = layout.vertices[t[1]];
         const SurfaceVertex& c = layout.vertices[t[2]];
         if (a.tile == b.tile && b.tile == c.tile)
+            continue;
+        if (is_sliver(a.position, b.position, c.position))
             continue;
         if (same_tile_chord(t[0], t[1]) || same_tile_chord(t[1], t[2]) || same_tile_chord(t[0], t[2]))
             continue;
@@ -870,7 +925,8 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
                     continue;
                 const Vec3 normal = triangle_cross(positions[a], positions[b], positions[c]);
                 const double area = norm(normal);
-                if (!(area > 0.0) || (projection.used && !(dot(normal, projection.axis) > 0.0)))
+                if (is_sliver(positions[a], positions[b], positions[c]) ||
+                    (projection.used && !(dot(normal, projection.axis) > 0.0)))
                     continue;
                 const double total = c0 + c1 + area;
                 if (total < cost[i * n + j]) {
@@ -955,7 +1011,11 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
             double perimeter = 0.0, largest_tile = 0.0;
             bool was_widened = false;
             for (std::size_t i = 0; i < n; ++i) {
-                perimeter += distance(positions[loop[i]], positions[loop[(i + 1) % n]]);
+                // A height field's holes are measured in its domain: a gap at a jump is small there.
+                Vec3 d = positions[loop[(i + 1) % n]] - positions[loop[i]];
+                if (projection.used)
+                    d -= projection.axis * dot(d, projection.axis);
+                perimeter += norm(d);
                 const std::int32_t t = layout.vertices[loop[i]].tile;
                 loop_tiles.push_back(t);
                 largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
@@ -1058,14 +1118,16 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     const Projection projection = choose_projection(h, tiles, options);
     const double alpha = options.alpha > 0.0 ? options.alpha : options.alpha_factor * layout.mean_edge;
 
-    // T2 input: every vertex but the fan centres.
+    // T2 input: every vertex but the fan centres. (Adding the centres as Delaunay blockers against
+    // triangles spanning small tiles was tried: it gave wrong genus more often on the torus.)
     std::vector<Vec3> gap_points;
     std::vector<std::uint32_t> vertex_of;
-    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v)
-        if (!(layout.vertices[v].loop_pos == kNone && layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].centre == v)) {
-            gap_points.push_back(layout.vertices[v].position);
-            vertex_of.push_back(v);
-        }
+    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
+        if (layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].centre == v)
+            continue;
+        gap_points.push_back(layout.vertices[v].position);
+        vertex_of.push_back(v);
+    }
     DelaunayOptions dopt;
     dopt.projected = projection.used;
     dopt.axis_u = projection.u;
