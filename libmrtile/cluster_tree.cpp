@@ -551,6 +551,17 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         }
     }
     update_derived(h);
+    for (std::size_t k = h.nodes.size(); k-- > 0;) {
+        Node& node = h.nodes[k];
+        if (node.is_leaf()) {
+            std::vector<Vec3> pts(h.cloud.positions.begin() + node.begin, h.cloud.positions.begin() + node.end);
+            node.box = bounding_box(pts);
+        } else {
+            const BoundingBox& l = h.nodes[static_cast<std::size_t>(node.left)].box;
+            const BoundingBox& r = h.nodes[static_cast<std::size_t>(node.right)].box;
+            node.box = {min(l.min, r.min), max(l.max, r.max)};
+        }
+    }
     for (Node& node : h.nodes) {
         double error = 0.0, max_plane = 0.0;
         const Vec3 c = node.moments.mean, normal = node.frame.vectors[0];

@@ -43,6 +43,9 @@ struct Node
     //! Largest distance of a point of the node to the node's best-fit plane (model units). Bounds the
     //! geometric error of the node's tile; used for screen-space error and 3D Tiles geometricError.
     double max_plane_distance = 0.0;
+    //! Axis-aligned bounding box of the node's points (relative to the cloud's origin). A child's box
+    //! lies inside its parent's. Used by region and camera cuts and as 3D Tiles bounding volumes.
+    BoundingBox box;
 
     // Derived from `moments` when the hierarchy is built or loaded (not stored in the file).
     Eigen3x3 frame;                  //!< PCA: frame.vectors[0] = normal, frame.values[0] = λ_min(M)

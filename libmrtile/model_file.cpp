@@ -19,7 +19,7 @@ constexpr char kMagic[8] = {'M', 'R', 'T', 'I', 'L', 'E', '\r', '\n'};
 constexpr char kEndMagic[4] = {'M', 'E', 'N', 'D'};
 constexpr std::uint32_t kEndianMarker = 0x01020304u;
 constexpr std::size_t kHeaderSize = 104;
-constexpr std::size_t kNodeSize = 120;
+constexpr std::size_t kNodeSize = 168;
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2;
 
@@ -203,6 +203,11 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
             w.f64(v);
         w.f64(node.internal_error);
         w.f64(node.max_plane_distance);
+        for (const Vec3* v : {&node.box.min, &node.box.max}) {
+            w.f64(v->x);
+            w.f64(v->y);
+            w.f64(v->z);
+        }
     }
     const std::uint64_t payload = out.size() - kHeaderSize;
     std::string patch;
@@ -294,6 +299,11 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
             v = r.f64();
         node.internal_error = r.f64();
         node.max_plane_distance = r.f64();
+        for (Vec3* v : {&node.box.min, &node.box.max}) {
+            v->x = r.f64();
+            v->y = r.f64();
+            v->z = r.f64();
+        }
     }
     if (r.position() != end)
         r.fail("unexpected extra sections (written by a newer version?)");

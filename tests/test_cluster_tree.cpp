@@ -109,6 +109,9 @@ TEST(ClusterTree, node_statistics_match_brute_force)
         for (const Vec3& p : pts)
             max_plane = std::max(max_plane, std::abs(dot(p - n.centre(), n.frame.vectors[0])));
         EXPECT_NEAR(n.max_plane_distance, max_plane, 1e-12);
+        const BoundingBox box = bounding_box(pts);
+        EXPECT_EQ(n.box.min, box.min);
+        EXPECT_EQ(n.box.max, box.max);
     }
 }
 

@@ -1,0 +1,181 @@
+// Level-of-detail selection over the persistent hierarchy (paper §3: "hierarchical clustering ... a
+// means for controlling the levels of detail"; §1: "control the level of detail locally"). All cuts
+// are top-down walks over node statistics stored at build time, so their cost follows the size of the
+// cut, not of the input.
+#include "libmrtile/cut.h"
+
+#include "libmrtile/errors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <string>
+#include <tuple>
+
+namespace mrt {
+namespace {
+
+void check_tolerance(double value, const char* name)
+{
+    if (!(value >= 0) || !std::isfinite(value))
+        throw InvalidInput(std::string("cut: ") + name + " must be a finite number >= 0, got " + std::to_string(value));
+}
+
+double distance_to_box(const Vec3& p, const BoundingBox& b)
+{
+    const Vec3 d = max(max(b.min - p, p - b.max), Vec3{0, 0, 0});
+    return norm(d);
+}
+
+bool boxes_meet(const BoundingBox& a, const BoundingBox& b)
+{
+    return a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y &&
+           a.min.z <= b.max.z && b.min.z <= a.max.z;
+}
+
+} // namespace
+
+Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
+{
+    Cut cut;
+    if (h.nodes.empty())
+        return cut;
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        stack.pop_back();
+        const Node& node = h.nodes[static_cast<std::size_t>(id)];
+        if (!node.is_leaf() && refine(h, id)) {
+            stack.push_back(node.right); // left first: depth-first = point order
+            stack.push_back(node.left);
+        } else {
+            cut.push_back(id);
+        }
+    }
+    return cut;
+}
+
+Cut cut_by_tolerance(const Hierarchy& h, double tolerance)
+{
+    check_tolerance(tolerance, "tolerance");
+    const double limit = tolerance * h.bbox().largest_side();
+    return cut_by_predicate(h, [limit](const Hierarchy& hh, std::int32_t id) {
+        return hh.nodes[static_cast<std::size_t>(id)].rms_plane_distance > limit;
+    });
+}
+
+Cut cut_by_tau(const Hierarchy& h, double tau)
+{
+    check_tolerance(tau, "tau");
+    return cut_by_predicate(h, [tau](const Hierarchy& hh, std::int32_t id) {
+        return hh.nodes[static_cast<std::size_t>(id)].frame.values[0] > tau;
+    });
+}
+
+Cut cut_by_budget(const Hierarchy& h, std::size_t tiles)
+{
+    if (tiles == 0)
+        throw InvalidInput("cut: a tile budget must be at least 1");
+    // Max-heap of refinable nodes by plane error; leaves wait in the cut.
+    using Entry = std::pair<double, std::int32_t>;
+    auto less = [](const Entry& a, const Entry& b) { return std::tie(a.first, b.second) < std::tie(b.first, a.second); };
+    std::priority_queue<Entry, std::vector<Entry>, decltype(less)> open(less);
+    Cut done;
+    auto push = [&](std::int32_t id) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        if (n.is_leaf())
+            done.push_back(id);
+        else
+            open.push({n.frame.values[0], id});
+    };
+    push(0);
+    while (!open.empty() && done.size() + open.size() < tiles) {
+        const std::int32_t id = open.top().second;
+        open.pop();
+        push(h.nodes[static_cast<std::size_t>(id)].left);
+        push(h.nodes[static_cast<std::size_t>(id)].right);
+    }
+    while (!open.empty()) {
+        done.push_back(open.top().second);
+        open.pop();
+    }
+    // Depth-first order = order of the point ranges.
+    std::sort(done.begin(), done.end(), [&](std::int32_t a, std::int32_t b) {
+        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+    });
+    return done;
+}
+
+bool intersects(const Node& node, const FocusRegion& region)
+{
+    if (region.shape == FocusRegion::Shape::Box)
+        return boxes_meet(node.box, region.box);
+    return distance_to_box(region.centre, node.box) <= region.radius;
+}
+
+Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions)
+{
+    check_tolerance(base_tolerance, "base tolerance");
+    for (const FocusRegion& r : regions) {
+        check_tolerance(r.tolerance, "region tolerance");
+        if (r.shape == FocusRegion::Shape::Sphere && (!(r.radius >= 0) || !std::isfinite(r.radius)))
+            throw InvalidInput("cut: a focus sphere needs a finite radius >= 0");
+    }
+    const double side = h.bbox().largest_side();
+    return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
+        const Node& n = hh.nodes[static_cast<std::size_t>(id)];
+        double tolerance = base_tolerance;
+        for (const FocusRegion& r : regions)
+            if (intersects(n, r))
+                tolerance = std::min(tolerance, r.tolerance);
+        return n.rms_plane_distance > tolerance * side;
+    });
+}
+
+double screen_space_error(const Node& node, const Camera& camera)
+{
+    const double distance = distance_to_box(camera.position, node.box);
+    if (distance <= 0)
+        return std::numeric_limits<double>::infinity();
+    const double half_fov = camera.fov_y_degrees * 0.5 * 3.14159265358979323846 / 180.0;
+    return node.max_plane_distance * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
+}
+
+Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
+{
+    if (!(camera.fov_y_degrees > 0 && camera.fov_y_degrees < 180) || !(camera.viewport_height > 0) ||
+        !(camera.max_pixel_error > 0) || !is_finite(camera.position))
+        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height and pixel error, and a finite position");
+    return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
+        return screen_space_error(hh.nodes[static_cast<std::size_t>(id)], camera) > camera.max_pixel_error;
+    });
+}
+
+double cut_plane_error(const Hierarchy& h, const Cut& cut)
+{
+    double sum = 0.0;
+    for (std::int32_t id : cut)
+        sum += h.nodes[static_cast<std::size_t>(id)].frame.values[0];
+    return sum;
+}
+
+bool is_partition(const Hierarchy& h, const Cut& cut)
+{
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
+    for (std::int32_t id : cut) {
+        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
+            return false;
+        ranges.push_back({h.nodes[static_cast<std::size_t>(id)].begin, h.nodes[static_cast<std::size_t>(id)].end});
+    }
+    std::sort(ranges.begin(), ranges.end());
+    std::uint32_t next = 0;
+    for (const auto& r : ranges) {
+        if (r.first != next)
+            return false;
+        next = r.second;
+    }
+    return next == h.cloud.size();
+}
+
+} // namespace mrt

@@ -1,0 +1,86 @@
+#pragma once
+//! \file cut.h
+//! \brief Cuts of the persistent hierarchy: which nodes become tiles.
+//! \details A cut is a frontier of the tree: a set of nodes such that every point belongs to exactly
+//! one of them (the hierarchy stores each node's points as a contiguous range, so any frontier is a
+//! partition). Every cut here is found top-down — a node is kept when it need not be refined, else
+//! its two children are examined — so it costs time proportional to the nodes visited, never to the
+//! number of points. Cuts are returned in depth-first (= point) order.
+//!
+//! Errors used to decide refinement, all exact from the node statistics:
+//!  - plane error λ_min(M): the sum of squared distances of the node's points to the tile plane (the
+//!    paper's τ quantity). It never increases down the tree: the children's best planes fit at least
+//!    as well as the parent's plane does, so refining always lowers the total Σ λ_min of a cut.
+//!  - RMS plane distance sqrt(λ_min / count), relative to the bounding box's largest side (tolerance).
+//!  - geometric error (max distance of a point to its tile plane), for screen-space error.
+
+#include "libmrtile/hierarchy.h"
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace mrt {
+
+using Cut = std::vector<std::int32_t>;
+
+//! "Refine this node?" — asked only for internal nodes, parents before children.
+using RefinePredicate = std::function<bool(const Hierarchy& h, std::int32_t node)>;
+
+//! The general form: refine every internal node for which `refine` says yes.
+Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine);
+
+//! Scale-free: every tile's RMS plane distance is at most tolerance × the bbox's largest side (or
+//! the tile is a leaf). \throw InvalidInput if tolerance is negative or not finite.
+Cut cut_by_tolerance(const Hierarchy& h, double tolerance);
+
+//! The paper's τ: every tile's λ_min(ΔᵀΔ) is at most tau (or the tile is a leaf).
+Cut cut_by_tau(const Hierarchy& h, double tau);
+
+//! The best cut with `tiles` nodes (or all leaves, if fewer): starting from the root, always refine
+//! the node with the largest plane error λ_min (ties: smaller id). Exactly min(tiles, leaves) nodes.
+//! \throw InvalidInput if tiles is 0.
+Cut cut_by_budget(const Hierarchy& h, std::size_t tiles);
+
+//! A sphere or box of interest refined to its own tolerance while the rest stays coarser.
+struct FocusRegion
+{
+    enum class Shape { Sphere, Box };
+    Shape shape = Shape::Sphere;
+    Vec3 centre{0, 0, 0};       //!< sphere centre (relative to the cloud's origin)
+    double radius = 0.0;        //!< sphere radius
+    BoundingBox box;            //!< for Shape::Box
+    double tolerance = 0.0;     //!< scale-free tolerance inside the region (as cut_by_tolerance)
+};
+
+//! True when the node's bounding box meets the region.
+bool intersects(const Node& node, const FocusRegion& region);
+
+//! Every node meeting a region is refined to the smallest tolerance of the regions it meets; every
+//! other node to `base_tolerance`. Nodes of cut_by_tolerance(h, base_tolerance) that meet no region
+//! are in the result unchanged.
+Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions);
+
+//! A pinhole camera for view-dependent cuts (3D Tiles / CesiumJS convention).
+struct Camera
+{
+    Vec3 position{0, 0, 0};          //!< relative to the cloud's origin
+    double fov_y_degrees = 60.0;     //!< vertical field of view
+    double viewport_height = 1080.0; //!< pixels
+    double max_pixel_error = 16.0;   //!< CesiumJS's default maximumScreenSpaceError
+};
+
+//! Screen-space error of a node seen from the camera: error × height / (distance × 2 tan(fov/2)),
+//! with error = the node's max plane distance and distance to the node's bounding box (0 inside).
+double screen_space_error(const Node& node, const Camera& camera);
+
+//! Refines every node whose screen-space error exceeds the camera's max_pixel_error.
+Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
+
+//! Σ λ_min over the cut: the total squared distance of the points to their tile planes.
+double cut_plane_error(const Hierarchy& h, const Cut& cut);
+
+//! True when the nodes of `cut` partition the points (each point in exactly one node).
+bool is_partition(const Hierarchy& h, const Cut& cut);
+
+} // namespace mrt

@@ -1,0 +1,159 @@
+// Tests of cut.h: every kind of cut is a partition of the points, errors fall monotonically with
+// refinement, budgets are exact, and local cuts refine where asked and nowhere else.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+namespace mrt {
+namespace {
+
+const Hierarchy& torus()
+{
+    static const Hierarchy h = [] {
+        PointCloud c = shapes::torus(30000);
+        shapes::add_noise(c, 0.0005);
+        return build_hierarchy(c);
+    }();
+    return h;
+}
+
+// Tolerance and τ cuts partition the points, and a finer tolerance never raises the plane error.
+TEST(Cut, tolerance_cuts_partition_and_error_is_monotone)
+{
+    const Hierarchy& h = torus();
+    double previous = std::numeric_limits<double>::infinity();
+    std::size_t previous_size = 0;
+    for (double tol : {0.05, 0.02, 0.01, 0.005, 0.002, 0.001, 0.0}) {
+        const Cut cut = cut_by_tolerance(h, tol);
+        EXPECT_TRUE(is_partition(h, cut)) << tol;
+        const double error = cut_plane_error(h, cut);
+        EXPECT_LE(error, previous * (1 + 1e-12));
+        EXPECT_GE(cut.size(), previous_size);
+        previous = error;
+        previous_size = cut.size();
+        const double limit = tol * h.bbox().largest_side();
+        for (std::int32_t id : cut)
+            EXPECT_TRUE(h.nodes[static_cast<std::size_t>(id)].is_leaf() ||
+                        h.nodes[static_cast<std::size_t>(id)].rms_plane_distance <= limit);
+    }
+    EXPECT_EQ(cut_by_tolerance(h, 0.0).size(), h.leaf_count());
+    const Cut tau = cut_by_tau(h, 1e-3);
+    EXPECT_TRUE(is_partition(h, tau));
+    for (std::int32_t id : tau)
+        EXPECT_TRUE(h.nodes[static_cast<std::size_t>(id)].is_leaf() || h.nodes[static_cast<std::size_t>(id)].frame.values[0] <= 1e-3);
+    EXPECT_THROW(cut_by_tolerance(h, -1), InvalidInput);
+}
+
+// A budget of N tiles gives exactly N tiles (or all leaves), and more tiles never more error.
+TEST(Cut, budget_is_exact_and_error_falls)
+{
+    const Hierarchy& h = torus();
+    double previous = std::numeric_limits<double>::infinity();
+    for (std::size_t n : {1u, 2u, 3u, 10u, 100u, 1000u, 1001u}) {
+        const Cut cut = cut_by_budget(h, n);
+        EXPECT_EQ(cut.size(), std::min(n, h.leaf_count()));
+        EXPECT_TRUE(is_partition(h, cut));
+        const double error = cut_plane_error(h, cut);
+        EXPECT_LE(error, previous * (1 + 1e-12));
+        previous = error;
+    }
+    EXPECT_EQ(cut_by_budget(h, 100000000).size(), h.leaf_count());
+    EXPECT_THROW(cut_by_budget(h, 0), InvalidInput);
+}
+
+// A focus sphere: more tiles meet it than in the coarse cut, and the coarse cut's tiles away from it
+// are kept unchanged.
+TEST(Cut, focus_region_refines_inside_only)
+{
+    const Hierarchy& h = torus();
+    const double coarse_tol = 0.01;
+    FocusRegion region;
+    region.centre = h.cloud.positions[h.nodes[0].begin + 7];
+    region.radius = 0.3;
+    region.tolerance = 0.0001;
+    const Cut coarse = cut_by_tolerance(h, coarse_tol);
+    const Cut focus = cut_by_regions(h, coarse_tol, {region});
+    EXPECT_TRUE(is_partition(h, focus));
+    auto meeting = [&](const Cut& cut) {
+        return std::count_if(cut.begin(), cut.end(), [&](std::int32_t id) { return intersects(h.nodes[static_cast<std::size_t>(id)], region); });
+    };
+    EXPECT_GT(meeting(focus), 3 * meeting(coarse));
+    // Denser inside than outside: tiles meeting the region hold far fewer points each.
+    double inside_points = 0, outside_points = 0;
+    for (std::int32_t id : focus)
+        (intersects(h.nodes[static_cast<std::size_t>(id)], region) ? inside_points : outside_points) +=
+            h.nodes[static_cast<std::size_t>(id)].count();
+    const double inside_tiles = static_cast<double>(meeting(focus));
+    EXPECT_LT(inside_points / inside_tiles, 0.25 * outside_points / (static_cast<double>(focus.size()) - inside_tiles));
+    const std::set<std::int32_t> in_focus(focus.begin(), focus.end());
+    std::size_t away = 0;
+    for (std::int32_t id : coarse)
+        if (!intersects(h.nodes[static_cast<std::size_t>(id)], region)) {
+            ++away;
+            EXPECT_TRUE(in_focus.count(id)) << "coarse tile away from the region was changed";
+        }
+    EXPECT_GT(away, 10u);
+
+    // A box region and two regions at once.
+    FocusRegion box;
+    box.shape = FocusRegion::Shape::Box;
+    box.box = {{-1.5, -1.5, -0.5}, {-0.8, 1.5, 0.5}};
+    box.tolerance = 0.001;
+    const Cut both = cut_by_regions(h, coarse_tol, {region, box});
+    EXPECT_TRUE(is_partition(h, both));
+    EXPECT_GT(both.size(), focus.size());
+}
+
+// A camera close to one side of the torus refines tiles near it more than far ones.
+TEST(Cut, camera_refines_near_the_camera)
+{
+    const Hierarchy& h = torus();
+    Camera cam;
+    cam.position = {2.0, 0.0, 0.2};
+    cam.viewport_height = 1080;
+    const Cut cut = cut_for_camera(h, cam);
+    EXPECT_TRUE(is_partition(h, cut));
+    double near_points = 0, far_points = 0;
+    std::size_t near_tiles = 0, far_tiles = 0;
+    for (std::int32_t id : cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        if (n.centre().x > 0.5) {
+            near_points += n.count();
+            ++near_tiles;
+        } else if (n.centre().x < -0.5) {
+            far_points += n.count();
+            ++far_tiles;
+        }
+    }
+    ASSERT_GT(near_tiles, 0u);
+    ASSERT_GT(far_tiles, 0u);
+    EXPECT_LT(near_points / near_tiles, 0.5 * far_points / far_tiles); // smaller tiles near the camera
+    for (std::int32_t id : cut)
+        EXPECT_TRUE(h.nodes[static_cast<std::size_t>(id)].is_leaf() ||
+                    screen_space_error(h.nodes[static_cast<std::size_t>(id)], cam) <= cam.max_pixel_error);
+    Camera bad = cam;
+    bad.fov_y_degrees = 0;
+    EXPECT_THROW(cut_for_camera(h, bad), InvalidInput);
+}
+
+// The general predicate form: refine exactly the nodes above depth 4.
+TEST(Cut, predicate_cut)
+{
+    const Hierarchy& h = torus();
+    const Cut cut = cut_by_predicate(h, [](const Hierarchy& hh, std::int32_t id) { return hh.nodes[static_cast<std::size_t>(id)].depth < 4; });
+    EXPECT_TRUE(is_partition(h, cut));
+    for (std::int32_t id : cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        EXPECT_TRUE(n.depth == 4 || (n.depth < 4 && n.is_leaf()));
+    }
+    EXPECT_EQ(cut_by_predicate(h, [](const Hierarchy&, std::int32_t) { return false; }), Cut{0});
+}
+
+} // namespace
+} // namespace mrt
