@@ -1,0 +1,228 @@
+// Tests of draco_encode.h: round trips within the quantization step, exact colours, the origin in the
+// metadata, a shared explicit grid making border vertices of neighbouring meshes bit-identical, and
+// decoding by independent clients (draco3d from npm, the draco_decoder command).
+// OpenMesh copies a default-constructed (uninitialized) VectorT when a vertex is added; the fixtures set
+// every value they use right after, so GCC's warning about that copy does not apply.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include "formats/draco_encode.h"
+#include "libmrtile/errors.h"
+#include "mesh_fixtures.h"
+#include "npm/node_clients.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+namespace mrt {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::grid_mesh;
+using testing::uv_sphere;
+
+fs::path scratch(const std::string& name)
+{
+    const fs::path dir = fs::path(MRTILE_BINARY_DIR) / ("test_draco_encode." + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir / name;
+}
+
+std::string read_bytes(const fs::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+Vec3 point(const Mesh& mesh, Mesh::VertexHandle v)
+{
+    const auto& p = mesh.point(v);
+    return {p[0], p[1], p[2]};
+}
+
+Vec3 decoded_point(const DracoDecoded& d, std::size_t i)
+{
+    return {d.positions[3 * i], d.positions[3 * i + 1], d.positions[3 * i + 2]};
+}
+
+// Index of the decoded point nearest to `p` (brute force; the meshes are small).
+std::size_t nearest(const DracoDecoded& d, const Vec3& p)
+{
+    std::size_t best = 0;
+    double best_d2 = INFINITY;
+    for (std::size_t i = 0; i < d.positions.size() / 3; ++i) {
+        const double d2 = squared_distance(decoded_point(d, i), p);
+        if (d2 < best_d2) {
+            best_d2 = d2;
+            best = i;
+        }
+    }
+    return best;
+}
+
+class DracoFiles : public ::testing::Test
+{
+protected:
+    static void TearDownTestSuite()
+    {
+        std::error_code ec;
+        fs::remove_all(scratch("x").parent_path(), ec);
+    }
+};
+
+// Every source vertex comes back within half a quantization step per axis (plus float rounding), with
+// the origin + offset in the metadata restoring absolute coordinates far from zero.
+TEST_F(DracoFiles, round_trip_within_quantization_far_from_origin)
+{
+    const Vec3 origin{5.0e6, -3.0e6, 250.0};
+    const Mesh mesh = uv_sphere(20, 40, 7.0, {0.3, 0.2, -0.1}, true);
+    const fs::path path = scratch("sphere.drc");
+    write_drc(mesh, origin, path);
+    const DracoDecoded d = decode_draco(read_bytes(path), path.string());
+    ASSERT_EQ(d.positions.size(), 3 * mesh.n_vertices());
+    ASSERT_EQ(d.indices.size(), 3 * mesh.n_faces());
+    ASSERT_EQ(d.normals.size(), d.positions.size());
+    ASSERT_EQ(d.colors.size(), 4 * mesh.n_vertices());
+    ASSERT_TRUE(d.metadata_origin.has_value());
+    const Vec3 offset = *d.metadata_origin - origin; // the rounded centre (0, 0, 0)
+    EXPECT_EQ(offset, (Vec3{0, 0, 0}));
+    const double step = 14.0 / ((1 << 14) - 1); // the sphere's bounding cube is 14 wide
+    double worst = 0, worst_normal = 0;
+    for (const auto v : mesh.vertices()) {
+        const Vec3 p = point(mesh, v);
+        const std::size_t i = nearest(d, p - offset);
+        const Vec3 absolute = *d.metadata_origin + decoded_point(d, i);
+        for (int k = 0; k < 3; ++k)
+            worst = std::max(worst, std::fabs(absolute[k] - (origin + p)[k]));
+        // Colours are stored as exact bytes.
+        const auto& c = mesh.color(v);
+        for (std::size_t k = 0; k < 4; ++k)
+            EXPECT_EQ(d.colors[4 * i + k], c[static_cast<int>(k)]);
+        // Normals (computed: the fixture leaves them zero) point outwards, 10-bit octahedral.
+        const Vec3 n{d.normals[3 * i], d.normals[3 * i + 1], d.normals[3 * i + 2]};
+        worst_normal = std::max(worst_normal, std::fabs(norm(n) - 1.0));
+        EXPECT_GT(dot(n, normalized(p - Vec3{0.3, 0.2, -0.1})), 0.99);
+    }
+    EXPECT_LE(worst, 0.5 * step + 1e-5);
+    EXPECT_LE(worst_normal, 1e-3);
+}
+
+// Two grids sharing the border x = 4 encoded on one explicit grid: every shared vertex decodes to the
+// same float bits in both files. On their own bounding cubes they do not (checked, so that the test
+// shows the grid is what makes the difference).
+TEST_F(DracoFiles, shared_grid_makes_border_vertices_bit_identical)
+{
+    const Mesh left = grid_mesh(16, 16, 0.0, 0.0, 0.25, testing::wave);
+    const Mesh right = grid_mesh(16, 16, 4.0, 0.0, 0.25, testing::wave);
+    DracoOptions shared;
+    shared.grid = QuantizationGrid{{-1.0, -1.0, -1.0}, 10.0};
+    const Vec3 origin{1000, 2000, 30};
+    std::vector<Vec3> border;
+    for (const auto v : left.vertices())
+        if (point(left, v).x == 4.0)
+            border.push_back(point(left, v));
+    ASSERT_EQ(border.size(), 17u);
+
+    auto border_mismatches = [&](const DracoOptions& options, const std::string& tag) {
+        write_drc(left, origin, scratch(tag + "_left.drc"), options);
+        write_drc(right, origin, scratch(tag + "_right.drc"), options);
+        const DracoDecoded a = decode_draco(read_bytes(scratch(tag + "_left.drc")), "left");
+        const DracoDecoded b = decode_draco(read_bytes(scratch(tag + "_right.drc")), "right");
+        const Vec3 offset_a = *a.metadata_origin - origin, offset_b = *b.metadata_origin - origin;
+        std::size_t mismatches = 0;
+        for (const Vec3& p : border) {
+            const std::size_t i = nearest(a, p - offset_a), j = nearest(b, p - offset_b);
+            EXPECT_LE(distance(decoded_point(a, i) + offset_a, p), 1e-3);
+            // Absolute decoded coordinates, as a viewer computes them: offset (translation) + float.
+            double pa[3], pb[3];
+            for (std::size_t k = 0; k < 3; ++k) {
+                pa[k] = offset_a[static_cast<int>(k)] + double(a.positions[3 * i + k]);
+                pb[k] = offset_b[static_cast<int>(k)] + double(b.positions[3 * j + k]);
+            }
+            mismatches += std::memcmp(pa, pb, sizeof pa) != 0;
+            if (options.grid) { // same offset too: the very same float bits
+                EXPECT_EQ(std::memcmp(&a.positions[3 * i], &b.positions[3 * j], 3 * sizeof(float)), 0);
+            }
+        }
+        return mismatches;
+    };
+    EXPECT_EQ(border_mismatches(shared, "shared"), 0u);
+    EXPECT_GT(border_mismatches(DracoOptions{}, "own"), 0u);
+}
+
+// draco3d (npm) and the draco_decoder command decode our files to the same counts and bounds as
+// libdraco does.
+TEST_F(DracoFiles, independent_decoders_agree)
+{
+    const Mesh mesh = uv_sphere(12, 24, 2.0, {}, true);
+    const fs::path path = scratch("clients.drc");
+    write_drc(mesh, {}, path);
+    const DracoDecoded d = decode_draco(read_bytes(path), path.string());
+    const nlohmann::json r = testing::run_node_script("draco_check.mjs", {path.string()}).at(0);
+    EXPECT_EQ(r["ok"], true) << r.dump();
+    EXPECT_EQ(r["points"], d.positions.size() / 3);
+    EXPECT_EQ(r["faces"], d.indices.size() / 3);
+    for (std::size_t k = 0; k < 3; ++k) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (std::size_t i = k; i < d.positions.size(); i += 3) {
+            lo = std::min(lo, d.positions[i]);
+            hi = std::max(hi, d.positions[i]);
+        }
+        EXPECT_EQ(r["min"][k].get<float>(), lo);
+        EXPECT_EQ(r["max"][k].get<float>(), hi);
+    }
+    const fs::path ply = scratch("clients.ply");
+    testing::run_command("draco_decoder -i " + testing::shell_quote(path.string()) + " -o " +
+                         testing::shell_quote(ply.string()) + " >/dev/null");
+    const std::string header = read_bytes(ply).substr(0, 400);
+    EXPECT_NE(header.find("element vertex " + std::to_string(mesh.n_vertices()) + "\n"), std::string::npos) << header;
+    EXPECT_NE(header.find("element face " + std::to_string(mesh.n_faces()) + "\n"), std::string::npos) << header;
+}
+
+TEST_F(DracoFiles, output_is_byte_deterministic)
+{
+    const Mesh mesh = uv_sphere(10, 20, 1.0, {}, true);
+    write_drc(mesh, {1, 2, 3}, scratch("a.drc"));
+    write_drc(mesh, {1, 2, 3}, scratch("b.drc"));
+    EXPECT_EQ(read_bytes(scratch("a.drc")), read_bytes(scratch("b.drc")));
+}
+
+TEST(DracoEncode, rejects_bad_options_and_positions_outside_the_grid)
+{
+    const Mesh mesh = uv_sphere(4, 8, 1.0);
+    const fs::path path = fs::path(MRTILE_BINARY_DIR) / "test_draco_encode_never_written.drc";
+    for (auto change : std::vector<void (*)(DracoOptions&)>{
+             [](DracoOptions& o) { o.position_bits = 0; }, [](DracoOptions& o) { o.position_bits = 31; },
+             [](DracoOptions& o) { o.normal_bits = 0; }, [](DracoOptions& o) { o.encoding_speed = 11; },
+             [](DracoOptions& o) { o.decoding_speed = -1; },
+             [](DracoOptions& o) { o.grid = QuantizationGrid{{0, 0, 0}, 0.0}; },
+             [](DracoOptions& o) { o.grid = QuantizationGrid{{-1, -1, -1}, 1.5}; }}) { // sphere reaches +1
+        DracoOptions options;
+        change(options);
+        EXPECT_THROW(write_drc(mesh, {}, path, options), InvalidInput);
+    }
+    EXPECT_FALSE(fs::exists(path));
+    EXPECT_THROW(decode_draco("not draco", "junk.drc"), IoError);
+}
+
+TEST(DracoEncode, bad_paths_throw_io_error_naming_the_path)
+{
+    const Mesh mesh = uv_sphere(4, 8, 1.0);
+    for (const fs::path& path : {fs::path(MRTILE_BINARY_DIR) / "no_such_dir_for_draco" / "x.drc",
+                                fs::path("/proc/mrtile_out.drc")}) {
+        try {
+            write_drc(mesh, {}, path);
+            ADD_FAILURE() << "no exception for " << path;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(path.parent_path()) && fs::exists(path));
+    }
+}
+
+} // namespace
+} // namespace mrt
