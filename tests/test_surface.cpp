@@ -1,0 +1,295 @@
+// Tests of surface.h: the T1 + T2 mesh of a cut is a valid oriented 2-manifold (no refused face, no
+// non-manifold edge or vertex, no duplicate or zero-area face) with the topology of the sampled surface.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include "libmrtile/surface.h"
+
+#include "cut_fixtures.h"
+#include "formats/read_points.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/mesh_stats.h"
+#include "libmrtile/shapes.h"
+#include "libmrtile/tiles.h"
+
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+namespace mrt {
+namespace {
+
+struct Result
+{
+    Mesh mesh;
+    SurfaceStats stats;
+    TopologyStats topo;
+};
+
+Result mesh_cut(const testing::FlatCut& fc, const SurfaceOptions& options = {})
+{
+    const std::vector<Tile> tiles = make_tiles(fc.hierarchy, fc.cut);
+    Result r;
+    r.mesh = build_surface(fc.hierarchy, tiles, options, &r.stats);
+    r.topo = topology_stats(r.mesh);
+    return r;
+}
+
+Result mesh_of(const PointCloud& cloud, std::size_t k, const SurfaceOptions& options = {})
+{
+    return mesh_cut(testing::kmeans_cut(cloud, k), options);
+}
+
+double signed_volume(const Mesh& mesh)
+{
+    double v = 0.0;
+    for (auto f : mesh.faces()) {
+        auto it = mesh.cfv_begin(f);
+        const auto a = mesh.point(*it++), b = mesh.point(*it++), c = mesh.point(*it);
+        v += (a | (b % c)) / 6.0;
+    }
+    return v;
+}
+
+// Every requirement of a valid output mesh, whatever the input.
+void expect_valid(const Result& r)
+{
+    EXPECT_EQ(r.stats.refused_faces, 0u);
+    EXPECT_EQ(r.topo.nonmanifold_edges, 0u);
+    EXPECT_EQ(r.topo.nonmanifold_vertices, 0u);
+    EXPECT_EQ(testing::count_nonmanifold_vertices(r.mesh), 0u);
+    EXPECT_EQ(r.topo.duplicate_faces, 0u);
+    EXPECT_EQ(r.topo.degenerate_faces, 0u);
+    EXPECT_EQ(r.topo.isolated_vertices, 0u);
+    EXPECT_TRUE(r.topo.consistently_oriented);
+    EXPECT_EQ(r.stats.fan_faces + r.stats.gap_faces, r.mesh.n_faces());
+    EXPECT_EQ(r.stats.boundary_loops, r.topo.boundary_loops);
+}
+
+// Fans are closed disks around their centre: per tile, the fan faces share one vertex (the centre, at
+// the node mean) and their outer edges form a single loop through the tile's boundary vertices.
+void expect_fans(const Result& r, const testing::FlatCut& fc)
+{
+    auto tile = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(const_cast<Mesh&>(r.mesh), kFaceTile);
+    auto gap = OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(const_cast<Mesh&>(r.mesh), kFaceGap);
+    auto cluster = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(const_cast<Mesh&>(r.mesh), kVertexCluster);
+    std::map<int, std::map<int, int>> vertex_uses; // tile -> vertex -> number of fan faces
+    std::size_t fans = 0;
+    for (auto f : r.mesh.faces()) {
+        EXPECT_EQ(gap[f], tile[f] < 0);
+        if (tile[f] < 0)
+            continue;
+        ++fans;
+        for (auto v : r.mesh.fv_range(f)) {
+            ++vertex_uses[tile[f]][v.idx()];
+            EXPECT_EQ(cluster[v], tile[f]);
+        }
+    }
+    EXPECT_EQ(fans, r.stats.fan_faces);
+    for (const auto& [t, uses] : vertex_uses) {
+        std::size_t faces = 0, centres = 0;
+        for (const auto& [v, n] : uses) {
+            if (n > 2) {
+                ++centres;
+                faces = static_cast<std::size_t>(n);
+                const Vec3& m = fc.hierarchy.nodes[static_cast<std::size_t>(t)].moments.mean;
+                const auto p = r.mesh.point(Mesh::VertexHandle(v));
+                EXPECT_EQ(Vec3(p[0], p[1], p[2]), m);
+            } else {
+                EXPECT_EQ(n, 2) << "a boundary vertex of a fan is in exactly two of its faces";
+            }
+        }
+        EXPECT_EQ(centres, 1u);
+        EXPECT_EQ(uses.size(), faces + 1);
+    }
+}
+
+TEST(Surface, sphere_is_closed_genus_0_outward)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(20000), 400);
+    const Result r = mesh_cut(fc);
+    expect_valid(r);
+    expect_fans(r, fc);
+    EXPECT_FALSE(r.stats.height_field_used);
+    EXPECT_EQ(r.stats.fan_tiles, 400u);
+    EXPECT_EQ(r.topo.boundary_loops, 0u);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.genus, 0);
+    EXPECT_NEAR(signed_volume(r.mesh), 4.0 / 3.0 * M_PI, 0.1);
+    for (auto v : r.mesh.vertices())
+        EXPECT_GT(r.mesh.normal(v) | r.mesh.point(v), 0.5) << "vertex normals point outward";
+}
+
+TEST(Surface, torus_is_closed_genus_1)
+{
+    const Result r = mesh_of(shapes::torus(20000), 400);
+    expect_valid(r);
+    EXPECT_EQ(r.topo.boundary_loops, 0u);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.genus, 1);
+    EXPECT_GT(signed_volume(r.mesh), 0.0);
+}
+
+TEST(Surface, three_holes_is_closed_genus_3)
+{
+    const Result r = mesh_of(shapes::three_holes(4000), 200);
+    expect_valid(r);
+    EXPECT_EQ(r.topo.boundary_loops, 0u);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.genus, 3);
+    EXPECT_GT(signed_volume(r.mesh), 0.0);
+}
+
+TEST(Surface, height_field_is_one_disk_facing_up)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::smooth_height_field(8000), 200);
+    const Result r = mesh_cut(fc);
+    expect_valid(r);
+    expect_fans(r, fc);
+    EXPECT_TRUE(r.stats.height_field_used);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.boundary_loops, 1u);
+    EXPECT_EQ(r.topo.genus, 0);
+    for (auto f : r.mesh.faces())
+        EXPECT_GT(r.mesh.calc_face_normal(f)[2], 0.0);
+}
+
+TEST(Surface, step_function_bridged_or_open)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::step_function(8000), 60);
+    const Result bridged = mesh_cut(fc);
+    expect_valid(bridged);
+    EXPECT_TRUE(bridged.stats.height_field_used);
+    EXPECT_EQ(bridged.topo.components, 1u);
+    EXPECT_EQ(bridged.topo.boundary_loops, 1u);
+
+    SurfaceOptions open;
+    open.bridge_steps = false;
+    const Result split = mesh_cut(fc, open);
+    expect_valid(split);
+    // The two plateaus stay apart: no face rises across the jump, one disk per plateau.
+    EXPECT_EQ(split.topo.components, 2u);
+    EXPECT_EQ(split.topo.boundary_loops, 2u);
+    for (auto f : split.mesh.faces()) {
+        double lo = 2, hi = -1;
+        for (auto v : split.mesh.fv_range(f)) {
+            lo = std::min(lo, split.mesh.point(v)[2]);
+            hi = std::max(hi, split.mesh.point(v)[2]);
+        }
+        EXPECT_LT(hi - lo, 0.5);
+    }
+}
+
+TEST(Surface, bunny_scan_is_valid)
+{
+    const PointCloud bunny = read_points(MRTILE_SHARED_DATA "/bun_zipper.ply");
+    const Result r = mesh_of(bunny, 400);
+    expect_valid(r);
+    EXPECT_FALSE(r.stats.height_field_used);
+}
+
+TEST(Surface, deterministic)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(6000), 120);
+    const Result a = mesh_cut(fc), b = mesh_cut(fc);
+    ASSERT_EQ(a.mesh.n_vertices(), b.mesh.n_vertices());
+    ASSERT_EQ(a.mesh.n_faces(), b.mesh.n_faces());
+    for (auto v : a.mesh.vertices())
+        EXPECT_EQ(a.mesh.point(v), b.mesh.point(Mesh::VertexHandle(v.idx())));
+    for (auto f : a.mesh.faces()) {
+        std::vector<int> fa, fb;
+        for (auto v : a.mesh.fv_range(f))
+            fa.push_back(v.idx());
+        for (auto v : b.mesh.fv_range(Mesh::FaceHandle(f.idx())))
+            fb.push_back(v.idx());
+        EXPECT_EQ(fa, fb);
+    }
+}
+
+TEST(Surface, degenerate_cuts)
+{
+    const PointCloud grid = shapes::plane_grid(30);
+    // One tile: its fan alone, one boundary loop (the hull), no gap faces.
+    {
+        const testing::FlatCut fc = testing::kmeans_cut(grid, 1);
+        const Result r = mesh_cut(fc);
+        expect_valid(r);
+        expect_fans(r, fc);
+        EXPECT_EQ(r.stats.gap_faces, 0u);
+        EXPECT_EQ(r.topo.boundary_loops, 1u);
+        EXPECT_EQ(r.topo.genus, 0);
+    }
+    // Two tiles and a planar cloud in many tiles: one disk.
+    for (std::size_t k : {2u, 25u}) {
+        const Result r = mesh_of(grid, k);
+        expect_valid(r);
+        EXPECT_EQ(r.topo.components, 1u) << k;
+        EXPECT_EQ(r.topo.boundary_loops, 1u) << k;
+        EXPECT_EQ(r.topo.genus, 0) << k;
+    }
+    // The same planar cloud forced through 3D Delaunay (coplanar points) is still valid.
+    {
+        SurfaceOptions off;
+        off.height_field = HeightField::Off;
+        const Result r = mesh_of(grid, 25, off);
+        expect_valid(r);
+        EXPECT_FALSE(r.stats.height_field_used);
+        EXPECT_EQ(r.topo.boundary_loops, 1u);
+    }
+    const testing::FlatCut fc = testing::kmeans_cut(grid, 4);
+    EXPECT_THROW(build_surface(fc.hierarchy, {}), InvalidInput);
+    std::vector<Tile> bad = make_tiles(fc.hierarchy, fc.cut);
+    bad[0].node = 99;
+    EXPECT_THROW(build_surface(fc.hierarchy, bad), InvalidInput);
+    // Tiles of one or two points only: nothing to fan.
+    PointCloud pairs;
+    pairs.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    const testing::FlatCut tiny = testing::hierarchy_from_labels(pairs, {0, 0, 1, 1});
+    EXPECT_THROW(build_surface(tiny.hierarchy, make_tiles(tiny.hierarchy, tiny.cut)), InvalidInput);
+    SurfaceOptions negative;
+    negative.alpha = -1;
+    EXPECT_THROW(build_surface(fc.hierarchy, make_tiles(fc.hierarchy, fc.cut), negative), InvalidInput);
+}
+
+TEST(Surface, height_field_mode_follows_the_option)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::smooth_height_field(4000), 80);
+    SurfaceOptions off;
+    off.height_field = HeightField::Off;
+    const Result r3 = mesh_cut(fc, off);
+    expect_valid(r3);
+    EXPECT_FALSE(r3.stats.height_field_used);
+    EXPECT_EQ(r3.topo.components, 1u);
+    // Two parallel planes are flat everywhere but overlap along the axis: not a height field.
+    const Result planes = mesh_of(shapes::parallel_planes(3000, 0.5), 60);
+    expect_valid(planes);
+    EXPECT_FALSE(planes.stats.height_field_used);
+    EXPECT_EQ(planes.topo.components, 2u);
+}
+
+// With ε-splitting the result does not depend on alpha over a wide range (paper §4.3): the sphere is
+// closed and of genus 0 for alpha from 2/3 to 2 times the automatic value.
+TEST(Surface, alpha_insensitive_with_splitting)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(5000), 100);
+    for (double alpha : {0.1, 0.2, 0.3}) {
+        SurfaceOptions o;
+        o.alpha = alpha;
+        const Result r = mesh_cut(fc, o);
+        expect_valid(r);
+        EXPECT_EQ(r.stats.alpha, alpha);
+        EXPECT_GT(r.stats.split_points, 0u);
+        EXPECT_EQ(r.topo.boundary_loops, 0u) << alpha;
+        EXPECT_EQ(r.topo.genus, 0) << alpha;
+    }
+    SurfaceOptions unsplit;
+    unsplit.split_length = -1;
+    const Result r = mesh_cut(fc, unsplit);
+    expect_valid(r);
+    EXPECT_EQ(r.stats.split_points, 0u);
+}
+
+} // namespace
+} // namespace mrt

@@ -1,0 +1,146 @@
+// Tests of tiles.h: the tile outline is the convex hull of the projected cluster (brute-force
+// cross-check), counter-clockwise seen from the normal, strictly convex; degenerate clusters.
+#include "libmrtile/tiles.h"
+
+#include "cut_fixtures.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+#include <utility>
+
+namespace mrt {
+namespace {
+
+// One-node hierarchy over the given points.
+Hierarchy single_node(const std::vector<Vec3>& points)
+{
+    PointCloud c;
+    c.positions = points;
+    return testing::hierarchy_from_labels(c, std::vector<std::uint32_t>(points.size(), 0)).hierarchy;
+}
+
+std::pair<double, double> uv(const Hierarchy& h, const Tile& t, std::uint32_t i)
+{
+    const Vec3 d = h.cloud.positions[i] - t.centre;
+    return {dot(d, t.axis_u), dot(d, t.axis_v)};
+}
+
+double turn(std::pair<double, double> o, std::pair<double, double> a, std::pair<double, double> b)
+{
+    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+}
+
+// Directed hull edges by brute force: i -> j is an edge when every other point is strictly to its left
+// (points in general position: no three collinear).
+std::set<std::pair<std::uint32_t, std::uint32_t>> brute_force_hull(const Hierarchy& h, const Tile& t)
+{
+    std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+    const std::uint32_t n = static_cast<std::uint32_t>(h.cloud.size());
+    for (std::uint32_t i = 0; i < n; ++i)
+        for (std::uint32_t j = 0; j < n; ++j) {
+            if (i == j)
+                continue;
+            bool all_left = true;
+            for (std::uint32_t k = 0; k < n && all_left; ++k)
+                if (k != i && k != j)
+                    all_left = turn(uv(h, t, i), uv(h, t, j), uv(h, t, k)) > 0;
+            if (all_left)
+                edges.insert({i, j});
+        }
+    return edges;
+}
+
+TEST(Tiles, hull_matches_brute_force_on_random_tilted_clusters)
+{
+    std::mt19937 rng(42);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int trial = 0; trial < 20; ++trial) {
+        const Vec3 n = normalized(Vec3{u(rng), u(rng), u(rng)});
+        const Vec3 a = normalized(cross(n, Vec3{0.3, 0.5, 0.8}));
+        const Vec3 b = cross(n, a);
+        std::vector<Vec3> pts;
+        const int count = 10 + trial * 3;
+        for (int i = 0; i < count; ++i)
+            pts.push_back(Vec3{2, -1, 5} + a * u(rng) + b * (0.5 * u(rng)) + n * (0.01 * u(rng)));
+        const Hierarchy h = single_node(pts);
+        const Tile t = make_tile(h, 0);
+        ASSERT_TRUE(t.has_fan());
+        EXPECT_NEAR(dot(cross(t.axis_u, t.axis_v), t.normal), 1.0, 1e-12);
+        EXPECT_NEAR(std::abs(dot(t.normal, n)), 1.0, 1e-3);
+        std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+        const std::size_t m = t.boundary.size();
+        double twice_area = 0.0;
+        for (std::size_t i = 0; i < m; ++i) {
+            const std::uint32_t p = t.boundary[i], q = t.boundary[(i + 1) % m], r = t.boundary[(i + 2) % m];
+            got.insert({p, q});
+            EXPECT_GT(turn(uv(h, t, p), uv(h, t, q), uv(h, t, r)), 0.0) << "not strictly convex / CCW";
+            twice_area += uv(h, t, p).first * uv(h, t, q).second - uv(h, t, p).second * uv(h, t, q).first;
+        }
+        EXPECT_EQ(got, brute_force_hull(h, t)) << "trial " << trial;
+        EXPECT_NEAR(t.area, 0.5 * twice_area, 1e-12);
+        EXPECT_GT(t.area, 0.0);
+        EXPECT_EQ(t.points, static_cast<std::uint32_t>(count));
+    }
+}
+
+TEST(Tiles, collinear_hull_points_are_dropped)
+{
+    // A 5 x 5 grid: the hull is the 4 corners, the 12 other border points are collinear.
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j)
+            pts.push_back({double(i), double(j), 0.0});
+    const Hierarchy h = single_node(pts);
+    const Tile t = make_tile(h, 0);
+    ASSERT_EQ(t.boundary.size(), 4u);
+    for (std::uint32_t i : t.boundary) {
+        const Vec3& p = h.cloud.positions[i];
+        EXPECT_TRUE((p.x == 0 || p.x == 4) && (p.y == 0 || p.y == 4));
+    }
+    EXPECT_NEAR(t.area, 16.0, 1e-9);
+}
+
+TEST(Tiles, degenerate_clusters_have_no_fan)
+{
+    EXPECT_EQ(make_tile(single_node({{1, 2, 3}}), 0).boundary.size(), 1u);
+    const Tile two = make_tile(single_node({{0, 0, 0}, {1, 1, 0}}), 0);
+    EXPECT_EQ(two.boundary.size(), 2u);
+    EXPECT_FALSE(two.has_fan());
+    std::vector<Vec3> line;
+    for (int i = 0; i < 9; ++i)
+        line.push_back(Vec3{1, 2, 2} * (i * 0.25));
+    const Hierarchy hl = single_node(line);
+    const Tile t = make_tile(hl, 0);
+    ASSERT_EQ(t.boundary.size(), 2u);
+    EXPECT_FALSE(t.has_fan());
+    std::set<double> ends{hl.cloud.positions[t.boundary[0]].x, hl.cloud.positions[t.boundary[1]].x};
+    EXPECT_EQ(ends, (std::set<double>{0.0, 2.0}));
+    EXPECT_EQ(make_tile(single_node({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}), 0).boundary.size(), 1u);
+}
+
+TEST(Tiles, cut_tiles_use_their_own_points)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(3000), 40);
+    const std::vector<Tile> tiles = make_tiles(fc.hierarchy, fc.cut);
+    ASSERT_EQ(tiles.size(), fc.cut.size());
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const Node& n = fc.hierarchy.nodes[static_cast<std::size_t>(fc.cut[k])];
+        EXPECT_EQ(tiles[k].node, fc.cut[k]);
+        EXPECT_EQ(tiles[k].centre, n.moments.mean);
+        ASSERT_TRUE(tiles[k].has_fan());
+        for (std::uint32_t i : tiles[k].boundary) {
+            EXPECT_GE(i, n.begin);
+            EXPECT_LT(i, n.end);
+        }
+    }
+    EXPECT_THROW(make_tiles(fc.hierarchy, {static_cast<std::int32_t>(fc.hierarchy.nodes.size())}), InvalidInput);
+    EXPECT_THROW(make_tiles(fc.hierarchy, {-1}), InvalidInput);
+}
+
+} // namespace
+} // namespace mrt
