@@ -9,6 +9,7 @@
 //! Vertex normals use OpenMesh's standard property.
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
 
 namespace mrt {
 
@@ -29,5 +30,32 @@ using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";
 inline constexpr const char* kFaceGap = "f:gap";
+
+//! Silences OpenMesh's console streams for its lifetime (the library never prints; OpenMesh writes
+//! "complex edge" and reader/writer chatter to omerr/omlog). Restores their previous state.
+class QuietOpenMesh
+{
+public:
+    QuietOpenMesh() : log_(omlog().is_enabled()), out_(omout().is_enabled()), err_(omerr().is_enabled())
+    {
+        omlog().disable();
+        omout().disable();
+        omerr().disable();
+    }
+    ~QuietOpenMesh()
+    {
+        if (log_)
+            omlog().enable();
+        if (out_)
+            omout().enable();
+        if (err_)
+            omerr().enable();
+    }
+    QuietOpenMesh(const QuietOpenMesh&) = delete;
+    QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
+
+private:
+    bool log_, out_, err_;
+};
 
 } // namespace mrt

@@ -1,3 +1,618 @@
-// The mrtile command-line tool (work in progress).
+// The mrtile command-line tool: parses options into the library's option structs, runs the stages,
+// and reports. It is the only place that prints and picks exit codes (0 ok, 1 error, 2 usage).
+#include "formats/lod_tileset.h"
+#include "formats/read_points.h"
+#include "formats/write_gltf.h"
+#include "formats/write_mesh.h"
+#include "libmrtile/atomic_file.h"
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/lod_set.h"
+#include "libmrtile/model_file.h"
+#include "libmrtile/reconstruct.h"
+#include "libmrtile/shapes.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
-int main() { std::puts("mrtile " MRTILE_VERSION); return 0; }
+#include <iostream>
+#include <new>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+using namespace mrt;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// Thrown for bad option values found after parsing (CLI11 handles the rest); exit code 2.
+struct UsageError : std::runtime_error
+{
+    using std::runtime_error::runtime_error;
+};
+
+struct Globals
+{
+    bool quiet = false;
+    bool progress() const { return !quiet && ::isatty(2); }
+};
+
+std::string lower_extension(const fs::path& p)
+{
+    std::string e = p.extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return e;
+}
+
+std::vector<double> parse_numbers(const std::string& text, char separator, const std::string& what)
+{
+    std::vector<double> out;
+    std::stringstream ss(text);
+    std::string item;
+    while (std::getline(ss, item, separator)) {
+        try {
+            std::size_t used = 0;
+            const double v = std::stod(item, &used);
+            if (used != item.size() || !std::isfinite(v))
+                throw std::invalid_argument(item);
+            out.push_back(v);
+        } catch (const std::exception&) {
+            throw UsageError(what + ": '" + item + "' is not a finite number");
+        }
+    }
+    return out;
+}
+
+// --- options shared by several commands -------------------------------------------------------
+
+struct BuildArgs
+{
+    double tolerance = BuildOptions{}.tolerance;
+    double tau = 0.0;
+    std::size_t pca_limit = BuildOptions{}.pca_limit;
+    std::size_t min_cluster = BuildOptions{}.min_cluster;
+    bool no_reclassify = false;
+
+    void add(CLI::App* cmd)
+    {
+        auto* tol = cmd->add_option("--build-tolerance", tolerance,
+                                    "hierarchy stop criterion: RMS plane distance / largest bbox side")
+                        ->check(CLI::NonNegativeNumber);
+        auto* t = cmd->add_option("--build-tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
+                      ->check(CLI::PositiveNumber);
+        tol->excludes(t);
+        cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")->capture_default_str();
+        cmd->add_option("--min-cluster", min_cluster, "clusters up to this size are not split")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
+    }
+
+    BuildOptions options(const Globals& g) const
+    {
+        BuildOptions o;
+        o.tolerance = tolerance;
+        o.tau = tau;
+        o.pca_limit = pca_limit;
+        o.min_cluster = min_cluster;
+        o.reclassify = !no_reclassify;
+        if (g.progress())
+            o.progress = [](double f) { std::fprintf(stderr, "\rbuilding hierarchy %5.1f%%", 100.0 * f); };
+        return o;
+    }
+};
+
+struct CutArgs
+{
+    double tolerance = 0.0;
+    double tau = 0.0;
+    std::size_t tiles = 0;
+    std::vector<std::string> focus;
+    std::string camera;
+
+    static constexpr double kDefaultTolerance = 0.002;
+
+    void add(CLI::App* cmd)
+    {
+        auto* tol = cmd->add_option("--tolerance", tolerance,
+                                    "cut: RMS plane distance / largest bbox side (default 0.002)")
+                        ->check(CLI::NonNegativeNumber);
+        auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
+                      ->check(CLI::PositiveNumber);
+        auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(CLI::PositiveNumber);
+        auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)");
+        auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
+        tol->excludes(t)->excludes(n);
+        t->excludes(n);
+        c->excludes(f)->excludes(n)->excludes(t);
+    }
+
+    Cut cut(const Hierarchy& h) const
+    {
+        const Vec3 origin = h.cloud.origin;
+        if (!camera.empty()) {
+            std::vector<std::string> parts;
+            std::stringstream ss(camera);
+            std::string part;
+            while (std::getline(ss, part, ':'))
+                parts.push_back(part);
+            if (parts.size() < 4 || parts.size() > 5)
+                throw UsageError("--camera: expected X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
+            const auto p = parse_numbers(parts[0], ',', "--camera position");
+            const auto target = parse_numbers(parts[1], ',', "--camera target");
+            if (p.size() != 3 || target.size() != 3)
+                throw UsageError("--camera: position and target need three coordinates each");
+            Camera cam;
+            cam.position = Vec3{p[0], p[1], p[2]} - origin;
+            cam.fov_y_degrees = parse_numbers(parts[2], ',', "--camera fov").at(0);
+            cam.viewport_height = parse_numbers(parts[3], ',', "--camera height").at(0);
+            if (parts.size() == 5)
+                cam.max_pixel_error = parse_numbers(parts[4], ',', "--camera pixels").at(0);
+            return cut_for_camera(h, cam);
+        }
+        if (tiles > 0)
+            return cut_by_budget(h, tiles);
+        if (tau > 0)
+            return cut_by_tau(h, tau);
+        const double base = tolerance > 0 ? tolerance : kDefaultTolerance;
+        if (focus.empty())
+            return cut_by_tolerance(h, base);
+        std::vector<FocusRegion> regions;
+        for (const std::string& spec : focus) {
+            const std::size_t colon = spec.find(':');
+            const auto v = parse_numbers(spec.substr(0, colon), ',', "--focus");
+            if (v.size() != 4 || v[3] < 0)
+                throw UsageError("--focus: expected X,Y,Z,R[:TOL] with R >= 0, got '" + spec + "'");
+            FocusRegion r;
+            r.centre = Vec3{v[0], v[1], v[2]} - origin;
+            r.radius = v[3];
+            r.tolerance = colon == std::string::npos ? 0.0 : parse_numbers(spec.substr(colon + 1), ',', "--focus tolerance").at(0);
+            regions.push_back(r);
+        }
+        return cut_by_regions(h, base, regions);
+    }
+};
+
+struct MeshArgs
+{
+    double alpha = 0.0;
+    std::string height_field = "auto";
+    bool keep_steps = false;
+    std::string stats_json;
+    bool no_quality = false;
+
+    void add(CLI::App* cmd)
+    {
+        cmd->add_option("--alpha", alpha, "gap triangulation alpha in model units (default: automatic)")
+            ->check(CLI::NonNegativeNumber);
+        cmd->add_option("--height-field", height_field, "2D Delaunay on the projection: auto, on or off")
+            ->check(CLI::IsMember({"auto", "on", "off"}))
+            ->capture_default_str();
+        cmd->add_flag("--keep-steps", keep_steps, "height fields: keep step discontinuities open (paper Fig. 9b)");
+        cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file");
+        cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
+    }
+
+    MeshOptions options() const
+    {
+        MeshOptions o;
+        o.surface.alpha = alpha;
+        o.surface.height_field = height_field == "on" ? HeightField::On : height_field == "off" ? HeightField::Off : HeightField::Auto;
+        o.surface.bridge_steps = !keep_steps;
+        return o;
+    }
+};
+
+struct OutputArgs
+{
+    bool draco = false;
+    int quantize = 14;
+    std::string up = "z";
+
+    void add(CLI::App* cmd)
+    {
+        cmd->add_flag("--draco", draco, "Draco-compress glTF/GLB and 3D Tiles content");
+        cmd->add_option("--quantize", quantize, "Draco position quantization bits")->check(CLI::Range(1, 30))->capture_default_str();
+        cmd->add_option("--up", up, "up axis of the input (glTF is y-up): z or y")->check(CLI::IsMember({"z", "y"}))->capture_default_str();
+    }
+
+    GltfOptions gltf() const
+    {
+        GltfOptions o;
+        o.draco = draco;
+        o.draco_options.position_bits = quantize;
+        o.up_axis = up == "y" ? UpAxis::Y : UpAxis::Z;
+        return o;
+    }
+};
+
+// Writes a mesh to any supported single-file format, chosen by extension.
+void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, const OutputArgs& args)
+{
+    const std::string ext = lower_extension(out);
+    if (ext == ".glb" || ext == ".gltf") {
+        write_gltf(mesh, origin, out, args.gltf());
+    } else if (ext == ".drc") {
+        DracoOptions d;
+        d.position_bits = args.quantize;
+        write_drc(mesh, origin, out, d);
+    } else if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".om") {
+        write_mesh(mesh, origin, out);
+    } else {
+        throw UsageError(out.string() + ": unknown output extension (use .ply .obj .off .stl .om .glb .gltf .drc, or --format 3dtiles with a directory)");
+    }
+}
+
+nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double seconds)
+{
+    nlohmann::json j;
+    j["tiles"] = r.tiles;
+    j["vertices"] = r.mesh.n_vertices();
+    j["faces"] = r.mesh.n_faces();
+    j["fan_faces"] = r.surface.fan_faces;
+    j["gap_faces"] = r.surface.gap_faces;
+    j["refused_faces"] = r.surface.refused_faces;
+    j["holes_filled"] = r.surface.holes_filled;
+    j["height_field"] = r.surface.height_field_used;
+    j["alpha"] = r.surface.alpha;
+    if (q) {
+        j["boundary_loops"] = q->topology.boundary_loops;
+        j["genus"] = q->topology.genus;
+        j["components"] = q->topology.components;
+        j["nonmanifold_edges"] = q->topology.nonmanifold_edges;
+        j["nonmanifold_vertices"] = q->topology.nonmanifold_vertices;
+        j["consistently_oriented"] = q->topology.consistently_oriented;
+        j["e_rms"] = q->e_rms;
+        j["mean_distance"] = q->point_to_mesh.mean;
+        j["max_distance"] = q->point_to_mesh.max;
+    }
+    j["seconds"] = seconds;
+    return j;
+}
+
+void print_mesh_report(const nlohmann::json& j, const fs::path& out)
+{
+    std::printf("wrote %s: %zu tiles, %zu vertices, %zu faces", out.string().c_str(), j["tiles"].get<std::size_t>(),
+                j["vertices"].get<std::size_t>(), j["faces"].get<std::size_t>());
+    if (j.contains("genus"))
+        std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices, E_RMS %.3g, "
+                    "mean/max distance %.3g/%.3g of the diagonal",
+                    j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
+                    j["nonmanifold_vertices"].get<std::size_t>(), j["e_rms"].get<double>(), j["mean_distance"].get<double>(),
+                    j["max_distance"].get<double>());
+    std::printf(" (%.2f s)\n", j["seconds"].get<double>());
+}
+
+// Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`.
+nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const MeshArgs& mesh_args,
+                              const OutputArgs& out_args, const fs::path& out)
+{
+    const auto start = Clock::now();
+    const Cut cut = cut_args.cut(h);
+    MeshResult r = mesh_cut(h, cut, mesh_args.options());
+    QualityReport q;
+    if (!mesh_args.no_quality)
+        q = measure_quality(h, cut, r.mesh);
+    write_any_mesh(r.mesh, h.cloud.origin, out, out_args);
+    nlohmann::json j = mesh_json(r, mesh_args.no_quality ? nullptr : &q, seconds_since(start));
+    if (!mesh_args.stats_json.empty())
+        write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
+    print_mesh_report(j, out);
+    return j;
+}
+
+struct ExportArgs
+{
+    std::string format;
+    std::size_t max_tile_triangles = LodSetOptions{}.max_tile_triangles;
+    std::vector<double> tolerances;
+    std::size_t levels = 0;
+
+    void add(CLI::App* cmd)
+    {
+        cmd->add_option("--format", format, "3dtiles (a directory), or by the output's extension")
+            ->check(CLI::IsMember({"3dtiles", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om", "lods"}));
+        cmd->add_option("--max-tile-triangles", max_tile_triangles, "largest number of triangles in one 3D Tiles tile")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)");
+        cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")->delimiter(',');
+    }
+
+    LodSetOptions options(const MeshArgs& mesh_args) const
+    {
+        LodSetOptions o;
+        o.max_tile_triangles = max_tile_triangles;
+        o.levels = levels;
+        o.tolerances = tolerances;
+        o.mesh = mesh_args.options();
+        return o;
+    }
+};
+
+void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& dir)
+{
+    const auto start = Clock::now();
+    const LodSet set = make_lod_set(h, e.options(m));
+    TilesetOptions t;
+    t.gltf = o.gltf();
+    write_lod_tileset(set, h.cloud.origin, dir, t);
+    std::size_t contents = 0, triangles = 0;
+    for (const LodTile& tile : set.tiles)
+        if (tile.mesh.n_faces() > 0) {
+            ++contents;
+            triangles += tile.mesh.n_faces();
+        }
+    std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
+                dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+}
+
+void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& dir)
+{
+    const auto start = Clock::now();
+    LodSetOptions options = e.options(m);
+    options.tileset = false;
+    const LodSet set = make_lod_set(h, options);
+    ensure_directory(dir);
+    nlohmann::json index = nlohmann::json::array();
+    const std::string ext = lower_extension(dir / ("x." + (e.format.empty() || e.format == "lods" ? std::string("ply") : e.format)));
+    for (std::size_t level = 0; level < set.levels.size(); ++level) {
+        const LodLevel& l = set.levels[level];
+        const std::string name = "level" + std::to_string(level) + ext;
+        write_any_mesh(l.mesh, h.cloud.origin, dir / name, o);
+        const QualityReport q = measure_quality(h, l.cut, l.mesh);
+        index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
+                         {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
+                         {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
+                         {"e_rms", q.e_rms}});
+        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, mean/max distance %.3g/%.3g\n", level, l.tolerance,
+                    l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.point_to_mesh.mean, q.point_to_mesh.max);
+    }
+    write_file_atomically(dir / "lods.json", index.dump(2) + "\n");
+    std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), set.levels.size(), seconds_since(start));
+}
+
+Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const Globals& g)
+{
+    const auto start = Clock::now();
+    PointCloud cloud = read_points(points);
+    const std::size_t n = cloud.size();
+    Hierarchy h = build_hierarchy(std::move(cloud), args.options(g));
+    if (g.progress())
+        std::fprintf(stderr, "\r%40s\r", "");
+    std::printf("read and built %s: %zu points, %zu nodes, %zu leaves, depth %u (%.2f s)\n", points.string().c_str(), n,
+                h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
+    return h;
+}
+
+int run_info(const fs::path& model, bool json)
+{
+    const Hierarchy h = load_model(model);
+    const BoundingBox box = h.bbox();
+    const Vec3 lo = box.min + h.cloud.origin, hi = box.max + h.cloud.origin;
+    const bool timed = std::isfinite(h.info.build_seconds);
+    const std::string criterion = h.info.criterion == Criterion::Tau ? "tau" : "tolerance";
+    if (json) {
+        nlohmann::json j;
+        j["file"] = model.string();
+        j["points"] = h.cloud.size();
+        j["nodes"] = h.nodes.size();
+        j["leaves"] = h.leaf_count();
+        j["depth"] = h.max_depth();
+        j["bbox_min"] = vec_json(lo);
+        j["bbox_max"] = vec_json(hi);
+        j["origin"] = vec_json(h.cloud.origin);
+        j["criterion"] = criterion;
+        j["criterion_value"] = h.info.criterion_value;
+        j["pca_limit"] = h.info.pca_limit;
+        j["min_cluster"] = h.info.min_cluster;
+        j["reclassify"] = h.info.reclassify;
+        j["colors"] = h.cloud.has_colors();
+        j["build_seconds"] = timed ? nlohmann::json(h.info.build_seconds) : nlohmann::json(nullptr);
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    std::printf("model       %s\n", model.string().c_str());
+    std::printf("points      %zu%s\n", h.cloud.size(), h.cloud.has_colors() ? " (with colours)" : "");
+    std::printf("nodes       %zu\nleaves      %zu\ndepth       %u\n", h.nodes.size(), h.leaf_count(), h.max_depth());
+    std::printf("bbox min    %.17g %.17g %.17g\nbbox max    %.17g %.17g %.17g\n", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    std::printf("criterion   %s %g, pca limit %u, min cluster %u, reclassify %s\n", criterion.c_str(), h.info.criterion_value,
+                h.info.pca_limit, h.info.min_cluster, h.info.reclassify ? "on" : "off");
+    if (timed)
+        std::printf("build time  %.3f s\n", h.info.build_seconds);
+    else
+        std::printf("build time  not recorded (build with --record-time)\n");
+    return 0;
+}
+
+int run(int argc, char** argv)
+{
+    CLI::App app{"mrtile: point clouds to multiresolution meshes, glTF and 3D Tiles "
+                 "(Heckel, Uva, Hamann clustering-based hierarchical surface models)"};
+    app.set_version_flag("--version", std::string("mrtile ") + MRTILE_VERSION);
+    app.require_subcommand(1);
+    Globals g;
+    app.add_flag("-q,--quiet", g.quiet, "no progress output");
+
+    // build
+    auto* build = app.add_subcommand("build", "build the cluster hierarchy of a point cloud into a .mrt model");
+    fs::path build_in, build_out;
+    BuildArgs build_args;
+    bool record_time = false;
+    build->add_option("POINTS", build_in, "point file: .ply .xyz .pts .txt .csv .obj .off, optionally .gz")->required();
+    build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
+    build_args.add(build);
+    build->add_option("--tolerance", build_args.tolerance, "alias of --build-tolerance")->check(CLI::NonNegativeNumber);
+    build->add_option("--tau", build_args.tau, "alias of --build-tau")->check(CLI::PositiveNumber);
+    build->add_flag("--record-time", record_time, "store the build time in the model (the file then differs between runs)");
+
+    // info
+    auto* info = app.add_subcommand("info", "describe a .mrt model");
+    fs::path info_in;
+    bool info_json = false;
+    info->add_option("MODEL", info_in, "model file")->required();
+    info->add_flag("--json", info_json, "one JSON object");
+
+    // mesh
+    auto* mesh = app.add_subcommand("mesh", "cut a model and write the mesh");
+    fs::path mesh_in, mesh_out;
+    CutArgs mesh_cut_args;
+    MeshArgs mesh_args;
+    OutputArgs mesh_out_args;
+    mesh->add_option("MODEL", mesh_in, "model file")->required();
+    mesh->add_option("-o,--output", mesh_out, "mesh file: .ply .obj .off .stl .om .glb .gltf .drc")->required();
+    mesh_cut_args.add(mesh);
+    mesh_args.add(mesh);
+    mesh_out_args.add(mesh);
+
+    // reconstruct
+    auto* rec = app.add_subcommand("reconstruct", "build and mesh in one step (or write 3D Tiles with --format 3dtiles)");
+    fs::path rec_in, rec_out, rec_model;
+    BuildArgs rec_build;
+    CutArgs rec_cut;
+    MeshArgs rec_mesh;
+    OutputArgs rec_output;
+    ExportArgs rec_export;
+    rec->add_option("POINTS", rec_in, "point file")->required();
+    rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
+    rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
+    rec_build.add(rec);
+    rec_cut.add(rec);
+    rec_mesh.add(rec);
+    rec_output.add(rec);
+    rec_export.add(rec);
+
+    // lods
+    auto* lods = app.add_subcommand("lods", "write one mesh per level of detail and a JSON index");
+    fs::path lods_in, lods_out;
+    MeshArgs lods_mesh;
+    OutputArgs lods_output;
+    ExportArgs lods_export;
+    lods->add_option("MODEL", lods_in, "model file")->required();
+    lods->add_option("-o,--output", lods_out, "directory")->required();
+    lods_mesh.add(lods);
+    lods_output.add(lods);
+    lods_export.add(lods);
+
+    // export
+    auto* exp = app.add_subcommand("export", "export a model: 3D Tiles (directory) or one mesh file");
+    fs::path exp_in, exp_out;
+    CutArgs exp_cut;
+    MeshArgs exp_mesh;
+    OutputArgs exp_output;
+    ExportArgs exp_export;
+    exp->add_option("MODEL", exp_in, "model file")->required();
+    exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->required();
+    exp_cut.add(exp);
+    exp_mesh.add(exp);
+    exp_output.add(exp);
+    exp_export.add(exp);
+
+    // demo
+    auto* demo = app.add_subcommand("demo", "the whole pipeline on a built-in genus-3 test shape");
+    fs::path demo_out = "out/demo";
+    demo->add_option("-o,--output", demo_out, "output directory")->capture_default_str();
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int code = app.exit(e);
+        return code == 0 ? 0 : 2;
+    }
+
+    if (*build) {
+        Hierarchy h = build_from_points(build_in, build_args, g);
+        SaveOptions s;
+        s.record_build_time = record_time;
+        save_model(h, build_out, s);
+        std::printf("wrote %s (%ju bytes)\n", build_out.string().c_str(), static_cast<std::uintmax_t>(fs::file_size(build_out)));
+        return 0;
+    }
+    if (*info)
+        return run_info(info_in, info_json);
+    if (*mesh) {
+        const Hierarchy h = load_model(mesh_in);
+        mesh_and_write(h, mesh_cut_args, mesh_args, mesh_out_args, mesh_out);
+        return 0;
+    }
+    if (*rec) {
+        const Hierarchy h = build_from_points(rec_in, rec_build, g);
+        if (!rec_model.empty())
+            save_model(h, rec_model);
+        if (rec_export.format == "3dtiles")
+            write_tileset(h, rec_export, rec_mesh, rec_output, rec_out);
+        else
+            mesh_and_write(h, rec_cut, rec_mesh, rec_output, rec_out);
+        return 0;
+    }
+    if (*lods) {
+        const Hierarchy h = load_model(lods_in);
+        write_lods(h, lods_export, lods_mesh, lods_output, lods_out);
+        return 0;
+    }
+    if (*exp) {
+        const Hierarchy h = load_model(exp_in);
+        if (exp_export.format == "3dtiles")
+            write_tileset(h, exp_export, exp_mesh, exp_output, exp_out);
+        else
+            mesh_and_write(h, exp_cut, exp_mesh, exp_output, exp_out);
+        return 0;
+    }
+    if (*demo) {
+        // The built-in default input: the paper's "3Holes"-like genus-3 solid, 40,000 samples.
+        ensure_directory(demo_out);
+        const auto start = Clock::now();
+        PointCloud cloud = shapes::three_holes(40000);
+        shapes::add_noise(cloud, 0.05);
+        recenter(cloud);
+        std::printf("demo input: genus-3 plate with three holes, %zu noisy samples (built in)\n", cloud.size());
+        const Hierarchy h = build_hierarchy(std::move(cloud));
+        save_model(h, demo_out / "model.mrt");
+        std::printf("wrote %s: %zu nodes, %zu leaves, depth %u\n", (demo_out / "model.mrt").string().c_str(), h.nodes.size(),
+                    h.leaf_count(), h.max_depth());
+        CutArgs cut;
+        MeshArgs m;
+        m.stats_json = (demo_out / "mesh.json").string();
+        OutputArgs o;
+        mesh_and_write(h, cut, m, o, demo_out / "mesh.ply");
+        m.no_quality = true;
+        m.stats_json.clear();
+        o.draco = true;
+        mesh_and_write(h, cut, m, o, demo_out / "mesh.glb");
+        ExportArgs e;
+        write_tileset(h, e, m, o, demo_out / "tiles");
+        std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
+                    (demo_out / "tiles" / "tileset.json").string().c_str(), (demo_out / "mesh.glb").string().c_str());
+        return 0;
+    }
+    return 2;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    try {
+        return run(argc, argv);
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "mrtile: usage error: %s\n", e.what());
+        return 2;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "mrtile: error: out of memory\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "mrtile: error: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,38 @@
+// Bridge from the LOD set chosen in libmrtile (which tiles, which errors) to the 3D Tiles writer
+// (how they are serialised): kept apart so the writer stays a pure serialiser.
+#include "formats/lod_tileset.h"
+
+#include "libmrtile/errors.h"
+
+#include <algorithm>
+
+namespace mrt {
+
+std::vector<TilesetTile> tileset_tiles(const LodSet& set)
+{
+    std::vector<TilesetTile> out(set.tiles.size());
+    for (std::size_t k = 0; k < set.tiles.size(); ++k) {
+        const LodTile& t = set.tiles[k];
+        out[k].mesh = t.mesh.n_faces() > 0 ? &t.mesh : nullptr;
+        out[k].box = t.box;
+        out[k].geometric_error = t.geometric_error;
+        out[k].children = t.children;
+    }
+    return out;
+}
+
+void write_lod_tileset(const LodSet& set, const Vec3& origin, const std::filesystem::path& dir, TilesetOptions options)
+{
+    if (set.tiles.empty())
+        throw InvalidInput(dir.string() + ": the LOD set has no tiles (was it made with tileset = false?)");
+    if (options.gltf.draco && !options.gltf.draco_options.grid) {
+        const BoundingBox& root = set.tiles[0].box;
+        QuantizationGrid grid;
+        grid.min = root.min;
+        grid.range = std::max(root.largest_side(), 1e-12);
+        options.gltf.draco_options.grid = grid;
+    }
+    write_3d_tiles(tileset_tiles(set), origin, dir, options);
+}
+
+} // namespace mrt

@@ -1,0 +1,287 @@
+// Streamed LOD sets over the persistent hierarchy (the paper's "model hierarchies by triangulating
+// various levels", §1 and Fig. 11-13), organised for 3D Tiles REPLACE refinement. See lod_set.h for
+// the scheme; the reasons for its parts:
+//  - one global mesh per level: tiles cut from it share border vertices bit for bit, so tiles of one
+//    level never crack against each other;
+//  - regions are hierarchy nodes: a region's points are a contiguous range, so "faces of cut nodes in
+//    this region" is a range test, and children regions partition their parent exactly;
+//  - skirts: a neighbour shown at another level has a slightly different border; a strip hanging
+//    along the surface normal from the region's border hides the crack (the standard terrain remedy).
+#include "libmrtile/lod_set.h"
+
+#include "libmrtile/errors.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+namespace mrt {
+namespace {
+
+struct LevelIndex
+{
+    // Cut node owning each face of the level mesh.
+    std::vector<std::int32_t> face_owner;
+    // Faces owned by each hierarchy node's subtree at this level (0 for nodes not above/at the cut).
+    std::vector<std::size_t> faces_below;
+    // True for nodes of the cut and their ancestors (regions may not go below the cut).
+    std::vector<char> at_or_above_cut;
+};
+
+double level_max_plane_distance(const Hierarchy& h, const Cut& cut)
+{
+    double m = 0.0;
+    for (std::int32_t id : cut)
+        m = std::max(m, h.nodes[static_cast<std::size_t>(id)].max_plane_distance);
+    return m;
+}
+
+// The scale-free tolerance a cut satisfies: its largest tile RMS plane distance / largest side.
+double cut_tolerance(const Hierarchy& h, const Cut& cut)
+{
+    const double side = h.bbox().largest_side();
+    double m = 0.0;
+    for (std::int32_t id : cut)
+        m = std::max(m, h.nodes[static_cast<std::size_t>(id)].rms_plane_distance);
+    return side > 0 ? m / side : 0.0;
+}
+
+LevelIndex index_level(const Hierarchy& h, const LodLevel& level)
+{
+    LevelIndex index;
+    const Mesh& mesh = level.mesh;
+    index.faces_below.assign(h.nodes.size(), 0);
+    index.at_or_above_cut.assign(h.nodes.size(), 0);
+    // Map node → the cut node containing it is not needed: owners come from the face/vertex ids,
+    // which name tile nodes of this cut.
+    OpenMesh::FPropHandleT<int> tile;
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!mesh.get_property_handle(tile, kFaceTile) || !mesh.get_property_handle(cluster, kVertexCluster))
+        throw InvalidInput("lods: level mesh lacks the tile/cluster properties");
+    index.face_owner.assign(mesh.n_faces(), -1);
+    for (const auto f : mesh.faces()) {
+        int owner = mesh.property(tile, f);
+        if (owner < 0) {
+            // Gap face: owned by the tile of its smallest-index vertex (deterministic).
+            int best_vertex = -1;
+            for (const auto v : mesh.fv_range(f))
+                if (best_vertex < 0 || v.idx() < best_vertex) {
+                    best_vertex = v.idx();
+                    owner = mesh.property(cluster, v);
+                }
+        }
+        index.face_owner[static_cast<std::size_t>(f.idx())] = owner;
+        if (owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size())
+            ++index.faces_below[static_cast<std::size_t>(owner)];
+    }
+    for (std::int32_t id : level.cut)
+        index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
+    // Children come after parents: accumulate upwards.
+    for (std::size_t k = h.nodes.size(); k-- > 1;) {
+        const auto parent = static_cast<std::size_t>(h.nodes[k].parent);
+        index.faces_below[parent] += index.faces_below[k];
+        if (index.at_or_above_cut[k])
+            index.at_or_above_cut[parent] = 1;
+    }
+    return index;
+}
+
+bool inside(const Node& region, const Node& node) { return region.begin <= node.begin && node.end <= region.end; }
+
+// The content of a tile: the level's faces owned by cut nodes inside the region, with a skirt along
+// every border edge that is not a border of the whole level mesh.
+Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
+                    double skirt_depth, bool skirts, std::size_t* skirt_faces)
+{
+    const Mesh& src = level.mesh;
+    const QuietOpenMesh quiet; // refusals below are handled, not reported on the console
+    Mesh out;
+    std::vector<int> map(src.n_vertices(), -1);
+    std::vector<char> selected(src.n_faces(), 0);
+    for (const auto f : src.faces()) {
+        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
+        if (owner < 0 || !inside(region, h.nodes[static_cast<std::size_t>(owner)]))
+            continue;
+        selected[static_cast<std::size_t>(f.idx())] = 1;
+        std::array<Mesh::VertexHandle, 3> vs;
+        int k = 0;
+        for (const auto v : src.fv_range(f)) {
+            int& m = map[static_cast<std::size_t>(v.idx())];
+            if (m < 0) {
+                const Mesh::VertexHandle nv = out.add_vertex(src.point(v));
+                out.set_normal(nv, src.normal(v));
+                m = nv.idx();
+            }
+            vs[static_cast<std::size_t>(k++)] = Mesh::VertexHandle(m);
+        }
+        if (!out.add_face(vs[0], vs[1], vs[2]).is_valid()) {
+            // A subset of a manifold mesh is manifold except where two fans of the region touch at
+            // one vertex only: give this face its own copies of its vertices (same positions, so
+            // nothing moves on screen) rather than lose it.
+            for (auto& v : vs) {
+                const Mesh::VertexHandle copy = out.add_vertex(out.point(v));
+                out.set_normal(copy, out.normal(v));
+                v = copy;
+            }
+            const Mesh::FaceHandle added = out.add_face(vs[0], vs[1], vs[2]);
+            assert(added.is_valid());
+            (void)added;
+        }
+    }
+    *skirt_faces = 0;
+    if (!skirts || skirt_depth <= 0)
+        return out;
+    // Border edges of the region that are interior edges of the level mesh get a skirt quad.
+    std::vector<int> lowered(src.n_vertices(), -1);
+    auto lower = [&](Mesh::VertexHandle src_v) {
+        int& l = lowered[static_cast<std::size_t>(src_v.idx())];
+        if (l < 0) {
+            const OpenMesh::Vec3d n = src.normal(src_v);
+            const Mesh::VertexHandle nv = out.add_vertex(src.point(src_v) - n * skirt_depth);
+            out.set_normal(nv, n);
+            l = nv.idx();
+        }
+        return Mesh::VertexHandle(l);
+    };
+    for (const auto he : src.halfedges()) {
+        const auto f = src.face_handle(he);
+        const auto g = src.opposite_face_handle(he);
+        if (!f.is_valid() || !g.is_valid())
+            continue; // a border of the surface itself: nothing shows through
+        if (!selected[static_cast<std::size_t>(f.idx())] || selected[static_cast<std::size_t>(g.idx())])
+            continue;
+        // he runs a → b inside the selected face f; the skirt quad runs b → a on top, consistently.
+        const auto a = src.from_vertex_handle(he), b = src.to_vertex_handle(he);
+        const Mesh::VertexHandle ta(map[static_cast<std::size_t>(a.idx())]), tb(map[static_cast<std::size_t>(b.idx())]);
+        const Mesh::VertexHandle la = lower(a), lb = lower(b);
+        if (out.add_face(tb, ta, la).is_valid())
+            ++*skirt_faces;
+        if (out.add_face(tb, la, lb).is_valid())
+            ++*skirt_faces;
+    }
+    return out;
+}
+
+BoundingBox mesh_box(const Mesh& m, BoundingBox box)
+{
+    for (const auto v : m.vertices()) {
+        const auto p = m.point(v);
+        box.min = min(box.min, Vec3{p[0], p[1], p[2]});
+        box.max = max(box.max, Vec3{p[0], p[1], p[2]});
+    }
+    return box;
+}
+
+std::vector<double> level_tolerances(const Hierarchy& h, const LodSetOptions& o)
+{
+    if (!o.tolerances.empty()) {
+        for (std::size_t i = 0; i < o.tolerances.size(); ++i)
+            if (!(o.tolerances[i] >= 0) || (i > 0 && !(o.tolerances[i] < o.tolerances[i - 1])))
+                throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
+        return o.tolerances;
+    }
+    // Level 0: the best cut that should fit one tile (about 12 triangles per tile plus skirts).
+    const Cut first = cut_by_budget(h, std::max<std::size_t>(1, o.max_tile_triangles / 16));
+    std::vector<double> t{cut_tolerance(h, first)};
+    const std::size_t wanted = o.levels > 0 ? o.levels : o.max_levels;
+    while (t.size() < wanted) {
+        if (o.levels == 0 && cut_by_tolerance(h, t.back()).size() >= h.leaf_count())
+            break;
+        t.push_back(t.back() / 2);
+    }
+    if (o.levels == 0 && t.size() == o.max_levels)
+        t.back() = 0.0; // end at the leaves
+    return t;
+}
+
+} // namespace
+
+LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
+{
+    if (o.max_tile_triangles < 64)
+        throw InvalidInput("lods: max_tile_triangles must be at least 64");
+    if (h.nodes.empty())
+        throw InvalidInput("lods: empty hierarchy");
+    LodSet set;
+    double previous_error = std::numeric_limits<double>::infinity();
+    for (double tol : level_tolerances(h, o)) {
+        LodLevel level;
+        level.tolerance = tol;
+        level.cut = cut_by_tolerance(h, tol);
+        if (!set.levels.empty() && level.cut.size() == set.levels.back().cut.size())
+            continue; // no finer than the previous level (e.g. below the build tolerance)
+        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        level.max_plane_distance = level_max_plane_distance(h, level.cut);
+        level.geometric_error = std::min(previous_error, level.max_plane_distance);
+        previous_error = level.geometric_error;
+        set.levels.push_back(std::move(level));
+    }
+    if (!set.levels.empty())
+        set.levels.back().geometric_error = 0.0;
+    if (!o.tileset)
+        return set;
+
+    std::vector<LevelIndex> index;
+    for (const LodLevel& level : set.levels)
+        index.push_back(index_level(h, level));
+    const std::size_t face_budget = o.max_tile_triangles * 3 / 4; // room for skirts
+    const std::size_t last = set.levels.size() - 1;
+
+    // Breadth-first over (region, level).
+    struct Pending
+    {
+        std::int32_t region;
+        std::size_t level;
+        std::ptrdiff_t parent;
+    };
+    std::vector<Pending> queue{{0, 0, -1}};
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+        const Pending p = queue[q];
+        const Node& region = h.nodes[static_cast<std::size_t>(p.region)];
+        LodTile tile;
+        tile.region = p.region;
+        tile.level = p.level;
+        const LodLevel& level = set.levels[p.level];
+        tile.mesh = extract_region(h, level, index[p.level], region, 2.0 * level.max_plane_distance, o.skirts, &tile.skirt_faces);
+        tile.geometric_error = level.geometric_error;
+        tile.box = mesh_box(tile.mesh, region.box);
+        const std::size_t id = set.tiles.size();
+        if (p.parent >= 0)
+            set.tiles[static_cast<std::size_t>(p.parent)].children.push_back(id);
+        set.tiles.push_back(std::move(tile));
+        if (p.level == last)
+            continue;
+        // Children: the largest regions below whose next-level content fits the budget; never below
+        // that level's cut (a cut node's faces cannot be split between tiles).
+        const LevelIndex& next = index[p.level + 1];
+        std::vector<std::int32_t> stack{p.region};
+        std::vector<std::int32_t> children;
+        while (!stack.empty()) {
+            const std::int32_t id_q = stack.back();
+            stack.pop_back();
+            const Node& n = h.nodes[static_cast<std::size_t>(id_q)];
+            const bool stop = n.is_leaf() || next.faces_below[static_cast<std::size_t>(id_q)] <= face_budget ||
+                              !next.at_or_above_cut[static_cast<std::size_t>(n.left)] ||
+                              !next.at_or_above_cut[static_cast<std::size_t>(n.right)];
+            if (stop) {
+                children.push_back(id_q);
+            } else {
+                stack.push_back(n.right);
+                stack.push_back(n.left);
+            }
+        }
+        for (std::int32_t c : children)
+            queue.push_back({c, p.level + 1, static_cast<std::ptrdiff_t>(id)});
+    }
+    // A parent's box must contain its children's (3D Tiles bounding volume rule): grow bottom-up.
+    for (std::size_t k = set.tiles.size(); k-- > 0;)
+        for (std::size_t c : set.tiles[k].children) {
+            set.tiles[k].box.min = min(set.tiles[k].box.min, set.tiles[c].box.min);
+            set.tiles[k].box.max = max(set.tiles[k].box.max, set.tiles[c].box.max);
+        }
+    return set;
+}
+
+} // namespace mrt

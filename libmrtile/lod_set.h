@@ -1,0 +1,73 @@
+#pragma once
+//! \file lod_set.h
+//! \brief Streamed level-of-detail sets: global levels whose error halves per level, and a 3D Tiles
+//! tile tree over them (chosen here; formats/write_3d_tiles.h only serialises it).
+//! \details
+//! Levels: level 0 is the best cut that fits one tile (cut_by_budget), each next level halves the
+//! scale-free tolerance, the last is the hierarchy's leaves. Each level is meshed *globally* (one
+//! manifold surface per level), so tiles of one level cut from it share their border vertices exactly.
+//! Tiles: a tile is a hierarchy node (its region) at a level. Its content is the level's faces owned
+//! by the cut nodes inside the region. Its children are the largest regions below it whose content at
+//! the next level fits `max_tile_triangles` (REPLACE refinement: the children together cover exactly
+//! the parent's points). Where a tile meets a tile of another level (a neighbour not yet refined),
+//! borders differ slightly; every tile carries a skirt (a strip hanging from its region borders along
+//! the surface normal, as deep as twice the level's geometric error) that hides those cracks.
+//! Geometric error of a level = the largest distance of a point to its tile plane over the level's cut
+//! (model units), forced non-increasing with the level; the finest level's tiles get 0.
+
+#include "libmrtile/cut.h"
+#include "libmrtile/reconstruct.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace mrt {
+
+
+struct LodSetOptions
+{
+    //! Largest number of triangles in one tile (skirts included).
+    std::size_t max_tile_triangles = 65536;
+    //! Number of levels; 0 = halve the tolerance until the cut reaches the hierarchy's leaves (at most
+    //! max_levels).
+    std::size_t levels = 0;
+    std::size_t max_levels = 16;
+    //! Explicit scale-free tolerances, coarse to fine (overrides levels).
+    std::vector<double> tolerances;
+    //! Build the 3D Tiles tile tree (false: levels only, for `mrtile lods`).
+    bool tileset = true;
+    //! Add skirts to tiles (3D Tiles only).
+    bool skirts = true;
+    MeshOptions mesh;
+};
+
+struct LodLevel
+{
+    double tolerance = 0.0;       //!< scale-free tolerance of the level's cut
+    Cut cut;
+    Mesh mesh;                    //!< the whole level, one manifold surface
+    double geometric_error = 0.0; //!< model units (see file comment)
+    double max_plane_distance = 0.0; //!< raw largest point-to-tile-plane distance over the cut
+};
+
+struct LodTile
+{
+    std::int32_t region = 0;      //!< hierarchy node whose points the tile covers
+    std::size_t level = 0;
+    Mesh mesh;                    //!< content (may be empty for a region with no faces)
+    BoundingBox box;              //!< contains the content and every descendant's box
+    double geometric_error = 0.0;
+    std::vector<std::size_t> children;
+    std::size_t skirt_faces = 0;
+};
+
+struct LodSet
+{
+    std::vector<LodLevel> levels;
+    std::vector<LodTile> tiles; //!< tiles[0] is the root; empty when options.tileset is false
+};
+
+//! \throw InvalidInput for options out of range (max_tile_triangles < 64, tolerances not decreasing).
+LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& options = {});
+
+} // namespace mrt
