@@ -69,28 +69,42 @@ void validate_tree(const std::vector<TilesetTile>& tiles)
             throw InvalidInput("write_3d_tiles: tile " + std::to_string(t) + " is not reachable from the root");
 }
 
-Json box_json(const BoundingBox& box, UpAxis up)
+// Draco moves a vertex by up to half a quantization step, so a vertex on the box's face could decode
+// just outside it: the box is enlarged by one step (of the shared grid, or of the largest cube Draco
+// can choose for content inside this box).
+double quantization_padding(const BoundingBox& box, const GltfOptions& gltf)
 {
+    if (!gltf.draco)
+        return 0.0;
+    const DracoOptions& d = gltf.draco_options;
+    const double cube = d.grid ? d.grid->range : box.largest_side();
+    return cube / (std::ldexp(1.0, d.position_bits) - 1.0);
+}
+
+Json box_json(const BoundingBox& box, const GltfOptions& gltf)
+{
+    const UpAxis up = gltf.up_axis;
+    const double pad = quantization_padding(box, gltf);
     const Vec3 a = to_tileset_frame(box.min, up), b = to_tileset_frame(box.max, up);
-    const Vec3 lo = min(a, b), hi = max(a, b);
+    const Vec3 lo = min(a, b) - Vec3{pad, pad, pad}, hi = max(a, b) + Vec3{pad, pad, pad};
     const Vec3 c = (lo + hi) * 0.5, h = (hi - lo) * 0.5;
     return Json::array({c.x, c.y, c.z, h.x, 0.0, 0.0, 0.0, h.y, 0.0, 0.0, 0.0, h.z});
 }
 
 std::string content_uri(std::size_t tile) { return "tiles/" + std::to_string(tile) + ".glb"; }
 
-Json tile_json(const std::vector<TilesetTile>& tiles, std::size_t t, UpAxis up)
+Json tile_json(const std::vector<TilesetTile>& tiles, std::size_t t, const GltfOptions& gltf)
 {
     const TilesetTile& tile = tiles[t];
     Json out;
-    out["boundingVolume"] = Json{{"box", box_json(tile.box, up)}};
+    out["boundingVolume"] = Json{{"box", box_json(tile.box, gltf)}};
     out["geometricError"] = tile.geometric_error;
     if (tile.mesh != nullptr)
         out["content"] = Json{{"uri", content_uri(t)}};
     if (!tile.children.empty()) {
         Json children = Json::array();
         for (const std::size_t c : tile.children)
-            children.push_back(tile_json(tiles, c, up));
+            children.push_back(tile_json(tiles, c, gltf));
         out["children"] = std::move(children);
     }
     return out;
@@ -171,7 +185,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
             }
         }
 
-        Json root = tile_json(tiles, 0, up);
+        Json root = tile_json(tiles, 0, options.gltf);
         std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
         if (options.root_transform) {
             transform = *options.root_transform;

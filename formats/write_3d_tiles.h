@@ -42,6 +42,8 @@ struct TilesetOptions
 };
 
 //! \brief Writes `dir`/tileset.json and `dir`/tiles/<index>.glb (tiles[0] is the root).
+//! With Draco, every box is enlarged by one position quantization step so that it still contains the
+//! dequantized content.
 //! The directory is built in "<dir>.tmp.<pid>" and then swapped into place, so an existing `dir` is
 //! replaced only on success and a failure leaves nothing behind. Byte-deterministic.
 //! \throw InvalidInput if the tiles do not form a tree rooted at tiles[0], an error is negative,
