@@ -9,6 +9,9 @@
 //! *candidates*: an advancing front seeded by the T1 fans accepts them one at a time (best-shaped
 //! first) only if the surface stays an oriented 2-manifold, gaps left between tiles are filled, and the
 //! sample's own borders stay open. See surface.cpp for the rules.
+//! The result is always a valid oriented 2-manifold; its *topology* is right when neighbouring tiles do
+//! not overlap in their planes (Voronoi-like clusters). Overlapping pseudo tiles cover some surface twice
+//! and the extraction then closes the surface with extra handles.
 //! Properties on the mesh (names in mesh.h): "f:tile", "f:gap", "v:cluster"; vertex normals.
 
 #include "libmrtile/hierarchy.h"
