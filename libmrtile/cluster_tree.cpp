@@ -41,6 +41,7 @@ struct Cluster
     std::vector<std::uint32_t> neighbours;  // Gabriel neighbours (cluster ids, sorted)
     std::uint32_t version = 0;              // bumped on every change; stale queue entries are skipped
     std::uint64_t counted = 0;              // points counted as "still to split" for progress
+    bool failing = false;                   // fails the flatness test (and may be split)
     bool alive = true;
 };
 
@@ -88,6 +89,7 @@ private:
     void refresh(std::uint32_t id);
     void refresh_incremental(std::uint32_t id, const std::vector<Member>& left, const std::vector<Member>& arrived);
     void requeue(std::uint32_t id);
+    void set_failing(std::uint32_t id, bool failing);
     void split(std::uint32_t id);
     void connect_new(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& old_neighbours);
     const Vec3& centre(std::uint32_t id) const { return centres_[id]; }
@@ -104,6 +106,7 @@ private:
     std::priority_queue<QueueEntry> queue_;
     std::uint64_t unsettled_ = 0;
     std::uint64_t splits_ = 0;
+    std::uint64_t failing_clusters_ = 0; // while > 0 the paper's literal order keeps splitting
 };
 
 bool Builder::is_flat(const Moments& m) const
@@ -130,6 +133,7 @@ void Builder::refresh(std::uint32_t id)
     unsettled_ -= c.counted;
     c.counted = 0;
     if (c.members.empty()) {
+        set_failing(id, false);
         c.alive = false;
         alive_[id] = 0;
         c.moments = Moments{};
@@ -164,11 +168,26 @@ void Builder::refresh(std::uint32_t id)
 void Builder::requeue(std::uint32_t id)
 {
     Cluster& c = clusters_[id];
-    if (c.members.size() > options_.min_cluster && !is_flat(c.moments)) {
+    const bool splittable = c.members.size() > options_.min_cluster;
+    set_failing(id, splittable && !is_flat(c.moments));
+    if (c.failing) {
         c.counted = c.members.size();
         unsettled_ += c.counted;
-        queue_.push({c.internal_error, id, c.version});
     }
+    if (c.failing || (splittable && options_.paper_split_order))
+        queue_.push({c.internal_error, id, c.version});
+}
+
+void Builder::set_failing(std::uint32_t id, bool failing)
+{
+    Cluster& c = clusters_[id];
+    if (c.failing == failing)
+        return;
+    c.failing = failing;
+    if (failing)
+        ++failing_clusters_;
+    else
+        --failing_clusters_;
 }
 
 // A neighbour that gained or lost a few points: exact moments by Welford updates, and eq. 1 and the
@@ -256,6 +275,7 @@ void Builder::split(std::uint32_t id)
     const Vec3 c = moments.mean;
     unsettled_ -= clusters_[id].counted;
     clusters_[id].counted = 0;
+    set_failing(id, false);
     clusters_[id].alive = false;
     alive_[id] = 0;
     clusters_[id].members.clear();
@@ -403,7 +423,7 @@ void Builder::run()
     // Every split adds a cluster; reclassification can empty clusters but each split still removes
     // one unflat cluster from the queue, so 4n splits is an unreachable bound that guards the loop.
     const std::uint64_t max_splits = 4 * static_cast<std::uint64_t>(n) + 16;
-    while (!queue_.empty() && splits_ < max_splits) {
+    while (!queue_.empty() && failing_clusters_ > 0 && splits_ < max_splits) {
         const QueueEntry top = queue_.top();
         queue_.pop();
         const Cluster& c = clusters_[top.id];
@@ -591,9 +611,16 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
 
     const double largest_side = bounding_box(cloud.positions).largest_side();
     const double threshold = options.tau > 0 ? options.tau : options.tolerance * largest_side;
-    Builder builder(cloud.positions, options, threshold);
-    builder.run();
-    Hierarchy h = assemble_hierarchy(std::move(cloud), builder.parent_of, builder.leaf_of_point);
+    std::vector<std::int32_t> parent_of;
+    std::vector<std::uint32_t> leaf_of_point;
+    {
+        // The builder's per-cluster state is freed before the tree is assembled (peak memory).
+        Builder builder(cloud.positions, options, threshold);
+        builder.run();
+        parent_of = std::move(builder.parent_of);
+        leaf_of_point = std::move(builder.leaf_of_point);
+    }
+    Hierarchy h = assemble_hierarchy(std::move(cloud), parent_of, leaf_of_point);
     h.info.criterion = options.tau > 0 ? Criterion::Tau : Criterion::Tolerance;
     h.info.criterion_value = options.tau > 0 ? options.tau : options.tolerance;
     h.info.pca_limit = static_cast<std::uint32_t>(std::min<std::size_t>(options.pca_limit, std::numeric_limits<std::uint32_t>::max()));

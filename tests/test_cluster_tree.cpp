@@ -163,13 +163,32 @@ TEST(ClusterTree, leaves_meet_tau)
     EXPECT_EQ(h.info.criterion, Criterion::Tau);
     for (const Node& n : h.nodes) {
         if (n.is_leaf()) {
-            EXPECT_TRUE(n.count() <= 8 || n.frame.values[0] <= 1e-3 * (1 + 1e-9));
+            EXPECT_TRUE(n.count() <= BuildOptions{}.min_cluster || n.frame.values[0] <= 1e-3 * (1 + 1e-9));
         }
     }
     // A larger τ gives a coarser hierarchy.
     BuildOptions coarse;
     coarse.tau = 1e-1;
     EXPECT_LT(build_hierarchy(shapes::torus(10000), coarse).leaf_count(), h.leaf_count());
+}
+
+// The paper's literal order (split the highest-error cluster while any fails) refines flat regions
+// too: more leaves than the adaptive default, and still every leaf meets τ or the minimum size.
+TEST(ClusterTree, paper_split_order_gives_more_uniform_tiles)
+{
+    PointCloud c = shapes::three_holes(8000);
+    BuildOptions o;
+    o.tau = 50.0;
+    const Hierarchy adaptive = build_hierarchy(c, o);
+    o.paper_split_order = true;
+    const Hierarchy literal = build_hierarchy(c, o);
+    expect_valid_tree(literal);
+    EXPECT_GT(literal.leaf_count(), adaptive.leaf_count());
+    for (const Node& n : literal.nodes) {
+        if (n.is_leaf()) {
+            EXPECT_TRUE(n.count() <= o.min_cluster || n.frame.values[0] <= o.tau * (1 + 1e-9));
+        }
+    }
 }
 
 // A flat grid is one cluster: nothing to split.

@@ -82,12 +82,14 @@ struct BuildArgs
     std::size_t min_cluster = BuildOptions{}.min_cluster;
     bool no_reclassify = false;
 
-    void add(CLI::App* cmd)
+    // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
+    void add(CLI::App* cmd, const std::string& prefix)
     {
-        auto* tol = cmd->add_option("--build-tolerance", tolerance,
+        auto* tol = cmd->add_option("--" + prefix + "tolerance", tolerance,
                                     "hierarchy stop criterion: RMS plane distance / largest bbox side")
-                        ->check(CLI::NonNegativeNumber);
-        auto* t = cmd->add_option("--build-tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
+                        ->check(CLI::NonNegativeNumber)
+                        ->capture_default_str();
+        auto* t = cmd->add_option("--" + prefix + "tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
                       ->check(CLI::PositiveNumber);
         tol->excludes(t);
         cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")->capture_default_str();
@@ -442,6 +444,7 @@ int run(int argc, char** argv)
                  "(Heckel, Uva, Hamann clustering-based hierarchical surface models)"};
     app.set_version_flag("--version", std::string("mrtile ") + MRTILE_VERSION);
     app.require_subcommand(1);
+    app.fallthrough(); // global flags (-q) may follow the command
     Globals g;
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
 
@@ -452,9 +455,7 @@ int run(int argc, char** argv)
     bool record_time = false;
     build->add_option("POINTS", build_in, "point file: .ply .xyz .pts .txt .csv .obj .off, optionally .gz")->required();
     build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
-    build_args.add(build);
-    build->add_option("--tolerance", build_args.tolerance, "alias of --build-tolerance")->check(CLI::NonNegativeNumber);
-    build->add_option("--tau", build_args.tau, "alias of --build-tau")->check(CLI::PositiveNumber);
+    build_args.add(build, "");
     build->add_flag("--record-time", record_time, "store the build time in the model (the file then differs between runs)");
 
     // info
@@ -487,7 +488,7 @@ int run(int argc, char** argv)
     rec->add_option("POINTS", rec_in, "point file")->required();
     rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
     rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
-    rec_build.add(rec);
+    rec_build.add(rec, "build-");
     rec_cut.add(rec);
     rec_mesh.add(rec);
     rec_output.add(rec);

@@ -1,0 +1,139 @@
+// Tests of the mrtile CLI as a user meets it: exit codes (0 ok, 1 error, 2 usage), one-line errors
+// naming the file, no partial output on failure, the JSON keys scripts depend on, and determinism.
+#include "tests/test_dir.h"
+
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace mrt {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result
+{
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+Result mrtile(const std::string& args, const fs::path& dir)
+{
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const std::string command = std::string(MRTILE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
+    const int status = std::system(command.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// A small sphere sample as an .xyz file.
+fs::path sphere_xyz(const fs::path& dir, int n = 3000)
+{
+    std::string text;
+    for (int i = 0; i < n; ++i) {
+        const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = i * 2.399963229728653;
+        text += std::to_string(r * std::cos(phi)) + " " + std::to_string(r * std::sin(phi)) + " " + std::to_string(z) + "\n";
+    }
+    const fs::path p = dir / "sphere.xyz";
+    write_text(p, text);
+    return p;
+}
+
+TEST(Cli, version_help_and_usage_errors)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    Result r = mrtile("--version", dir);
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.out.find("mrtile "), std::string::npos);
+    for (const char* cmd : {"build", "info", "mesh", "reconstruct", "lods", "export", "demo"}) {
+        r = mrtile(std::string(cmd) + " --help", dir);
+        EXPECT_EQ(r.code, 0) << cmd;
+        EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd;
+    }
+    EXPECT_EQ(mrtile("", dir).code, 2);
+    EXPECT_EQ(mrtile("frobnicate", dir).code, 2);
+    EXPECT_EQ(mrtile("build", dir).code, 2); // missing POINTS and -o
+    EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
+    EXPECT_EQ(mrtile("build x.xyz -o y.mrt --tolerance 0.1 --tau 2", dir).code, 2);
+}
+
+// Bad input: exit 1, one line naming the file and the cause, and no output file.
+TEST(Cli, bad_input_gives_one_line_error_and_no_output)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path model = dir / "out.mrt";
+    auto expect_error = [&](const std::string& args, const std::string& needle) {
+        const Result r = mrtile(args, dir);
+        EXPECT_EQ(r.code, 1) << args << "\n" << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(model)) << args;
+    };
+    expect_error("build " + (dir / "missing.ply").string() + " -o " + model.string(), "missing.ply");
+    write_text(dir / "nan.xyz", "0 0 0\n1 nan 0\n");
+    expect_error("build " + (dir / "nan.xyz").string() + " -o " + model.string(), "nan.xyz");
+    write_text(dir / "trunc.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+                                  "property float y\nproperty float z\nend_header\n\x01\x02");
+    expect_error("build " + (dir / "trunc.ply").string() + " -o " + model.string(), "trunc.ply");
+    write_text(dir / "huge.ply", "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\n"
+                                 "property float y\nproperty float z\nend_header\n0 0 0\n");
+    expect_error("build " + (dir / "huge.ply").string() + " -o " + model.string(), "huge.ply");
+    write_text(dir / "empty.xyz", "");
+    expect_error("build " + (dir / "empty.xyz").string() + " -o " + model.string(), "empty.xyz");
+    expect_error("build " + sphere_xyz(dir).string() + " -o " + (dir / "no" / "dir" / "out.mrt").string(), "out.mrt");
+    write_text(dir / "garbage.mrt", "MRTILE\r\nthis is not a model");
+    expect_error("info " + (dir / "garbage.mrt").string(), "garbage.mrt");
+    expect_error("mesh " + (dir / "garbage.mrt").string() + " -o " + (dir / "m.ply").string(), "garbage.mrt");
+    EXPECT_FALSE(fs::exists(dir / "m.ply"));
+}
+
+// build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
+TEST(Cli, build_info_mesh_and_determinism)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir);
+    Result r = mrtile("build -q " + xyz.string() + " -o " + (dir / "a.mrt").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + (dir / "b.mrt").string(), dir).code, 0);
+    EXPECT_EQ(slurp(dir / "a.mrt"), slurp(dir / "b.mrt"));
+
+    r = mrtile("info --json " + (dir / "a.mrt").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto info = nlohmann::json::parse(r.out);
+    for (const char* key : {"points", "nodes", "leaves", "depth", "bbox_min", "bbox_max", "build_seconds"})
+        EXPECT_TRUE(info.contains(key)) << key;
+    EXPECT_EQ(info["points"], 3000);
+    EXPECT_NEAR(info["bbox_max"][2].get<double>(), 1.0, 1e-3);
+
+    r = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.ply").string() + " --stats-json " +
+                   (dir / "m.json").string(),
+               dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "m.ply"));
+    const auto stats = nlohmann::json::parse(slurp(dir / "m.json"));
+    for (const char* key : {"tiles", "vertices", "faces", "boundary_loops", "genus", "nonmanifold_edges",
+                            "nonmanifold_vertices", "e_rms", "mean_distance", "max_distance", "seconds"})
+        EXPECT_TRUE(stats.contains(key)) << key;
+    EXPECT_EQ(stats["nonmanifold_edges"], 0);
+    EXPECT_EQ(stats["nonmanifold_vertices"], 0);
+    EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.xyz").string(), dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "m.xyz"));
+}
+
+} // namespace
+} // namespace mrt
