@@ -20,12 +20,12 @@ using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, Tds>;
 
 } // namespace
 
-std::vector<std::vector<std::uint32_t>> gabriel_graph(const std::vector<Vec3>& points)
-{
-    std::vector<std::vector<std::uint32_t>> adjacency(points.size());
-    if (points.size() < 2)
-        return adjacency;
+namespace {
 
+// Builds the triangulation and calls visit(a, b) for every finite edge (each once).
+template <typename Visit>
+void for_each_delaunay_edge(const std::vector<Vec3>& points, Visit visit)
+{
     // Insert in input order (not spatially sorted) so that coincident points always merge into the
     // first of them, as documented; the triangulation itself does not depend on the order.
     Delaunay dt;
@@ -39,21 +39,47 @@ std::vector<std::vector<std::uint32_t>> gabriel_graph(const std::vector<Vec3>& p
         v->info() = i;
         hint = v;
     }
+    for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e)
+        visit(dt, e->first->vertex(e->second), e->first->vertex(e->third));
+}
 
-    for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e) {
-        const Delaunay::Vertex_handle a = e->first->vertex(e->second);
-        const Delaunay::Vertex_handle b = e->first->vertex(e->third);
+void sort_lists(std::vector<std::vector<std::uint32_t>>& adjacency)
+{
+    for (auto& list : adjacency)
+        std::sort(list.begin(), list.end());
+}
+
+} // namespace
+
+std::vector<std::vector<std::uint32_t>> delaunay_graph(const std::vector<Vec3>& points)
+{
+    std::vector<std::vector<std::uint32_t>> adjacency(points.size());
+    if (points.size() < 2)
+        return adjacency;
+    for_each_delaunay_edge(points, [&](const Delaunay&, Delaunay::Vertex_handle a, Delaunay::Vertex_handle b) {
+        adjacency[a->info()].push_back(b->info());
+        adjacency[b->info()].push_back(a->info());
+    });
+    sort_lists(adjacency);
+    return adjacency;
+}
+
+std::vector<std::vector<std::uint32_t>> gabriel_graph(const std::vector<Vec3>& points)
+{
+    std::vector<std::vector<std::uint32_t>> adjacency(points.size());
+    if (points.size() < 2)
+        return adjacency;
+    for_each_delaunay_edge(points, [&](const Delaunay& dt, Delaunay::Vertex_handle a, Delaunay::Vertex_handle b) {
         const Vec3& p = points[a->info()];
         const Vec3& q = points[b->info()];
         const Vec3 m = (p + q) * 0.5;
         const Delaunay::Vertex_handle nearest = dt.nearest_vertex(Kernel::Point_3(m.x, m.y, m.z), a->cell());
         if (nearest != a && nearest != b && !is_gabriel_edge(p, q, points[nearest->info()]))
-            continue;
+            return;
         adjacency[a->info()].push_back(b->info());
         adjacency[b->info()].push_back(a->info());
-    }
-    for (auto& list : adjacency)
-        std::sort(list.begin(), list.end());
+    });
+    sort_lists(adjacency);
     return adjacency;
 }
 

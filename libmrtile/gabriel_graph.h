@@ -16,6 +16,10 @@
 
 namespace mrt {
 
+//! Adjacency lists (sorted ascending) of the Delaunay graph of `points`: i and j are adjacent when
+//! their Voronoi cells share a face. Same precondition as gabriel_graph().
+std::vector<std::vector<std::uint32_t>> delaunay_graph(const std::vector<Vec3>& points);
+
 //! Adjacency lists (sorted ascending) of the Gabriel graph of `points`.
 //! \pre the points are pairwise distinct (coincident points are merged into the first of them, which
 //! then carries their edges).

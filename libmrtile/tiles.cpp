@@ -6,6 +6,7 @@
 #include "libmrtile/tiles.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/gabriel_graph.h"
 
 #include <algorithm>
 #include <cmath>
@@ -78,7 +79,7 @@ std::vector<std::uint32_t> convex_hull(std::vector<Projected>& pts, double toler
 
 } // namespace
 
-Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options)
+Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options, const std::vector<Vec3>& rivals)
 {
     if (node < 0 || static_cast<std::size_t>(node) >= h.nodes.size())
         throw InvalidInput("cut: node id " + std::to_string(node) + " is not in the hierarchy (" +
@@ -97,10 +98,24 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
 
     std::vector<Projected> pts;
     pts.reserve(n.count());
+    auto in_own_cell = [&](const Vec3& p) {
+        const double own = squared_distance(p, t.centre);
+        for (const Vec3& r : rivals)
+            if (squared_distance(p, r) < own)
+                return false;
+        return true;
+    };
     for (std::uint32_t i = n.begin; i < n.end; ++i) {
+        if (!rivals.empty() && !in_own_cell(h.cloud.positions[i]))
+            continue;
         const Vec3 d = h.cloud.positions[i] - t.centre;
         pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
     }
+    if (pts.empty()) // every point nearer to a rival (a very non-convex node): use them all
+        for (std::uint32_t i = n.begin; i < n.end; ++i) {
+            const Vec3 d = h.cloud.positions[i] - t.centre;
+            pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
+        }
     t.boundary = convex_hull(pts, options.collinear_tolerance);
     if (t.has_fan()) {
         double twice = 0.0;
@@ -122,10 +137,28 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
 {
     if (!(options.collinear_tolerance >= 0.0))
         throw InvalidInput("TileOptions::collinear_tolerance must be >= 0");
+    for (std::int32_t node : cut)
+        if (node < 0 || static_cast<std::size_t>(node) >= h.nodes.size())
+            throw InvalidInput("cut: node id " + std::to_string(node) + " is not in the hierarchy (" +
+                               std::to_string(h.nodes.size()) + " nodes)");
+    std::vector<std::vector<std::uint32_t>> neighbours;
+    std::vector<Vec3> centres;
+    if (options.voronoi_trim && cut.size() > 1) {
+        for (std::int32_t node : cut)
+            centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
+        neighbours = delaunay_graph(centres);
+    }
     std::vector<Tile> tiles;
     tiles.reserve(cut.size());
-    for (std::int32_t node : cut)
-        tiles.push_back(make_tile(h, node, options));
+    std::vector<Vec3> rivals;
+    for (std::size_t k = 0; k < cut.size(); ++k) {
+        rivals.clear();
+        if (!neighbours.empty())
+            for (std::uint32_t j : neighbours[k])
+                if (centres[j] != centres[k])
+                    rivals.push_back(centres[j]);
+        tiles.push_back(make_tile(h, cut[k], options, rivals));
+    }
     return tiles;
 }
 

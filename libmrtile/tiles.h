@@ -20,6 +20,13 @@ struct TileOptions
     //! A hull point is dropped as collinear when the turn at it is at most this fraction of the squared
     //! extent of the projected cluster (scale-free; 0 keeps every point that turns at all).
     double collinear_tolerance = 1e-12;
+    //! Build each tile only from the node's points that lie in the Voronoi cell of its centre among
+    //! the cut's centres (exact: tested against the centre's Delaunay neighbours). A coarse node is a
+    //! union of leaves and need not be convex, so the convex hull of all its points can overlap its
+    //! neighbours; trimmed tiles lie in disjoint convex cells, so their fans never overlap. The
+    //! trimmed-off points are still the node's (the cut stays a partition); the gap triangulation
+    //! covers them.
+    bool voronoi_trim = true;
 };
 
 struct Tile
@@ -44,6 +51,9 @@ struct Tile
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options = {});
 
 //! Builds one tile from the node's point range and frame (used by make_tiles; exposed for tests).
-Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {});
+//! With `rivals`, only points nearer to the node's centre than to every rival centre are used
+//! (falling back to all points if that leaves none).
+Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {},
+               const std::vector<Vec3>& rivals = {});
 
 } // namespace mrt
