@@ -174,24 +174,37 @@ BoundingBox mesh_box(const Mesh& m, BoundingBox box)
     return box;
 }
 
-std::vector<double> level_tolerances(const Hierarchy& h, const LodSetOptions& o)
+// Level 0 is the best cut whose mesh fits one tile: start from a guess of the triangles per tile and
+// correct it from the measured mesh (meshing a coarse cut is cheap).
+LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
 {
-    if (!o.tolerances.empty()) {
-        for (std::size_t i = 0; i < o.tolerances.size(); ++i)
-            if (!(o.tolerances[i] >= 0) || (i > 0 && !(o.tolerances[i] < o.tolerances[i - 1])))
-                throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
-        return o.tolerances;
-    }
-    // Level 0: the best cut that should fit one tile (about 12 triangles per tile plus skirts).
-    const Cut first = cut_by_budget(h, std::max<std::size_t>(1, o.max_tile_triangles / 16));
-    std::vector<double> t{cut_tolerance(h, first)};
-    const std::size_t wanted = o.levels > 0 ? o.levels : o.max_levels;
-    while (t.size() < wanted) {
-        if (o.levels == 0 && cut_by_tolerance(h, t.back()).size() >= h.leaf_count())
+    const auto budget = static_cast<double>(o.max_tile_triangles * 3 / 4);
+    std::size_t tiles = std::max<std::size_t>(1, o.max_tile_triangles / 32);
+    LodLevel level;
+    for (int attempt = 0; attempt < 6; ++attempt) {
+        level.cut = cut_by_budget(h, tiles);
+        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        const auto faces = static_cast<double>(level.mesh.n_faces());
+        if (faces <= budget || tiles == 1)
             break;
-        t.push_back(t.back() / 2);
+        tiles = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(tiles) * 0.9 * budget / faces));
     }
-    if (o.levels == 0 && t.size() == o.max_levels)
+    level.tolerance = cut_tolerance(h, level.cut);
+    return level;
+}
+
+std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o, double first)
+{
+    std::vector<double> t;
+    const std::size_t wanted = (o.levels > 0 ? o.levels : o.max_levels) - 1;
+    double tol = first;
+    while (t.size() < wanted) {
+        if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= h.leaf_count())
+            break;
+        tol /= 2;
+        t.push_back(tol);
+    }
+    if (o.levels == 0 && !t.empty() && t.size() == wanted)
         t.back() = 0.0; // end at the leaves
     return t;
 }
@@ -206,17 +219,30 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         throw InvalidInput("lods: empty hierarchy");
     LodSet set;
     double previous_error = std::numeric_limits<double>::infinity();
-    for (double tol : level_tolerances(h, o)) {
-        LodLevel level;
-        level.tolerance = tol;
-        level.cut = cut_by_tolerance(h, tol);
-        if (!set.levels.empty() && level.cut.size() == set.levels.back().cut.size())
-            continue; // no finer than the previous level (e.g. below the build tolerance)
-        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+    auto add_level = [&](LodLevel level) {
+        if (!set.levels.empty() && level.cut.size() <= set.levels.back().cut.size())
+            return; // no finer than the previous level (e.g. below the build tolerance)
+        if (level.mesh.n_faces() == 0)
+            level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
         level.max_plane_distance = level_max_plane_distance(h, level.cut);
         level.geometric_error = std::min(previous_error, level.max_plane_distance);
         previous_error = level.geometric_error;
         set.levels.push_back(std::move(level));
+    };
+    std::vector<double> tolerances = o.tolerances;
+    for (std::size_t i = 0; i < tolerances.size(); ++i)
+        if (!(tolerances[i] >= 0) || (i > 0 && !(tolerances[i] < tolerances[i - 1])))
+            throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
+    if (tolerances.empty()) {
+        LodLevel first = first_level(h, o);
+        tolerances = finer_tolerances(h, o, first.tolerance);
+        add_level(std::move(first));
+    }
+    for (double tol : tolerances) {
+        LodLevel level;
+        level.tolerance = tol;
+        level.cut = cut_by_tolerance(h, tol);
+        add_level(std::move(level));
     }
     if (!set.levels.empty())
         set.levels.back().geometric_error = 0.0;

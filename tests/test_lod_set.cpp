@@ -1,0 +1,135 @@
+// Tests of lod_set.h (levels and the 3D Tiles tile tree) and, end to end, of what `mrtile` writes for
+// the acceptance command: a Draco tileset of the Stanford bunny that real clients accept.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/lod_set.h"
+#include "libmrtile/mesh_stats.h"
+#include "libmrtile/shapes.h"
+#include "npm/node_clients.h"
+#include "tests/test_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+namespace mrt {
+namespace {
+
+const Hierarchy& torus()
+{
+    static const Hierarchy h = [] {
+        PointCloud c = shapes::torus(40000);
+        shapes::add_noise(c, 0.0005);
+        return build_hierarchy(c);
+    }();
+    return h;
+}
+
+// Levels: tolerance halves, geometric error never rises with the level and ends at 0, every level is a
+// valid manifold mesh, and the measured error of a coarser level is never below a finer one's.
+TEST(LodSet, levels_are_consistent)
+{
+    LodSetOptions o;
+    o.tileset = false;
+    o.max_tile_triangles = 4096;
+    const LodSet set = make_lod_set(torus(), o);
+    ASSERT_GE(set.levels.size(), 3u);
+    EXPECT_TRUE(set.tiles.empty());
+    double previous_mean = std::numeric_limits<double>::infinity();
+    for (std::size_t l = 0; l < set.levels.size(); ++l) {
+        const LodLevel& level = set.levels[l];
+        SCOPED_TRACE(l);
+        if (l > 0) {
+            EXPECT_LT(level.tolerance, set.levels[l - 1].tolerance);
+            EXPECT_LE(level.geometric_error, set.levels[l - 1].geometric_error);
+            EXPECT_GT(level.cut.size(), set.levels[l - 1].cut.size());
+        }
+        const TopologyStats t = topology_stats(level.mesh);
+        EXPECT_EQ(t.nonmanifold_edges, 0u);
+        EXPECT_EQ(t.nonmanifold_vertices, 0u);
+        const double mean = point_to_mesh_distance(torus().cloud.positions, level.mesh).mean;
+        EXPECT_LE(mean, previous_mean * 1.05); // a finer level is never (meaningfully) worse
+        previous_mean = mean;
+    }
+    EXPECT_EQ(set.levels.back().geometric_error, 0.0);
+    EXPECT_EQ(set.levels.back().cut.size(), torus().leaf_count());
+
+    LodSetOptions explicit_levels;
+    explicit_levels.tileset = false;
+    explicit_levels.tolerances = {0.01, 0.004, 0.001};
+    EXPECT_EQ(make_lod_set(torus(), explicit_levels).levels.size(), 3u);
+    explicit_levels.tolerances = {0.001, 0.01};
+    EXPECT_THROW(make_lod_set(torus(), explicit_levels), InvalidInput);
+}
+
+// The tile tree: budgets honoured, errors non-increasing, boxes nested, children's regions partition
+// their parent's region, and the leaves are at the finest level.
+TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
+{
+    LodSetOptions o;
+    o.max_tile_triangles = 3000;
+    const LodSet set = make_lod_set(torus(), o);
+    const Hierarchy& h = torus();
+    ASSERT_GT(set.tiles.size(), 4u);
+    std::size_t leaves = 0;
+    for (const LodTile& t : set.tiles) {
+        EXPECT_LE(t.mesh.n_faces(), o.max_tile_triangles);
+        const Node& region = h.nodes[static_cast<std::size_t>(t.region)];
+        if (t.children.empty()) {
+            ++leaves;
+            EXPECT_EQ(t.level, set.levels.size() - 1);
+            continue;
+        }
+        std::uint32_t next = region.begin;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
+        for (std::size_t c : t.children) {
+            const LodTile& child = set.tiles[c];
+            EXPECT_EQ(child.level, t.level + 1);
+            EXPECT_LE(child.geometric_error, t.geometric_error);
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_GE(child.box.min[k], t.box.min[k]);
+                EXPECT_LE(child.box.max[k], t.box.max[k]);
+            }
+            const Node& r = h.nodes[static_cast<std::size_t>(child.region)];
+            ranges.push_back({r.begin, r.end});
+        }
+        std::sort(ranges.begin(), ranges.end());
+        for (const auto& r : ranges) {
+            EXPECT_EQ(r.first, next);
+            next = r.second;
+        }
+        EXPECT_EQ(next, region.end);
+    }
+    EXPECT_GT(leaves, 1u);
+    // Tiles of the finest level cover every face of the finest level mesh once (skirts aside).
+    std::size_t faces = 0;
+    for (const LodTile& t : set.tiles)
+        if (t.level == set.levels.size() - 1)
+            faces += t.mesh.n_faces() - t.skirt_faces;
+    EXPECT_EQ(faces, set.levels.back().mesh.n_faces());
+}
+
+// The acceptance command, through the CLI, checked by the Khronos validator, draco3d and the
+// structural tileset check.
+TEST(LodSet, bunny_draco_tileset_passes_real_clients)
+{
+    const auto dir = testing::fresh_test_dir("lod_set");
+    const std::string command = std::string(MRTILE_CLI) + " reconstruct " + MRTILE_SHARED_DATA +
+                                "/bun_zipper.ply -o " + (dir / "tiles").string() + " --format 3dtiles --draco -q >" +
+                                (dir / "out.txt").string() + " 2>&1";
+    const int status = std::system(command.c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << command;
+    const nlohmann::json results = testing::run_node_script("tileset_check.mjs", {(dir / "tiles").string()});
+    ASSERT_EQ(results.size(), 1u);
+    const nlohmann::json& r = results[0];
+    EXPECT_TRUE(r["problems"].empty()) << r["problems"].dump(1);
+    EXPECT_GT(r["contents"].get<int>(), 1);
+    for (const nlohmann::json& v : r["validation"]) {
+        EXPECT_EQ(v["errors"], 0) << v.dump(1);
+        EXPECT_EQ(v["warnings"], 0) << v.dump(1);
+    }
+    EXPECT_EQ(r["draco"].size(), r["contents"].get<std::size_t>());
+}
+
+} // namespace
+} // namespace mrt
