@@ -6,6 +6,7 @@
 # More programs to build and run against the installed package, one executable per file (named after
 # the file), e.g. the README's example: list(APPEND MRTILE_CONSUMER_EXTRA_SOURCES <absolute path>).
 set(MRTILE_CONSUMER_EXTRA_SOURCES "")
+list(APPEND MRTILE_CONSUMER_EXTRA_SOURCES ${CMAKE_CURRENT_LIST_DIR}/readme_example.cpp)
 
 string(REPLACE ";" "|" _mrtile_consumer_extra "${MRTILE_CONSUMER_EXTRA_SOURCES}")
 set(_mrtile_consumer_flags "")
