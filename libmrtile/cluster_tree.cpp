@@ -17,6 +17,10 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <deque>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <queue>
 #include <tuple>
 
@@ -42,6 +46,7 @@ struct Cluster
     std::uint32_t version = 0;              // bumped on every change; stale queue entries are skipped
     std::uint64_t counted = 0;              // points counted as "still to split" for progress
     bool failing = false;                   // fails the flatness test (and may be split)
+    bool queued = false;                    // has an entry in the queue (possibly with an older error)
     bool alive = true;
 };
 
@@ -98,7 +103,7 @@ private:
     const std::vector<Vec3>& pos_;
     const BuildOptions& options_;
     const double threshold_; // on λ_min (Tau) or on the RMS plane distance in model units (Tolerance)
-    std::vector<Cluster> clusters_;
+    std::deque<Cluster> clusters_; // a deque: growing never copies (and never doubles the peak)
     // Centres and liveness kept apart from the (large) Cluster records: the graph update reads them
     // for many clusters at random, and this keeps those reads in cache.
     std::vector<Vec3> centres_;
@@ -174,8 +179,12 @@ void Builder::requeue(std::uint32_t id)
         c.counted = c.members.size();
         unsettled_ += c.counted;
     }
-    if (c.failing || (splittable && options_.paper_split_order))
+    // One queue entry per cluster: a changed cluster keeps its entry, which is corrected when it
+    // reaches the top (a lazy decrease-key; it bounds the queue by the number of clusters).
+    if ((c.failing || (splittable && options_.paper_split_order)) && !c.queued) {
         queue_.push({c.internal_error, id, c.version});
+        c.queued = true;
+    }
 }
 
 void Builder::set_failing(std::uint32_t id, bool failing)
@@ -279,7 +288,7 @@ void Builder::split(std::uint32_t id)
     clusters_[id].alive = false;
     alive_[id] = 0;
     clusters_[id].members.clear();
-    clusters_[id].neighbours.clear();
+    std::vector<std::uint32_t>().swap(clusters_[id].neighbours); // release: dead clusters keep no memory
     for (std::uint32_t n : neighbours)
         erase_sorted(clusters_[n].neighbours, id);
 
@@ -396,7 +405,7 @@ void Builder::split(std::uint32_t id)
         if (!clusters_[n].alive) {
             for (std::uint32_t m : clusters_[n].neighbours)
                 erase_sorted(clusters_[m].neighbours, n);
-            clusters_[n].neighbours.clear();
+            std::vector<std::uint32_t>().swap(clusters_[n].neighbours);
         }
     if (clusters_[a].alive || clusters_[b].alive)
         connect_new(a, b, neighbours);
@@ -412,7 +421,6 @@ void Builder::add_cluster()
 void Builder::run()
 {
     const std::size_t n = pos_.size();
-    clusters_.reserve(std::min<std::size_t>(2 * (n / std::max<std::size_t>(options_.min_cluster, 1)) + 16, 1u << 24));
     add_cluster();
     clusters_[0].members.resize(n);
     for (std::uint32_t i = 0; i < n; ++i)
@@ -426,9 +434,16 @@ void Builder::run()
     while (!queue_.empty() && failing_clusters_ > 0 && splits_ < max_splits) {
         const QueueEntry top = queue_.top();
         queue_.pop();
-        const Cluster& c = clusters_[top.id];
-        if (!c.alive || c.version != top.version)
+        Cluster& c = clusters_[top.id];
+        c.queued = false;
+        const bool splittable = c.members.size() > options_.min_cluster;
+        if (!c.alive || !(c.failing || (splittable && options_.paper_split_order)))
             continue;
+        if (top.error != c.internal_error) { // changed since queued: take its place by its current error
+            queue_.push({c.internal_error, top.id, c.version});
+            c.queued = true;
+            continue;
+        }
         split(top.id);
         ++splits_;
         if (options_.progress && (splits_ & 1023) == 0)
@@ -547,17 +562,30 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         }
     }
 
-    h.input_index = order;
-    std::vector<Vec3> positions(n);
-    for (std::size_t i = 0; i < n; ++i)
-        positions[i] = cloud.positions[order[i]];
-    cloud.positions = std::move(positions);
-    if (cloud.has_colors()) {
-        std::vector<std::array<std::uint8_t, 4>> colors(n);
-        for (std::size_t i = 0; i < n; ++i)
-            colors[i] = cloud.colors[order[i]];
-        cloud.colors = std::move(colors);
+    // Permute in place, cycle by cycle (a second copy of the positions would be the peak of the build).
+    std::vector<bool> placed(n, false);
+    for (std::size_t start_i = 0; start_i < n; ++start_i) {
+        if (placed[start_i])
+            continue;
+        const Vec3 first = cloud.positions[start_i];
+        const std::array<std::uint8_t, 4> first_color = cloud.has_colors() ? cloud.colors[start_i] : std::array<std::uint8_t, 4>{};
+        std::size_t i = start_i;
+        for (;;) {
+            placed[i] = true;
+            const std::size_t from = order[i];
+            if (from == start_i) {
+                cloud.positions[i] = first;
+                if (cloud.has_colors())
+                    cloud.colors[i] = first_color;
+                break;
+            }
+            cloud.positions[i] = cloud.positions[from];
+            if (cloud.has_colors())
+                cloud.colors[i] = cloud.colors[from];
+            i = from;
+        }
     }
+    h.input_index = std::move(order);
     h.cloud = std::move(cloud);
 
     // Exact statistics: leaves from their points, parents by merging (children come after parents).
@@ -620,6 +648,11 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
         parent_of = std::move(builder.parent_of);
         leaf_of_point = std::move(builder.leaf_of_point);
     }
+#if defined(__GLIBC__)
+    // The builder's many small vectors are freed but glibc keeps the pages; hand them back so the
+    // assembly's large arrays do not stack on top of them (the build's peak memory).
+    malloc_trim(0);
+#endif
     Hierarchy h = assemble_hierarchy(std::move(cloud), parent_of, leaf_of_point);
     h.info.criterion = options.tau > 0 ? Criterion::Tau : Criterion::Tolerance;
     h.info.criterion_value = options.tau > 0 ? options.tau : options.tolerance;
