@@ -324,8 +324,11 @@ void Builder::split(std::uint32_t id)
     for (int iteration = 0; iteration < 2; ++iteration) {
         Vec3 sa{0, 0, 0}, sb{0, 0, 0};
         std::size_t na = 0, nb = 0;
+        // Nearer to ca than to cb ⟺ on ca's side of their bisector plane: one dot product.
+        const Vec3 axis = ca - cb;
+        const double split = dot(axis, (ca + cb) * 0.5);
         for (const Member& mb : members) {
-            if (squared_distance(mb.p, ca) <= squared_distance(mb.p, cb)) {
+            if (dot(mb.p, axis) >= split) {
                 sa += mb.p;
                 ++na;
             } else {
