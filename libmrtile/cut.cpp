@@ -133,6 +133,99 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
     });
 }
 
+namespace {
+
+double region_tolerance(const Node& n, double base, const std::vector<FocusRegion>& regions)
+{
+    double tolerance = base;
+    for (const FocusRegion& r : regions)
+        if (intersects(n, r))
+            tolerance = std::min(tolerance, r.tolerance);
+    return tolerance;
+}
+
+bool box_inside(const BoundingBox& b, const FocusRegion& r)
+{
+    if (r.shape == FocusRegion::Shape::Box)
+        return r.box.min.x <= b.min.x && r.box.min.y <= b.min.y && r.box.min.z <= b.min.z &&
+               b.max.x <= r.box.max.x && b.max.y <= r.box.max.y && b.max.z <= r.box.max.z;
+    // The farthest corner of the box from the centre lies within the radius.
+    const Vec3 far{std::max(std::abs(b.min.x - r.centre.x), std::abs(b.max.x - r.centre.x)),
+                   std::max(std::abs(b.min.y - r.centre.y), std::abs(b.max.y - r.centre.y)),
+                   std::max(std::abs(b.min.z - r.centre.z), std::abs(b.max.z - r.centre.z))};
+    return norm(far) <= r.radius;
+}
+
+} // namespace
+
+Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const std::vector<FocusRegion>& regions)
+{
+    check_tolerance(base_tolerance, "base tolerance");
+    for (const FocusRegion& r : regions)
+        check_tolerance(r.tolerance, "region tolerance");
+    const double side = h.bbox().largest_side();
+    Cut out;
+    std::vector<std::int32_t> stack;
+    for (std::int32_t id : cut) {
+        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
+            throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
+        bool meets = false;
+        for (const FocusRegion& r : regions)
+            meets = meets || intersects(h.nodes[static_cast<std::size_t>(id)], r);
+        if (!meets) {
+            out.push_back(id);
+            continue;
+        }
+        stack.assign(1, id);
+        while (!stack.empty()) {
+            const std::int32_t k = stack.back();
+            stack.pop_back();
+            const Node& n = h.nodes[static_cast<std::size_t>(k)];
+            if (!n.is_leaf() && n.rms_plane_distance > region_tolerance(n, base_tolerance, regions) * side) {
+                stack.push_back(n.right);
+                stack.push_back(n.left);
+            } else {
+                out.push_back(k);
+            }
+        }
+    }
+    return out;
+}
+
+Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance)
+{
+    check_tolerance(tolerance, "tolerance");
+    const double limit = tolerance * h.bbox().largest_side();
+    // For each cut node, its highest ancestor (or itself) inside the region and flat enough; a chain
+    // qualifies only as long as every node on it does (a parent is never flatter-tested past a failure).
+    std::vector<std::int32_t> replacement(cut.size());
+    for (std::size_t i = 0; i < cut.size(); ++i) {
+        std::int32_t best = cut[i];
+        for (std::int32_t k = cut[i]; k >= 0; k = h.nodes[static_cast<std::size_t>(k)].parent) {
+            const Node& n = h.nodes[static_cast<std::size_t>(k)];
+            if (!box_inside(n.box, region) || n.rms_plane_distance > limit)
+                break;
+            best = k;
+        }
+        replacement[i] = best;
+    }
+    // A replacement absorbs every cut node in its range (the cut is a frontier). Keep the outermost
+    // replacements: sorted by range start (longer first), drop those inside the last kept one.
+    std::sort(replacement.begin(), replacement.end(), [&](std::int32_t a, std::int32_t b) {
+        const Node& na = h.nodes[static_cast<std::size_t>(a)];
+        const Node& nb = h.nodes[static_cast<std::size_t>(b)];
+        return na.begin != nb.begin ? na.begin < nb.begin : na.end > nb.end;
+    });
+    Cut out;
+    for (std::int32_t r : replacement) {
+        const Node& node = h.nodes[static_cast<std::size_t>(r)];
+        if (!out.empty() && node.end <= h.nodes[static_cast<std::size_t>(out.back())].end)
+            continue;
+        out.push_back(r);
+    }
+    return out;
+}
+
 double screen_space_error(const Node& node, const Camera& camera)
 {
     const double distance = distance_to_box(camera.position, node.box);

@@ -61,6 +61,18 @@ bool intersects(const Node& node, const FocusRegion& region);
 //! are in the result unchanged.
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions);
 
+//! Incremental refinement: every node of `cut` that meets a region is replaced by its subtree's
+//! frontier under the same rule as cut_by_regions (the smallest tolerance of the regions a node meets,
+//! else `base_tolerance`); nodes meeting no region are kept. Cost: the nodes visited under the refined
+//! nodes only. refine_cut(cut_by_tolerance(h, base), base, regions) == cut_by_regions(h, base, regions)
+//! when every region's tolerance is at most base.
+Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const std::vector<FocusRegion>& regions);
+
+//! Incremental coarsening: groups of cut nodes are replaced by their highest common ancestor whose box
+//! lies inside `region` and whose RMS plane distance is at most tolerance × the bbox's largest side.
+//! Nodes not inside the region never change.
+Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance);
+
 //! A pinhole camera for view-dependent cuts (3D Tiles / CesiumJS convention).
 struct Camera
 {

@@ -110,6 +110,43 @@ TEST(Cut, focus_region_refines_inside_only)
     EXPECT_GT(both.size(), focus.size());
 }
 
+// Incremental refinement gives exactly the fresh focus cut; coarsening inside a region changes only
+// nodes inside it and gives back a cut no finer than before.
+TEST(Cut, incremental_refine_equals_fresh_extraction_and_coarsen_is_local)
+{
+    const Hierarchy& h = torus();
+    const double base = 0.01;
+    FocusRegion region;
+    region.centre = {1.3, 0.2, 0.0};
+    region.radius = 0.35;
+    region.tolerance = 0.0005;
+    FocusRegion box;
+    box.shape = FocusRegion::Shape::Box;
+    box.box = {{-1.4, -0.5, -0.4}, {-0.9, 0.5, 0.4}};
+    box.tolerance = 0.001;
+    const Cut coarse = cut_by_tolerance(h, base);
+    const Cut refined = refine_cut(h, coarse, base, {region, box});
+    EXPECT_EQ(refined, cut_by_regions(h, base, {region, box}));
+    EXPECT_GT(refined.size(), coarse.size());
+
+    FocusRegion back = region;
+    const Cut coarsened = coarsen_cut(h, refined, back, base);
+    EXPECT_TRUE(is_partition(h, coarsened));
+    EXPECT_LT(coarsened.size(), refined.size());
+    const std::set<std::int32_t> before(refined.begin(), refined.end()), after(coarsened.begin(), coarsened.end());
+    for (std::int32_t id : refined)
+        if (!after.count(id)) { // removed: it must lie inside the region
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            EXPECT_LE(distance(n.box.min, region.centre), region.radius + 1e-12);
+            EXPECT_LE(distance(n.box.max, region.centre), region.radius + 1e-12);
+        }
+    for (std::int32_t id : coarsened) {
+        if (!before.count(id)) {
+            EXPECT_LE(h.nodes[static_cast<std::size_t>(id)].rms_plane_distance, base * h.bbox().largest_side());
+        }
+    }
+}
+
 // A camera close to one side of the torus refines tiles near it more than far ones.
 TEST(Cut, camera_refines_near_the_camera)
 {
