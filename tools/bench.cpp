@@ -22,6 +22,9 @@ const std::vector<BenchSuite>& suites()
     static const std::vector<BenchSuite> all = {
         {"hierarchy", "hierarchy build: speed, peak memory, model size vs. a nanoflann kd-tree", hierarchy_tables},
         {"paper", "the paper's Table 2: bunny tile counts at τ = 0.006, 0.002, 0.001", paper_tables},
+        {"mesh", "reconstruction vs. CGAL AFSR (+ meshoptimizer), 1M points end to end, the paper's Table 2 layout", mesh_tables},
+        {"cuts", "budget and focus cuts + meshing from a loaded 4M-point model; model file size", cuts_tables},
+        {"export", "3D Tiles export of a 1M-point model (glTF, Draco); Draco size vs. draco_encoder", export_tables},
     };
     return all;
 }

@@ -31,5 +31,11 @@ void progress(const std::string& message);
 std::vector<Table> hierarchy_tables(const BenchContext& context);
 // Table 2 of the paper: tile counts for the bunny at the paper's three τ.
 std::vector<Table> paper_tables(const BenchContext& context);
+// Reconstruction against CGAL AFSR and meshoptimizer; end to end; the paper's Table 2 layout (bench_mesh.cpp).
+std::vector<Table> mesh_tables(const BenchContext& context);
+// Cuts and meshing from a loaded model (bench_cuts.cpp).
+std::vector<Table> cuts_tables(const BenchContext& context);
+// 3D Tiles export and Draco size (bench_export.cpp).
+std::vector<Table> export_tables(const BenchContext& context);
 
 } // namespace mrt::bench
