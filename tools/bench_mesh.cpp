@@ -153,7 +153,7 @@ void add_input_rows(Table& table, const MeshInput& input)
         if (i + 1 == kTolerances)
         {
             const double speedup = peers.afsr.total.cpu / ours[i].total.cpu;
-            check = "AFSR / ours " + fixed(speedup, 1) + "× " + verdict(speedup >= kMinSpeedupOverAfsr);
+            check = "AFSR / ours " + fixed(speedup, 2) + "× " + verdict(speedup >= kMinSpeedupOverAfsr);
         }
         table.rows.push_back(method_row(input.label, "ours", "tol " + fixed(kMeshTolerances[i], 3), ours[i],
                                         fixed(ours[i].part.cpu, 2), check));
