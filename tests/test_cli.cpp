@@ -100,6 +100,17 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     expect_error("info " + (dir / "garbage.mrt").string(), "garbage.mrt");
     expect_error("mesh " + (dir / "garbage.mrt").string() + " -o " + (dir / "m.ply").string(), "garbage.mrt");
     EXPECT_FALSE(fs::exists(dir / "m.ply"));
+
+    // A collinear cloud builds (a valid one-leaf model) but cannot be meshed: the error names the model.
+    std::string line;
+    for (int i = 0; i < 50; ++i)
+        line += std::to_string(i * 0.1) + " " + std::to_string(i * 0.2) + " 0\n";
+    write_text(dir / "line.xyz", line);
+    ASSERT_EQ(mrtile("build " + (dir / "line.xyz").string() + " -o " + (dir / "line.mrt").string(), dir).code, 0);
+    const Result r = mrtile("mesh " + (dir / "line.mrt").string() + " -o " + (dir / "line.ply").string(), dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("line.mrt: "), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "line.ply"));
 }
 
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.

@@ -398,6 +398,20 @@ Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const
     return h;
 }
 
+// Library errors about the data (not the file) do not know which input they came from: name it.
+template <typename Work>
+void naming_input(const fs::path& input, Work work)
+{
+    try {
+        work();
+    } catch (const InvalidInput& e) {
+        const std::string what = e.what();
+        if (what.rfind(input.string(), 0) == 0)
+            throw;
+        throw InvalidInput(input.string() + ": " + what);
+    }
+}
+
 int run_info(const fs::path& model, bool json)
 {
     const Hierarchy h = load_model(model);
@@ -533,7 +547,8 @@ int run(int argc, char** argv)
     }
 
     if (*build) {
-        Hierarchy h = build_from_points(build_in, build_args, g);
+        Hierarchy h;
+        naming_input(build_in, [&] { h = build_from_points(build_in, build_args, g); });
         SaveOptions s;
         s.record_build_time = record_time;
         save_model(h, build_out, s);
@@ -544,30 +559,34 @@ int run(int argc, char** argv)
         return run_info(info_in, info_json);
     if (*mesh) {
         const Hierarchy h = load_model(mesh_in);
-        mesh_and_write(h, mesh_cut_args, mesh_args, mesh_out_args, mesh_out);
+        naming_input(mesh_in, [&] { mesh_and_write(h, mesh_cut_args, mesh_args, mesh_out_args, mesh_out); });
         return 0;
     }
     if (*rec) {
         const Hierarchy h = build_from_points(rec_in, rec_build, g);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        if (rec_export.format == "3dtiles")
-            write_tileset(h, rec_export, rec_mesh, rec_output, rec_out);
-        else
-            mesh_and_write(h, rec_cut, rec_mesh, rec_output, rec_out);
+        naming_input(rec_in, [&] {
+            if (rec_export.format == "3dtiles")
+                write_tileset(h, rec_export, rec_mesh, rec_output, rec_out);
+            else
+                mesh_and_write(h, rec_cut, rec_mesh, rec_output, rec_out);
+        });
         return 0;
     }
     if (*lods) {
         const Hierarchy h = load_model(lods_in);
-        write_lods(h, lods_export, lods_mesh, lods_output, lods_out);
+        naming_input(lods_in, [&] { write_lods(h, lods_export, lods_mesh, lods_output, lods_out); });
         return 0;
     }
     if (*exp) {
         const Hierarchy h = load_model(exp_in);
-        if (exp_export.format == "3dtiles")
-            write_tileset(h, exp_export, exp_mesh, exp_output, exp_out);
-        else
-            mesh_and_write(h, exp_cut, exp_mesh, exp_output, exp_out);
+        naming_input(exp_in, [&] {
+            if (exp_export.format == "3dtiles")
+                write_tileset(h, exp_export, exp_mesh, exp_output, exp_out);
+            else
+                mesh_and_write(h, exp_cut, exp_mesh, exp_output, exp_out);
+        });
         return 0;
     }
     if (*demo) {
