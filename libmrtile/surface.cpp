@@ -42,6 +42,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 #include <queue>
@@ -54,6 +55,8 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kPi = 3.14159265358979323846;
+static double kGapDeg = std::getenv("GAPDEG") ? std::atof(std::getenv("GAPDEG")) : 150;
+static int kLocalMode = std::getenv("LOCALMODE") ? std::atoi(std::getenv("LOCALMODE")) : 1;
 using Tri = std::array<std::uint32_t, 3>;
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b)
@@ -300,6 +303,60 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
 }
 
 // ---------------------------------------------------------------------------------------------------
+// Step 2c: consistent tile orientation.
+
+// How much the normals of neighbouring tiles a, b agree: n_a against n_b reflected across the plane
+// bisecting the segment between the centres. On a surface that is symmetric about that plane the
+// reflection maps one normal onto the other exactly, so the score is +1 for consistent and -1 for
+// opposite signs whatever the angle between the tiles (a plain dot product is 0 across a 90-degree edge).
+double agreement(const Tile& a, const Tile& b)
+{
+    const Vec3 d = normalized(b.centre - a.centre);
+    const Vec3 reflected = b.normal - d * (2.0 * dot(b.normal, d));
+    return dot(a.normal, reflected);
+}
+
+// +1/-1 per tile: orientations of the tile normals that agree across the surface neighbour graph,
+// propagated along the most confident edges first (a maximum spanning tree on |agreement|, as in Hoppe
+// et al.'s normal orientation), starting from the largest tile of each connected part. Tiles without
+// neighbours keep +1.
+std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
+{
+    std::vector<int> orientation(tiles.size(), 0);
+    std::vector<std::uint32_t> order(tiles.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return tiles[a].points > tiles[b].points; });
+    struct Edge
+    {
+        double confidence;
+        std::uint32_t from, to;
+        bool operator<(const Edge& o) const
+        {
+            return confidence != o.confidence ? confidence < o.confidence : std::tie(from, to) > std::tie(o.from, o.to);
+        }
+    };
+    std::priority_queue<Edge> queue;
+    for (std::uint32_t seed : order) {
+        if (orientation[seed] != 0)
+            continue;
+        orientation[seed] = 1;
+        for (std::uint32_t n : tiles[seed].neighbours)
+            queue.push({std::abs(agreement(tiles[seed], tiles[n])), seed, n});
+        while (!queue.empty()) {
+            const Edge e = queue.top();
+            queue.pop();
+            if (orientation[e.to] != 0)
+                continue;
+            orientation[e.to] = orientation[e.from] * (agreement(tiles[e.from], tiles[e.to]) >= 0.0 ? 1 : -1);
+            for (std::uint32_t n : tiles[e.to].neighbours)
+                if (orientation[n] == 0)
+                    queue.push({std::abs(agreement(tiles[e.to], tiles[n])), e.to, n});
+        }
+    }
+    return orientation;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // Step 3: the manifold surface under construction.
 
 class Surface
@@ -514,11 +571,15 @@ class Front
 {
 public:
     //! `relative_radius[i]`: radius of candidate i divided by its local alpha radius b (<= 1).
+    //! `orientation`: +1/-1 per tile (orient_tiles), or empty to orient each fan from the face reaching it.
     Front(const Layout& layout, const std::vector<Tile>& tiles, Surface& surface, const Projection& projection,
-          const std::vector<Tri>& candidates, const std::vector<double>& relative_radius, double max_turn_degrees)
-        : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), candidates_(candidates),
+          const std::vector<Tri>& candidates, const std::vector<double>& relative_radius, double max_turn_degrees,
+          const std::vector<int>& orientation)
+        : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), orientation_(orientation),
+          candidates_(candidates),
           relative_radius_(relative_radius), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
-          placed_(layout.tiles.size(), false), neighbours_(layout.vertices.size())
+          placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
+          neighbours_(layout.vertices.size())
     {
         for (std::uint32_t i = 0; i < candidates.size(); ++i) {
             const Tri& t = candidates[i];
@@ -574,6 +635,8 @@ private:
         const Vec3& n = tiles_[t].normal;
         if (projection_.used)
             return dot(n, projection_.axis) >= 0 ? 1 : -1;
+        if (!orientation_.empty())
+            return orientation_[t];
         double vote = 0.0;
         for (std::uint32_t v : layout_.tiles[t].loop)
             for (std::uint32_t w : neighbours_[v])
@@ -585,6 +648,7 @@ private:
     void place(std::uint32_t t, int orientation)
     {
         placed_[t] = true;
+        oriented_normal_[t] = tiles_[t].normal * static_cast<double>(orientation);
         const TileLoop& tl = layout_.tiles[t];
         const std::size_t n = tl.loop.size();
         const auto node_tile = static_cast<std::int32_t>(t);
@@ -633,6 +697,10 @@ private:
                 continue;
             if (!merge_in_order(b, a, c) || !merge_in_order(a, c, b) || !merge_in_order(c, b, a))
                 continue;
+            // The face must look the way its placed tiles look (a fold through a sliver hinge can pass
+            // the turn test edge by edge).
+            if (!projection_.used && !faces_like_tiles(a, b, c, nt))
+                continue;
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
@@ -643,6 +711,21 @@ private:
             }
         }
         return out;
+    }
+
+    bool faces_like_tiles(std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vec3& nt) const
+    {
+        Vec3 ref;
+        for (std::uint32_t v : {a, b, c}) {
+            const auto t = static_cast<std::size_t>(layout_.vertices[v].tile);
+            if (placed_[t])
+                ref += oriented_normal_[t];
+            else if (!orientation_.empty() && !projection_.used)
+                ref += tiles_[t].normal * static_cast<double>(orientation_[t]);
+        }
+        if (squared_norm(ref) == 0.0)
+            return true;
+        return dot(nt, normalized(ref)) >= min_normal_cos_;
     }
 
     // The new face adds link edge x -> y at v. When that joins the end of one fan of v to the start of
@@ -735,7 +818,10 @@ private:
             const std::int32_t ct = layout_.vertices[c].tile;
             if (ct >= 0 && layout_.tiles[static_cast<std::size_t>(ct)].centre != kNone && !placed_[static_cast<std::size_t>(ct)]) {
                 const Vec3 nt = face_normal(b, a, c);
-                place(static_cast<std::uint32_t>(ct), dot(nt, tiles_[static_cast<std::size_t>(ct)].normal) >= 0 ? 1 : -1);
+                const auto t = static_cast<std::size_t>(ct);
+                place(static_cast<std::uint32_t>(ct), !orientation_.empty() && !projection_.used
+                                                          ? orientation_[t]
+                                                          : (dot(nt, tiles_[t].normal) >= 0 ? 1 : -1));
                 if (!surface_.can_add(b, a, c))
                     continue; // cannot happen: the fan only touches its own points
             }
@@ -752,10 +838,13 @@ private:
     const std::vector<Tile>& tiles_;
     Surface& surface_;
     const Projection& projection_;
+    const std::vector<int>& orientation_;
     const std::vector<Tri>& candidates_;
     const std::vector<double>& relative_radius_;
     double min_cos_;
     std::vector<bool> placed_;
+    std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
+    double min_normal_cos_ = std::cos(80.0 * kPi / 180.0);
     std::vector<std::vector<std::uint32_t>> neighbours_;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
@@ -770,50 +859,271 @@ struct Candidates
     std::vector<double> relative_radius; // radius / local b, in (0, 1]
 };
 
-Candidates prune(const Layout& layout, const DelaunayTriangles& dt, const std::vector<std::uint32_t>& vertex_of,
-                 const Projection& projection, double alpha, double mean_edge, const SurfaceOptions& options)
+// The removal rules of paper §4.3 (one-tile triangles, local alpha radius b) plus chords across a
+// fan, slivers, and triangles joining tiles that do not meet on the surface.
+class Pruner
 {
-    Candidates out;
-    auto same_tile_chord = [&](std::uint32_t a, std::uint32_t b) {
-        const SurfaceVertex& va = layout.vertices[a];
-        const SurfaceVertex& vb = layout.vertices[b];
-        if (va.tile != vb.tile || va.loop_pos == kNone || vb.loop_pos == kNone)
-            return false;
-        const auto n = static_cast<std::uint32_t>(layout.tiles[static_cast<std::size_t>(va.tile)].loop.size());
-        const std::uint32_t d = va.loop_pos > vb.loop_pos ? va.loop_pos - vb.loop_pos : vb.loop_pos - va.loop_pos;
-        return d != 1 && d != n - 1;
-    };
-    auto scale = [&](std::uint32_t v) {
-        const double e = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].edge_length;
-        return e > 0.0 ? e : mean_edge;
-    };
-    auto flat = [&](const Vec3& p) {
-        return projection.used ? Vec3{dot(p, projection.u), dot(p, projection.v), 0.0} : p;
-    };
-    for (const auto& d : dt.triangles) {
-        const Tri t{vertex_of[d[0]], vertex_of[d[1]], vertex_of[d[2]]};
-        const SurfaceVertex& a = layout.vertices[t[0]];
-        const SurfaceVertex& b = layout.vertices[t[1]];
-        const SurfaceVertex& c = layout.vertices[t[2]];
+public:
+    Pruner(const Layout& layout, const std::vector<Tile>& tiles, const Projection& projection, double alpha,
+           const SurfaceOptions& options)
+        : layout_(layout), tiles_(tiles), projection_(projection), alpha_(alpha), options_(options)
+    {
+        // A height field is triangulated in its domain (paper §4.3): tiles across a jump are not
+        // neighbours in space but are joined when steps are bridged.
+        know_neighbours_ = !projection.used &&
+                           std::any_of(tiles.begin(), tiles.end(), [](const Tile& t) { return !t.neighbours.empty(); });
+    }
+
+    bool know_neighbours() const { return know_neighbours_; }
+
+    //! Radius of t over its local alpha radius b, in (0, 1], or -1 when t is removed.
+    double relative_radius(const Tri& t) const
+    {
+        const SurfaceVertex& a = layout_.vertices[t[0]];
+        const SurfaceVertex& b = layout_.vertices[t[1]];
+        const SurfaceVertex& c = layout_.vertices[t[2]];
         if (a.tile == b.tile && b.tile == c.tile)
-            continue;
+            return -1.0;
         if (is_sliver(a.position, b.position, c.position))
-            continue;
-        if (same_tile_chord(t[0], t[1]) || same_tile_chord(t[1], t[2]) || same_tile_chord(t[0], t[2]))
-            continue;
-        const double local_b = alpha * std::max({scale(t[0]), scale(t[1]), scale(t[2])}) / mean_edge;
+            return -1.0;
+        if (chord(t[0], t[1]) || chord(t[1], t[2]) || chord(t[0], t[2]))
+            return -1.0;
+        // Only tiles that meet on the sampled surface are joined (not across a thin wall or a hole).
+        if (apart(a.tile, b.tile) || apart(b.tile, c.tile) || apart(a.tile, c.tile))
+            return -1.0;
+        const double local_b = alpha_ * std::max({scale(t[0]), scale(t[1]), scale(t[2])}) / layout_.mean_edge;
         const double r = circumradius(flat(a.position), flat(b.position), flat(c.position));
         if (!(r <= local_b))
-            continue;
-        if (projection.used && !options.bridge_steps) {
-            const double limit = options.step_height > 0.0 ? options.step_height : local_b;
-            const double ha = dot(a.position, projection.axis), hb = dot(b.position, projection.axis),
-                         hc = dot(c.position, projection.axis);
+            return -1.0;
+        if (projection_.used && !options_.bridge_steps) {
+            const double limit = options_.step_height > 0.0 ? options_.step_height : local_b;
+            const double ha = dot(a.position, projection_.axis), hb = dot(b.position, projection_.axis),
+                         hc = dot(c.position, projection_.axis);
             if (std::max({ha, hb, hc}) - std::min({ha, hb, hc}) > limit)
-                continue;
+                return -1.0;
         }
+        return r / local_b;
+    }
+
+private:
+    bool apart(std::int32_t a, std::int32_t b) const
+    {
+        if (!know_neighbours_ || a == b)
+            return false;
+        const auto& n = tiles_[static_cast<std::size_t>(a)].neighbours;
+        return !std::binary_search(n.begin(), n.end(), static_cast<std::uint32_t>(b));
+    }
+    // An edge joining two non-adjacent points of one tile's loop would cross its fan.
+    bool chord(std::uint32_t a, std::uint32_t b) const
+    {
+        const SurfaceVertex& va = layout_.vertices[a];
+        const SurfaceVertex& vb = layout_.vertices[b];
+        if (va.tile != vb.tile || va.loop_pos == kNone || vb.loop_pos == kNone)
+            return false;
+        const auto n = static_cast<std::uint32_t>(layout_.tiles[static_cast<std::size_t>(va.tile)].loop.size());
+        const std::uint32_t d = va.loop_pos > vb.loop_pos ? va.loop_pos - vb.loop_pos : vb.loop_pos - va.loop_pos;
+        return d != 1 && d != n - 1;
+    }
+    double scale(std::uint32_t v) const
+    {
+        const double e = layout_.tiles[static_cast<std::size_t>(layout_.vertices[v].tile)].edge_length;
+        return e > 0.0 ? e : layout_.mean_edge;
+    }
+    Vec3 flat(const Vec3& p) const
+    {
+        return projection_.used ? Vec3{dot(p, projection_.u), dot(p, projection_.v), 0.0} : p;
+    }
+
+    const Layout& layout_;
+    const std::vector<Tile>& tiles_;
+    const Projection& projection_;
+    double alpha_;
+    const SurfaceOptions& options_;
+    bool know_neighbours_ = false;
+};
+
+// Candidates from one Delaunay triangulation of all boundary points (3D, or 2D for height fields).
+Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, const std::vector<std::uint32_t>& vertex_of)
+{
+    Candidates out;
+    for (const auto& d : dt.triangles) {
+        const Tri t{vertex_of[d[0]], vertex_of[d[1]], vertex_of[d[2]]};
+        const double r = pruner.relative_radius(t);
+        if (r < 0.0)
+            continue;
         out.triangles.push_back(t);
-        out.relative_radius.push_back(r / local_b);
+        out.relative_radius.push_back(r);
+    }
+    return out;
+}
+
+// True when p, projected into the tile's plane, lies strictly inside its (convex) outline.
+bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
+{
+    if (!tile.has_fan())
+        return false;
+    auto uv = [&](const Vec3& q) {
+        const Vec3 d = q - tile.centre;
+        return std::array<double, 2>{dot(d, tile.axis_u), dot(d, tile.axis_v)};
+    };
+    const auto x = uv(p);
+    const std::size_t n = tile.boundary.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto a = uv(h.cloud.positions[tile.boundary[i]]);
+        const auto b = uv(h.cloud.positions[tile.boundary[(i + 1) % n]]);
+        if ((b[0] - a[0]) * (x[1] - a[1]) - (b[1] - a[1]) * (x[0] - a[0]) <= 0.0)
+            return false;
+    }
+    return true;
+}
+
+// Candidates from local Delaunay triangulations around each pair of neighbouring tiles A, B: the loops
+// of A, B and of their common neighbours, projected onto the plane halfway between A's and B's planes
+// (neither tile is seen edge-on there, even across a sharp 90-degree edge). Triangles with vertices in
+// both A and B are proposed: strips between A and B, and junction triangles with a common neighbour C
+// (proposed by up to three pairs; fewer proposals rank them later in the front).
+Candidates pair_candidates(const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
+{
+    std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
+    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
+        const auto t = static_cast<std::size_t>(layout.vertices[v].tile);
+        if (layout.tiles[t].centre != v)
+            members[t].push_back(v);
+    }
+    std::vector<std::pair<Tri, std::uint64_t>> proposals; // (sorted triangle, proposing pair)
+    std::vector<Vec3> points;
+    std::vector<std::uint32_t> ids, common;
+    for (std::uint32_t a = 0; a < tiles.size(); ++a)
+        for (std::uint32_t b : tiles[a].neighbours) {
+            if (b <= a)
+                continue;
+            const Vec3& na = tiles[a].normal;
+            const Vec3& nb = tiles[b].normal;
+            const Vec3 axis = normalized(na + (dot(na, nb) >= 0.0 ? nb : -nb));
+            const Vec3 helper = std::abs(axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+            DelaunayOptions o;
+            o.projected = true;
+            o.axis_u = normalized(cross(helper, axis));
+            o.axis_v = cross(axis, o.axis_u);
+            common.clear();
+            std::set_intersection(tiles[a].neighbours.begin(), tiles[a].neighbours.end(), tiles[b].neighbours.begin(),
+                                  tiles[b].neighbours.end(), std::back_inserter(common));
+            ids.clear();
+            for (std::uint32_t t : {a, b})
+                ids.insert(ids.end(), members[t].begin(), members[t].end());
+            for (std::uint32_t t : common)
+                ids.insert(ids.end(), members[t].begin(), members[t].end());
+            points.clear();
+            for (std::uint32_t v : ids)
+                points.push_back(layout.vertices[v].position);
+            const DelaunayTriangles dt = delaunay_triangles(points, o);
+            for (const auto& d : dt.triangles) {
+                Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
+                bool has_a = false, has_b = false;
+                for (std::uint32_t v : tri) {
+                    has_a = has_a || layout.vertices[v].tile == static_cast<std::int32_t>(a);
+                    has_b = has_b || layout.vertices[v].tile == static_cast<std::int32_t>(b);
+                }
+                if (!has_a || !has_b)
+                    continue;
+                std::sort(tri.begin(), tri.end());
+                proposals.push_back({tri, edge_key(a, b)});
+            }
+        }
+    std::sort(proposals.begin(), proposals.end());
+    Candidates out;
+    for (std::size_t i = 0; i < proposals.size();) {
+        std::size_t j = i;
+        while (j < proposals.size() && proposals[j].first == proposals[i].first)
+            ++j;
+        const Tri& tri = proposals[i].first;
+        std::int32_t ta = layout.vertices[tri[0]].tile, tb = layout.vertices[tri[1]].tile, tc = layout.vertices[tri[2]].tile;
+        const std::size_t pairs = (ta != tb && tb != tc && ta != tc) ? 3 : 1;
+        const std::size_t votes = j - i;
+        i = j;
+        double r = pruner.relative_radius(tri);
+        if (r < 0.0)
+            continue;
+        out.triangles.push_back(tri);
+        out.relative_radius.push_back(r + 0.5 * static_cast<double>(pairs - std::min(pairs, votes)));
+    }
+    return out;
+}
+
+// Candidates from local Delaunay triangulations: for every tile, its loop and its surface neighbours'
+// loops projected into its own plane (the surface is nearly flat at that scale, so the 2D Delaunay
+// triangulation there is a fold-free piece of the restricted Delaunay triangulation). A triangle is
+// proposed by each of its tiles whose triangulation has it; triangles all of their tiles propose come
+// first in the front (relative radius as is), the others after them (+1).
+Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
+{
+    std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
+    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
+        const auto t = static_cast<std::size_t>(layout.vertices[v].tile);
+        if (layout.tiles[t].centre != v)
+            members[t].push_back(v);
+    }
+    std::vector<std::pair<Tri, std::uint32_t>> proposals; // (sorted triangle, proposing tile)
+    std::vector<Vec3> points;
+    std::vector<std::uint32_t> ids;
+    for (std::uint32_t t = 0; t < layout.tiles.size(); ++t) {
+        if (layout.tiles[t].centre == kNone)
+            continue;
+        points.clear();
+        ids.clear();
+        for (std::uint32_t v : members[t])
+            ids.push_back(v);
+        for (std::uint32_t n : tiles[t].neighbours)
+            for (std::uint32_t v : members[n])
+                ids.push_back(v);
+        for (std::uint32_t v : ids)
+            points.push_back(layout.vertices[v].position);
+        DelaunayOptions o;
+        o.projected = true;
+        o.axis_u = tiles[t].axis_u;
+        o.axis_v = tiles[t].axis_v;
+        const DelaunayTriangles dt = delaunay_triangles(points, o);
+        for (const auto& d : dt.triangles) {
+            Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
+            const auto tile_of = [&](std::uint32_t v) { return static_cast<std::uint32_t>(layout.vertices[v].tile); };
+            if (tile_of(tri[0]) != t && tile_of(tri[1]) != t && tile_of(tri[2]) != t)
+                continue;
+            std::sort(tri.begin(), tri.end());
+            proposals.push_back({tri, t});
+        }
+    }
+    std::sort(proposals.begin(), proposals.end());
+    Candidates out;
+    for (std::size_t i = 0; i < proposals.size();) {
+        std::size_t j = i;
+        while (j < proposals.size() && proposals[j].first == proposals[i].first)
+            ++j;
+        const Tri& tri = proposals[i].first;
+        std::vector<std::uint32_t> fan_tiles;
+        for (std::uint32_t v : tri) {
+            const auto t = static_cast<std::uint32_t>(layout.vertices[v].tile);
+            if (layout.tiles[t].centre != kNone)
+                fan_tiles.push_back(t);
+        }
+        std::sort(fan_tiles.begin(), fan_tiles.end());
+        fan_tiles.erase(std::unique(fan_tiles.begin(), fan_tiles.end()), fan_tiles.end());
+        const std::size_t votes = j - i;
+        i = j;
+        double r = pruner.relative_radius(tri);
+        if (r < 0.0)
+            continue;
+        // A triangle over a fan (its tiles seen in their own planes) would overlap it.
+        const Vec3 centroid = (layout.vertices[tri[0]].position + layout.vertices[tri[1]].position +
+                               layout.vertices[tri[2]].position) / 3.0;
+        if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
+            continue;
+        if (votes < fan_tiles.size()) {
+            if (kLocalMode == 2)
+                continue;
+            r += 1.0;
+        }
+        out.triangles.push_back(tri);
+        out.relative_radius.push_back(r);
     }
     return out;
 }
@@ -907,6 +1217,13 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
         const std::uint32_t a = loop[i], b = loop[j];
         return a != b && !s.has_halfedge(a, b) && !s.has_halfedge(b, a);
     };
+    // The hole's facing: its vector area (loop order = face order), or the height-field axis.
+    Vec3 up = projection.axis;
+    if (!projection.used) {
+        up = Vec3{};
+        for (std::size_t i = 0; i < n; ++i)
+            up += cross(positions[loop[i]], positions[loop[(i + 1) % n]]);
+    }
     std::vector<double> cost(n * n, inf);
     std::vector<std::uint32_t> split(n * n, kNone);
     for (std::size_t i = 0; i + 1 < n; ++i)
@@ -925,8 +1242,8 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
                     continue;
                 const Vec3 normal = triangle_cross(positions[a], positions[b], positions[c]);
                 const double area = norm(normal);
-                if (is_sliver(positions[a], positions[b], positions[c]) ||
-                    (projection.used && !(dot(normal, projection.axis) > 0.0)))
+                // Every face looks the way the hole does (a fold would double-cover the surface).
+                if (is_sliver(positions[a], positions[b], positions[c]) || !(dot(normal, up) > 0.0))
                     continue;
                 const double total = c0 + c1 + area;
                 if (total < cost[i * n + j]) {
@@ -984,8 +1301,32 @@ struct FillResult
     std::size_t faces = 0;
 };
 
+// A tile is interior when its surface neighbours surround it: seen from its centre in its plane, no
+// angular sector wider than max_gap_degrees is free of neighbour centres. Tiles on the sample's border
+// have the empty outside there.
+std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees)
+{
+    std::vector<bool> out(tiles.size(), false);
+    std::vector<double> angles;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        angles.clear();
+        for (std::uint32_t n : tiles[t].neighbours) {
+            const Vec3 d = tiles[n].centre - tiles[t].centre;
+            angles.push_back(std::atan2(dot(d, tiles[t].axis_v), dot(d, tiles[t].axis_u)));
+        }
+        if (angles.size() < 3)
+            continue;
+        std::sort(angles.begin(), angles.end());
+        double gap = angles.front() + 2.0 * kPi - angles.back();
+        for (std::size_t i = 1; i < angles.size(); ++i)
+            gap = std::max(gap, angles[i] - angles[i - 1]);
+        out[t] = gap <= max_gap_degrees * kPi / 180.0;
+    }
+    return out;
+}
+
 FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>& positions, const Projection& projection,
-                      const SurfaceOptions& options)
+                      const std::vector<bool>& interior, const SurfaceOptions& options)
 {
     FillResult result;
     // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
@@ -1009,7 +1350,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
                 continue;
             std::vector<std::int32_t> loop_tiles;
             double perimeter = 0.0, largest_tile = 0.0;
-            bool was_widened = false;
+            bool was_widened = false, surrounded = true;
             for (std::size_t i = 0; i < n; ++i) {
                 // A height field's holes are measured in its domain: a gap at a jump is small there.
                 Vec3 d = positions[loop[(i + 1) % n]] - positions[loop[i]];
@@ -1018,6 +1359,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
                 perimeter += norm(d);
                 const std::int32_t t = layout.vertices[loop[i]].tile;
                 loop_tiles.push_back(t);
+                surrounded = surrounded && interior[static_cast<std::size_t>(t)];
                 largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
                 was_widened = was_widened || widened[loop[i]];
             }
@@ -1025,7 +1367,8 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
             loop_tiles.erase(std::unique(loop_tiles.begin(), loop_tiles.end()), loop_tiles.end());
             // A widened hole was small before we opened it: it may be up to three times as large.
             const double limit = options.hole_factor * largest_tile * (was_widened ? 3.0 : 1.0);
-            if (loop_tiles.size() < 2 || perimeter > limit)
+            // A hole among interior tiles is a gap whatever its size; elsewhere only small holes are.
+            if (loop_tiles.size() < 2 || (perimeter > limit && !surrounded))
                 continue;
             const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
             std::size_t added = 0;
@@ -1132,13 +1475,20 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     dopt.projected = projection.used;
     dopt.axis_u = projection.u;
     dopt.axis_v = projection.v;
-    const DelaunayTriangles dt = delaunay_triangles(gap_points, dopt);
-    const Candidates candidates = prune(layout, dt, vertex_of, projection, alpha, layout.mean_edge, options);
+    const Pruner pruner(layout, tiles, projection, alpha, options);
+    Candidates candidates;
+    if (!projection.used && pruner.know_neighbours() && kLocalMode == 3)
+        candidates = pair_candidates(pruner, layout, tiles);
+    else if (!projection.used && pruner.know_neighbours() && kLocalMode > 0)
+        candidates = local_candidates(h, pruner, layout, tiles);
+    else
+        candidates = global_candidates(pruner, delaunay_triangles(gap_points, dopt), vertex_of);
 
     Surface surface(layout.vertices.size());
     {
+        const std::vector<int> orientation = pruner.know_neighbours() ? orient_tiles(tiles) : std::vector<int>{};
         Front front(layout, tiles, surface, projection, candidates.triangles, candidates.relative_radius,
-                    options.max_turn_degrees);
+                    options.max_turn_degrees, orientation);
         front.run();
     }
     std::vector<Vec3> positions;
@@ -1146,7 +1496,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         positions.push_back(v.position);
     FillResult filled;
     if (options.fill_holes)
-        filled = fill_holes(surface, layout, positions, projection, options);
+        filled = fill_holes(surface, layout, positions, projection, interior_tiles(tiles, kGapDeg), options);
 
     // Pinched vertices become one vertex per fan.
     const std::vector<std::uint32_t> copies = surface.split_pinches();

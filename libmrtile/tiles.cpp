@@ -3,6 +3,17 @@
 // (axis_u, axis_v) coordinates of the plane, so it is exact for the projected points and
 // counter-clockwise seen from the normal; collinear hull points are dropped because they would give
 // zero-area fan triangles (T1) later.
+//
+// Coarse cut nodes are unions of leaves and need not be convex, so the hulls of neighbouring nodes can
+// overlap and their fans would cover some surface twice (extra handles in the mesh). By default the
+// points are therefore re-partitioned by the Voronoi cells of the cut's centres: a point goes to its
+// nearest centre, found by a greedy walk on the centres' Delaunay graph (exact: a site that is not the
+// nearest always has a Delaunay neighbour nearer to the point). Cells are convex and disjoint, so the
+// fans are too, and every point lies in some tile, so gaps stay one spacing wide. The same pass finds
+// the restricted Delaunay neighbours (tiles whose cells meet on the sampled surface): a point whose two
+// nearest centres are A and B and that lies close to their bisector plane witnesses that the surface
+// crosses the Voronoi face of A and B. The surface stage uses them to keep gap triangles between
+// tiles that really meet (not across a thin plate or a handle's hole).
 #include "libmrtile/tiles.h"
 
 #include "libmrtile/errors.h"
@@ -10,10 +21,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numeric>
 #include <string>
+#include <tuple>
 
 namespace mrt {
 namespace {
+
 
 struct Projected
 {
@@ -77,16 +92,11 @@ std::vector<std::uint32_t> convex_hull(std::vector<Projected>& pts, double toler
     return out;
 }
 
-} // namespace
-
-Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options, const std::vector<Vec3>& rivals)
+// The tile of `node` built from the points `indices` (into h.cloud.positions).
+Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t* indices, std::size_t count,
+                      const TileOptions& options)
 {
-    if (node < 0 || static_cast<std::size_t>(node) >= h.nodes.size())
-        throw InvalidInput("cut: node id " + std::to_string(node) + " is not in the hierarchy (" +
-                           std::to_string(h.nodes.size()) + " nodes)");
     const Node& n = h.nodes[static_cast<std::size_t>(node)];
-    if (n.end <= n.begin || n.end > h.cloud.positions.size())
-        throw InvalidInput("cut: node " + std::to_string(node) + " has an empty or out-of-range point range");
     Tile t;
     t.node = node;
     t.centre = n.moments.mean;
@@ -94,28 +104,13 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
     t.axis_u = n.frame.vectors[2];
     // Right-handed plane basis so that counter-clockwise in (u, v) is counter-clockwise seen from normal.
     t.axis_v = cross(t.normal, t.axis_u);
-    t.points = n.count();
-
+    t.points = static_cast<std::uint32_t>(count);
     std::vector<Projected> pts;
-    pts.reserve(n.count());
-    auto in_own_cell = [&](const Vec3& p) {
-        const double own = squared_distance(p, t.centre);
-        for (const Vec3& r : rivals)
-            if (squared_distance(p, r) < own)
-                return false;
-        return true;
-    };
-    for (std::uint32_t i = n.begin; i < n.end; ++i) {
-        if (!rivals.empty() && !in_own_cell(h.cloud.positions[i]))
-            continue;
-        const Vec3 d = h.cloud.positions[i] - t.centre;
-        pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
+    pts.reserve(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        const Vec3 d = h.cloud.positions[indices[k]] - t.centre;
+        pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), indices[k]});
     }
-    if (pts.empty()) // every point nearer to a rival (a very non-convex node): use them all
-        for (std::uint32_t i = n.begin; i < n.end; ++i) {
-            const Vec3 d = h.cloud.positions[i] - t.centre;
-            pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
-        }
     t.boundary = convex_hull(pts, options.collinear_tolerance);
     if (t.has_fan()) {
         double twice = 0.0;
@@ -133,31 +128,145 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
     return t;
 }
 
+void check_node(const Hierarchy& h, std::int32_t node)
+{
+    if (node < 0 || static_cast<std::size_t>(node) >= h.nodes.size())
+        throw InvalidInput("cut: node id " + std::to_string(node) + " is not in the hierarchy (" +
+                           std::to_string(h.nodes.size()) + " nodes)");
+    const Node& n = h.nodes[static_cast<std::size_t>(node)];
+    if (n.end <= n.begin || n.end > h.cloud.positions.size())
+        throw InvalidInput("cut: node " + std::to_string(node) + " has an empty or out-of-range point range");
+}
+
+// The Voronoi partition of the cut's points and the surface adjacency of the cells (see the file comment).
+struct Partition
+{
+    std::vector<std::uint32_t> start;  // points of cell k: order[start[k] .. start[k+1])
+    std::vector<std::uint32_t> order;
+    // closest[k][j]: smallest distance to the bisector plane of centres k and graph[k][j] over the points
+    // whose nearest centre is k (infinity if there is none).
+    std::vector<std::vector<double>> closest;
+};
+
+Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>& cut, const std::vector<Vec3>& centres,
+                            const std::vector<std::vector<std::uint32_t>>& graph)
+{
+    const auto tiles = static_cast<std::uint32_t>(cut.size());
+    // Coincident centres: the Delaunay graph keeps only the first; walks start there.
+    std::vector<std::uint32_t> by_position(tiles);
+    std::iota(by_position.begin(), by_position.end(), 0u);
+    std::sort(by_position.begin(), by_position.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const Vec3 &p = centres[a], &q = centres[b];
+        return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
+    });
+    std::vector<std::uint32_t> representative(tiles);
+    for (std::size_t i = 0; i < by_position.size(); ++i)
+        representative[by_position[i]] = i > 0 && centres[by_position[i]] == centres[by_position[i - 1]]
+                                             ? representative[by_position[i - 1]]
+                                             : by_position[i];
+    Partition out;
+    out.closest.resize(tiles);
+    for (std::uint32_t k = 0; k < tiles; ++k)
+        out.closest[k].assign(graph[k].size(), std::numeric_limits<double>::infinity());
+    std::size_t total = 0;
+    for (std::int32_t node : cut)
+        total += h.nodes[static_cast<std::size_t>(node)].count();
+    std::vector<std::uint32_t> owner(total);
+    std::vector<std::uint32_t> point(total);
+    std::size_t at = 0;
+    for (std::uint32_t k = 0; k < tiles; ++k) {
+        const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
+        for (std::uint32_t i = n.begin; i < n.end; ++i, ++at) {
+            const Vec3& p = h.cloud.positions[i];
+            std::uint32_t best = representative[k];
+            double best_d = squared_distance(p, centres[best]);
+            // Greedy walk: (distance, index) strictly decreases, so it ends, at a nearest centre.
+            for (bool moved = true; moved;) {
+                moved = false;
+                for (std::uint32_t j : graph[best]) {
+                    const double d = squared_distance(p, centres[j]);
+                    if (d < best_d || (d == best_d && j < best)) {
+                        best = j;
+                        best_d = d;
+                        moved = true;
+                    }
+                }
+            }
+            // Distance to the bisector plane with each Delaunay neighbour of the nearest centre (every
+            // Voronoi face of the cell is with one of them).
+            const std::vector<std::uint32_t>& around = graph[best];
+            for (std::size_t j = 0; j < around.size(); ++j) {
+                const double d = squared_distance(p, centres[around[j]]);
+                const double gap = distance(centres[best], centres[around[j]]);
+                if (gap > 0.0) {
+                    double& c = out.closest[best][j];
+                    c = std::min(c, (d - best_d) / (2.0 * gap));
+                }
+            }
+            owner[at] = best;
+            point[at] = i;
+        }
+    }
+    // Counting sort by owner, stable in point order (deterministic).
+    out.start.assign(tiles + 1, 0);
+    for (std::uint32_t o : owner)
+        ++out.start[o + 1];
+    for (std::uint32_t k = 0; k < tiles; ++k)
+        out.start[k + 1] += out.start[k];
+    out.order.resize(total);
+    std::vector<std::uint32_t> fill(out.start.begin(), out.start.end() - 1);
+    for (std::size_t i = 0; i < total; ++i)
+        out.order[fill[owner[i]]++] = point[i];
+    return out;
+}
+
+} // namespace
+
+Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options)
+{
+    check_node(h, node);
+    const Node& n = h.nodes[static_cast<std::size_t>(node)];
+    std::vector<std::uint32_t> indices(n.count());
+    std::iota(indices.begin(), indices.end(), n.begin);
+    return tile_from_points(h, node, indices.data(), indices.size(), options);
+}
+
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options)
 {
     if (!(options.collinear_tolerance >= 0.0))
         throw InvalidInput("TileOptions::collinear_tolerance must be >= 0");
+    if (!(options.adjacency_factor >= 0.0))
+        throw InvalidInput("TileOptions::adjacency_factor must be >= 0");
     for (std::int32_t node : cut)
-        if (node < 0 || static_cast<std::size_t>(node) >= h.nodes.size())
-            throw InvalidInput("cut: node id " + std::to_string(node) + " is not in the hierarchy (" +
-                               std::to_string(h.nodes.size()) + " nodes)");
-    std::vector<std::vector<std::uint32_t>> neighbours;
-    std::vector<Vec3> centres;
-    if (options.voronoi_trim && cut.size() > 1) {
-        for (std::int32_t node : cut)
-            centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
-        neighbours = delaunay_graph(centres);
-    }
+        check_node(h, node);
     std::vector<Tile> tiles;
     tiles.reserve(cut.size());
-    std::vector<Vec3> rivals;
-    for (std::size_t k = 0; k < cut.size(); ++k) {
-        rivals.clear();
-        if (!neighbours.empty())
-            for (std::uint32_t j : neighbours[k])
-                if (centres[j] != centres[k])
-                    rivals.push_back(centres[j]);
-        tiles.push_back(make_tile(h, cut[k], options, rivals));
+    if (!options.voronoi_trim || cut.size() < 2) {
+        for (std::int32_t node : cut)
+            tiles.push_back(make_tile(h, node, options));
+        return tiles;
+    }
+    std::vector<Vec3> centres;
+    for (std::int32_t node : cut)
+        centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
+    const std::vector<std::vector<std::uint32_t>> graph = delaunay_graph(centres);
+    const Partition part = voronoi_partition(h, cut, centres, graph);
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        tiles.push_back(tile_from_points(h, cut[k], part.order.data() + part.start[k],
+                                         part.start[k + 1] - part.start[k], options));
+    // Surface neighbours: witnessed from either side within the larger of the two spacings.
+    for (std::uint32_t k = 0; k < cut.size(); ++k)
+        for (std::size_t j = 0; j < graph[k].size(); ++j) {
+            const std::uint32_t other = graph[k][j];
+            const double spacing = std::max(tiles[k].spacing(), tiles[other].spacing());
+            if (part.closest[k][j] <= options.adjacency_factor * spacing) {
+                tiles[k].neighbours.push_back(other);
+                tiles[other].neighbours.push_back(k);
+            }
+        }
+    for (Tile& t : tiles) {
+        std::sort(t.neighbours.begin(), t.neighbours.end());
+        t.neighbours.erase(std::unique(t.neighbours.begin(), t.neighbours.end()), t.neighbours.end());
     }
     return tiles;
 }

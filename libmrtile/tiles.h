@@ -2,14 +2,15 @@
 //! \file tiles.h
 //! \brief Tile generation (paper §4.2): the convex hull of each cut cluster in its best-fit plane.
 //! \details For a cut node the plane through its centre spanned by its two largest PCA directions is
-//! the tile plane; the node's points are projected into it and the convex hull H of the projections is
+//! the tile plane; the tile's points are projected into it and the convex hull H of the projections is
 //! computed. The *pseudo tile* is the polygon through the hull points at their original 3D positions.
-//! Only the node's point range, moments and PCA frame are used, so a tile costs O(k log k) for a node of
-//! k points and any cut of the hierarchy can be tiled.
+//! The tile's points are those of the node's Voronoi cell among the cut's centres (TileOptions::
+//! voronoi_trim, default) or the node's own. A cut of N points costs O(N log N) in all.
 
 #include "libmrtile/hierarchy.h"
 #include "libmrtile/vec3.h"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -20,13 +21,18 @@ struct TileOptions
     //! A hull point is dropped as collinear when the turn at it is at most this fraction of the squared
     //! extent of the projected cluster (scale-free; 0 keeps every point that turns at all).
     double collinear_tolerance = 1e-12;
-    //! Build each tile only from the node's points that lie in the Voronoi cell of its centre among
-    //! the cut's centres (exact: tested against the centre's Delaunay neighbours). A coarse node is a
-    //! union of leaves and need not be convex, so the convex hull of all its points can overlap its
-    //! neighbours; trimmed tiles lie in disjoint convex cells, so their fans never overlap. The
-    //! trimmed-off points are still the node's (the cut stays a partition); the gap triangulation
-    //! covers them.
+    //! Build the tiles from the Voronoi partition of the points by the cut's centres: every point goes
+    //! to the tile of its nearest centre (found exactly by a greedy walk on the centres' Delaunay graph
+    //! from its own node's centre). A coarse node is a union of leaves and need not be convex, so the
+    //! convex hulls of the nodes themselves can overlap; Voronoi cells are disjoint and convex, so the
+    //! fans never overlap, and since every point is in some cell the gaps between tiles stay about one
+    //! point spacing wide. Also finds which tiles meet on the surface (Tile::neighbours).
+    //! false: each tile is the hull of exactly its node's points (the paper's literal tiles).
     bool voronoi_trim = true;
+    //! Two tiles are neighbours on the surface when some point of one lies within adjacency_factor ×
+    //! the larger of their point spacings of the bisector plane of the two centres (the sampled surface
+    //! comes that close to their Voronoi face).
+    double adjacency_factor = 1.5;
 };
 
 struct Tile
@@ -41,8 +47,13 @@ struct Tile
     //! 3 points or is collinear (the entries are then the distinct extreme points): such a tile has no fan.
     std::vector<std::uint32_t> boundary;
     double area = 0.0;        //!< area of the projected hull (tile plane units²)
-    std::uint32_t points = 0; //!< number of points in the node
+    std::uint32_t points = 0; //!< number of points the tile was built from (its Voronoi cell's, or its node's)
+    //! Indices (into the tile vector, ascending) of the tiles that meet this one on the sampled surface:
+    //! the restricted Delaunay neighbours found from the points (voronoi_trim only; else empty).
+    std::vector<std::uint32_t> neighbours;
 
+    //! Mean point spacing sqrt(area / points) (0 without a fan).
+    double spacing() const { return points > 0 && area > 0.0 ? std::sqrt(area / points) : 0.0; }
     bool has_fan() const { return boundary.size() >= 3; }
 };
 
@@ -50,10 +61,7 @@ struct Tile
 //! \throw InvalidInput if a cut entry is not a node id of `h` or names an empty node.
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options = {});
 
-//! Builds one tile from the node's point range and frame (used by make_tiles; exposed for tests).
-//! With `rivals`, only points nearer to the node's centre than to every rival centre are used
-//! (falling back to all points if that leaves none).
-Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {},
-               const std::vector<Vec3>& rivals = {});
+//! Builds one tile from all of the node's points and its frame (no Voronoi partition; for tests).
+Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {});
 
 } // namespace mrt

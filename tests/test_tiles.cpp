@@ -123,15 +123,20 @@ TEST(Tiles, degenerate_clusters_have_no_fan)
     EXPECT_EQ(make_tile(single_node({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}), 0).boundary.size(), 1u);
 }
 
-TEST(Tiles, cut_tiles_use_their_own_points)
+// Without the Voronoi partition a tile is exactly its node (the paper's literal tile).
+TEST(Tiles, untrimmed_tiles_use_their_own_points)
 {
     const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(3000), 40);
-    const std::vector<Tile> tiles = make_tiles(fc.hierarchy, fc.cut);
+    TileOptions literal;
+    literal.voronoi_trim = false;
+    const std::vector<Tile> tiles = make_tiles(fc.hierarchy, fc.cut, literal);
     ASSERT_EQ(tiles.size(), fc.cut.size());
     for (std::size_t k = 0; k < tiles.size(); ++k) {
         const Node& n = fc.hierarchy.nodes[static_cast<std::size_t>(fc.cut[k])];
         EXPECT_EQ(tiles[k].node, fc.cut[k]);
         EXPECT_EQ(tiles[k].centre, n.moments.mean);
+        EXPECT_EQ(tiles[k].points, n.count());
+        EXPECT_TRUE(tiles[k].neighbours.empty());
         ASSERT_TRUE(tiles[k].has_fan());
         for (std::uint32_t i : tiles[k].boundary) {
             EXPECT_GE(i, n.begin);
@@ -140,6 +145,49 @@ TEST(Tiles, cut_tiles_use_their_own_points)
     }
     EXPECT_THROW(make_tiles(fc.hierarchy, {static_cast<std::int32_t>(fc.hierarchy.nodes.size())}), InvalidInput);
     EXPECT_THROW(make_tiles(fc.hierarchy, {-1}), InvalidInput);
+}
+
+// Default tiles are the Voronoi cells of the cut's centres (brute-force nearest centre), they
+// partition the points, and neighbours are symmetric.
+TEST(Tiles, trimmed_tiles_are_voronoi_cells)
+{
+    // A few Lloyd steps only: the node means are not the centres the labels came from, so many points
+    // are nearer to another node's mean than to their own.
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(4000), 60, 1);
+    const Hierarchy& h = fc.hierarchy;
+    const std::vector<Tile> tiles = make_tiles(h, fc.cut);
+    ASSERT_EQ(tiles.size(), fc.cut.size());
+    auto nearest = [&](const Vec3& p) {
+        std::size_t best = 0;
+        for (std::size_t k = 1; k < tiles.size(); ++k)
+            if (squared_distance(p, tiles[k].centre) < squared_distance(p, tiles[best].centre))
+                best = k;
+        return best;
+    };
+    std::size_t total = 0, moved = 0;
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const Node& n = h.nodes[static_cast<std::size_t>(fc.cut[k])];
+        EXPECT_EQ(tiles[k].centre, n.moments.mean);
+        total += tiles[k].points;
+        for (std::uint32_t i : tiles[k].boundary) {
+            EXPECT_EQ(nearest(h.cloud.positions[i]), k);
+            moved += (i < n.begin || i >= n.end) ? 1 : 0;
+        }
+        for (std::uint32_t j : tiles[k].neighbours) {
+            EXPECT_NE(j, k);
+            EXPECT_TRUE(std::binary_search(tiles[j].neighbours.begin(), tiles[j].neighbours.end(), static_cast<std::uint32_t>(k)));
+        }
+        EXPECT_TRUE(std::is_sorted(tiles[k].neighbours.begin(), tiles[k].neighbours.end()));
+    }
+    EXPECT_EQ(total, h.cloud.size());
+    EXPECT_GT(moved, 0u) << "the fixture should have points outside their node's cell";
+    // On a closed surface every tile is surrounded: at least three neighbours each, about six on average.
+    std::size_t degree = 0;
+    for (const Tile& t : tiles) {
+        EXPECT_GE(t.neighbours.size(), 3u);
+        degree += t.neighbours.size();
+    }
+    EXPECT_NEAR(static_cast<double>(degree) / static_cast<double>(tiles.size()), 6.0, 1.0);
 }
 
 } // namespace
