@@ -13,6 +13,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -238,12 +242,47 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         tolerances = finer_tolerances(h, o, first.tolerance);
         add_level(std::move(first));
     }
+    // The finer levels are independent meshing jobs: cut them, mesh them on worker threads (largest
+    // first), then add them in order.
+    std::vector<LodLevel> finer;
     for (double tol : tolerances) {
         LodLevel level;
         level.tolerance = tol;
         level.cut = cut_by_tolerance(h, tol);
-        add_level(std::move(level));
+        const std::size_t previous = finer.empty() ? (set.levels.empty() ? 0 : set.levels.back().cut.size()) : finer.back().cut.size();
+        if (level.cut.size() > previous)
+            finer.push_back(std::move(level));
     }
+    std::vector<std::size_t> order(finer.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+        order[i] = finer.size() - 1 - i; // finest (largest) first
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto worker = [&] {
+        for (std::size_t k = next++; k < order.size(); k = next++) {
+            try {
+                LodLevel& level = finer[order[k]];
+                level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure)
+                    failure = std::current_exception();
+            }
+        }
+    };
+    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t workers = std::min(finer.size(), o.threads > 0 ? o.threads : hardware);
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < workers; ++t)
+        pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool)
+        t.join();
+    if (failure)
+        std::rethrow_exception(failure);
+    for (LodLevel& level : finer)
+        add_level(std::move(level));
     if (!set.levels.empty())
         set.levels.back().geometric_error = 0.0;
     if (!o.tileset)

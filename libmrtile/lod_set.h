@@ -39,6 +39,9 @@ struct LodSetOptions
     //! Add skirts to tiles (3D Tiles only).
     bool skirts = true;
     MeshOptions mesh;
+    //! Levels are meshed in parallel on this many threads (0 = one per hardware thread). The result
+    //! does not depend on it: every level is meshed on its own, deterministically.
+    std::size_t threads = 0;
 };
 
 struct LodLevel

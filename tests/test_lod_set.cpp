@@ -62,6 +62,33 @@ TEST(LodSet, levels_are_consistent)
     EXPECT_THROW(make_lod_set(torus(), explicit_levels), InvalidInput);
 }
 
+// Whatever the thread count, the levels are the same meshes.
+TEST(LodSet, thread_count_does_not_change_the_result)
+{
+    LodSetOptions o;
+    o.tileset = false;
+    o.max_tile_triangles = 4096;
+    o.threads = 1;
+    const LodSet one = make_lod_set(torus(), o);
+    o.threads = 3;
+    const LodSet three = make_lod_set(torus(), o);
+    ASSERT_EQ(one.levels.size(), three.levels.size());
+    for (std::size_t l = 0; l < one.levels.size(); ++l) {
+        const Mesh& a = one.levels[l].mesh;
+        const Mesh& b = three.levels[l].mesh;
+        ASSERT_EQ(a.n_vertices(), b.n_vertices());
+        ASSERT_EQ(a.n_faces(), b.n_faces());
+        for (const auto v : a.vertices())
+            ASSERT_EQ(a.point(v), b.point(Mesh::VertexHandle(v.idx())));
+        for (const auto f : a.faces()) {
+            auto fa = a.cfv_begin(f);
+            auto fb = b.cfv_begin(Mesh::FaceHandle(f.idx()));
+            for (int k = 0; k < 3; ++k, ++fa, ++fb)
+                ASSERT_EQ(fa->idx(), fb->idx());
+        }
+    }
+}
+
 // The tile tree: budgets honoured, errors non-increasing, boxes nested, children's regions partition
 // their parent's region, and the leaves are at the finest level.
 TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
