@@ -42,7 +42,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <limits>
 #include <numeric>
 #include <queue>
@@ -55,8 +54,6 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kPi = 3.14159265358979323846;
-static double kGapDeg = std::getenv("GAPDEG") ? std::atof(std::getenv("GAPDEG")) : 150;
-static int kLocalMode = std::getenv("LOCALMODE") ? std::atoi(std::getenv("LOCALMODE")) : 1;
 using Tri = std::array<std::uint32_t, 3>;
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b)
@@ -977,79 +974,6 @@ bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
     return true;
 }
 
-// Candidates from local Delaunay triangulations around each pair of neighbouring tiles A, B: the loops
-// of A, B and of their common neighbours, projected onto the plane halfway between A's and B's planes
-// (neither tile is seen edge-on there, even across a sharp 90-degree edge). Triangles with vertices in
-// both A and B are proposed: strips between A and B, and junction triangles with a common neighbour C
-// (proposed by up to three pairs; fewer proposals rank them later in the front).
-Candidates pair_candidates(const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
-{
-    std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
-    for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
-        const auto t = static_cast<std::size_t>(layout.vertices[v].tile);
-        if (layout.tiles[t].centre != v)
-            members[t].push_back(v);
-    }
-    std::vector<std::pair<Tri, std::uint64_t>> proposals; // (sorted triangle, proposing pair)
-    std::vector<Vec3> points;
-    std::vector<std::uint32_t> ids, common;
-    for (std::uint32_t a = 0; a < tiles.size(); ++a)
-        for (std::uint32_t b : tiles[a].neighbours) {
-            if (b <= a)
-                continue;
-            const Vec3& na = tiles[a].normal;
-            const Vec3& nb = tiles[b].normal;
-            const Vec3 axis = normalized(na + (dot(na, nb) >= 0.0 ? nb : -nb));
-            const Vec3 helper = std::abs(axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-            DelaunayOptions o;
-            o.projected = true;
-            o.axis_u = normalized(cross(helper, axis));
-            o.axis_v = cross(axis, o.axis_u);
-            common.clear();
-            std::set_intersection(tiles[a].neighbours.begin(), tiles[a].neighbours.end(), tiles[b].neighbours.begin(),
-                                  tiles[b].neighbours.end(), std::back_inserter(common));
-            ids.clear();
-            for (std::uint32_t t : {a, b})
-                ids.insert(ids.end(), members[t].begin(), members[t].end());
-            for (std::uint32_t t : common)
-                ids.insert(ids.end(), members[t].begin(), members[t].end());
-            points.clear();
-            for (std::uint32_t v : ids)
-                points.push_back(layout.vertices[v].position);
-            const DelaunayTriangles dt = delaunay_triangles(points, o);
-            for (const auto& d : dt.triangles) {
-                Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
-                bool has_a = false, has_b = false;
-                for (std::uint32_t v : tri) {
-                    has_a = has_a || layout.vertices[v].tile == static_cast<std::int32_t>(a);
-                    has_b = has_b || layout.vertices[v].tile == static_cast<std::int32_t>(b);
-                }
-                if (!has_a || !has_b)
-                    continue;
-                std::sort(tri.begin(), tri.end());
-                proposals.push_back({tri, edge_key(a, b)});
-            }
-        }
-    std::sort(proposals.begin(), proposals.end());
-    Candidates out;
-    for (std::size_t i = 0; i < proposals.size();) {
-        std::size_t j = i;
-        while (j < proposals.size() && proposals[j].first == proposals[i].first)
-            ++j;
-        const Tri& tri = proposals[i].first;
-        std::int32_t ta = layout.vertices[tri[0]].tile, tb = layout.vertices[tri[1]].tile, tc = layout.vertices[tri[2]].tile;
-        const std::size_t pairs = (ta != tb && tb != tc && ta != tc) ? 3 : 1;
-        const std::size_t votes = j - i;
-        i = j;
-        double r = pruner.relative_radius(tri);
-        if (r < 0.0)
-            continue;
-        out.triangles.push_back(tri);
-        out.relative_radius.push_back(r + 0.5 * static_cast<double>(pairs - std::min(pairs, votes)));
-    }
-    return out;
-}
-
 // Candidates from local Delaunay triangulations: for every tile, its loop and its surface neighbours'
 // loops projected into its own plane (the surface is nearly flat at that scale, so the 2D Delaunay
 // triangulation there is a fold-free piece of the restricted Delaunay triangulation). A triangle is
@@ -1117,11 +1041,8 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
                                layout.vertices[tri[2]].position) / 3.0;
         if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
             continue;
-        if (votes < fan_tiles.size()) {
-            if (kLocalMode == 2)
-                continue;
+        if (votes < fan_tiles.size())
             r += 1.0;
-        }
         out.triangles.push_back(tri);
         out.relative_radius.push_back(r);
     }
@@ -1217,7 +1138,15 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
         const std::uint32_t a = loop[i], b = loop[j];
         return a != b && !s.has_halfedge(a, b) && !s.has_halfedge(b, a);
     };
-    // The hole's facing: its vector area (loop order = face order), or the height-field axis.
+    // A face of the patch must look the way the hole does as a whole (its vector area in loop order =
+    // face order; the axis for height fields) or the way the surface around its corners does (for holes
+    // bent around an edge or corner). Anything else is a fold that would double-cover the surface.
+    std::vector<Vec3> facing(n);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::uint32_t f : s.faces_at(loop[i])) {
+            const Tri& t = s.faces()[f];
+            facing[i] += normalized(triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]));
+        }
     Vec3 up = projection.axis;
     if (!projection.used) {
         up = Vec3{};
@@ -1242,8 +1171,8 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
                     continue;
                 const Vec3 normal = triangle_cross(positions[a], positions[b], positions[c]);
                 const double area = norm(normal);
-                // Every face looks the way the hole does (a fold would double-cover the surface).
-                if (is_sliver(positions[a], positions[b], positions[c]) || !(dot(normal, up) > 0.0))
+                if (is_sliver(positions[a], positions[b], positions[c]) ||
+                    (!(dot(normal, up) > 0.0) && !(dot(normal, facing[i] + facing[k] + facing[j]) > 0.0)))
                     continue;
                 const double total = c0 + c1 + area;
                 if (total < cost[i * n + j]) {
@@ -1441,9 +1370,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         throw InvalidInput("build_surface: the cut has no tiles");
     if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
         !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
-        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length))
+        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length) || !(options.interior_gap_degrees > 0.0))
         throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor must be >= 0 and alpha_factor, "
-                           "split_factor, max_turn_degrees, max_tilt_degrees > 0");
+                           "split_factor, max_turn_degrees, max_tilt_degrees, interior_gap_degrees > 0");
     std::size_t fan_tiles = 0;
     for (const Tile& t : tiles) {
         if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
@@ -1477,9 +1406,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     dopt.axis_v = projection.v;
     const Pruner pruner(layout, tiles, projection, alpha, options);
     Candidates candidates;
-    if (!projection.used && pruner.know_neighbours() && kLocalMode == 3)
-        candidates = pair_candidates(pruner, layout, tiles);
-    else if (!projection.used && pruner.know_neighbours() && kLocalMode > 0)
+    if (pruner.know_neighbours())
         candidates = local_candidates(h, pruner, layout, tiles);
     else
         candidates = global_candidates(pruner, delaunay_triangles(gap_points, dopt), vertex_of);
@@ -1496,7 +1423,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         positions.push_back(v.position);
     FillResult filled;
     if (options.fill_holes)
-        filled = fill_holes(surface, layout, positions, projection, interior_tiles(tiles, kGapDeg), options);
+        filled = fill_holes(surface, layout, positions, projection, interior_tiles(tiles, options.interior_gap_degrees),
+                            options);
 
     // Pinched vertices become one vertex per fan.
     const std::vector<std::uint32_t> copies = surface.split_pinches();
@@ -1551,12 +1479,31 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         if (open_face[f])
             closed[r] = false;
     }
+    // A component that is one tile's fan alone, while that tile has surface neighbours and the surface
+    // goes on elsewhere, was passed over by its neighbours' gap triangles (at a sharp edge, say): the
+    // surface already covers it, and it would be a loose disk on top.
+    std::vector<std::int32_t> lone_tile(faces.size(), -2); // per root: the one tile, -1 if more or a gap face
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
-        const bool flip = closed[r] ? volume[r] < 0.0 : (projection.used && up[r] < 0.0);
+        const std::int32_t t = face_tile[f];
+        lone_tile[r] = lone_tile[r] == -2 ? t : (lone_tile[r] == t ? t : -1);
+    }
+    std::vector<bool> dropped(faces.size(), false);
+    std::size_t dropped_components = 0;
+    if (roots.size() > 1)
+        for (std::uint32_t r : roots)
+            if (lone_tile[r] >= 0 && !tiles[static_cast<std::size_t>(lone_tile[r])].neighbours.empty()) {
+                dropped[r] = true;
+                ++dropped_components;
+            }
+    for (std::uint32_t f = 0; f < face_count; ++f) {
+        const std::uint32_t r = components.find(f);
+        // Closed surfaces face outward; open ones in 3D too as far as their volume tells, height fields up.
+        const bool flip = projection.used && !closed[r] ? up[r] < 0.0 : volume[r] < 0.0;
         if (flip)
             std::swap(faces[f][1], faces[f][2]);
     }
+    roots.erase(std::remove_if(roots.begin(), roots.end(), [&](std::uint32_t r) { return dropped[r]; }), roots.end());
 
     Mesh mesh;
     auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster);
@@ -1564,9 +1511,10 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
     std::vector<Mesh::VertexHandle> handle(origin.size());
     std::vector<bool> used(origin.size(), false);
-    for (const Tri& t : faces)
-        for (std::uint32_t v : t)
-            used[v] = true;
+    for (std::uint32_t f = 0; f < face_count; ++f)
+        if (!dropped[components.find(f)])
+            for (std::uint32_t v : faces[f])
+                used[v] = true;
     for (std::uint32_t v = 0; v < origin.size(); ++v) {
         if (!used[v])
             continue;
@@ -1615,6 +1563,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     st.hole_faces = filled.faces;
     st.split_vertices = copies.size();
     st.components = roots.size();
+    st.dropped_fans = dropped_components;
     st.height_field_used = projection.used;
     st.alpha = alpha;
     {

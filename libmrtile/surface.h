@@ -65,6 +65,10 @@ struct SurfaceOptions
     double hole_factor = 1.0;
     //! Largest number of edges of a hole that is filled.
     std::size_t max_hole_edges = 300;
+    //! A tile is interior (not on the sample's border) when, seen from its centre in its plane, its
+    //! surface neighbours (Tile::neighbours) leave no empty angular sector wider than this. A hole whose
+    //! loop touches only interior tiles is filled whatever its size (up to max_hole_edges).
+    double interior_gap_degrees = 170.0;
 };
 
 struct SurfaceStats
@@ -82,6 +86,8 @@ struct SurfaceStats
     std::size_t boundary_loops = 0;  //!< boundary loops left open
     std::size_t split_vertices = 0;  //!< pinched vertices duplicated to keep the mesh manifold
     std::size_t components = 0;
+    //! Tiles whose fan ended up alone while their neighbours' surface closed over them (left out).
+    std::size_t dropped_fans = 0;
     bool height_field_used = false;
     double alpha = 0.0;              //!< global alpha used (model units)
     double seconds = 0.0;
