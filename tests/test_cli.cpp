@@ -143,6 +143,24 @@ TEST(Cli, build_info_mesh_and_determinism)
     EXPECT_EQ(stats["nonmanifold_edges"], 0);
     EXPECT_EQ(stats["nonmanifold_vertices"], 0);
     EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.xyz").string(), dir).code, 2);
+
+    // Exports: a georeferenced Draco tileset and the single-file MSFT_lod GLB.
+    r = mrtile("export " + (dir / "a.mrt").string() + " -o " + (dir / "tiles").string() +
+                   " --format 3dtiles --draco --enu 7.45,46.95,540 --max-tile-triangles 2000",
+               dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto tileset = nlohmann::json::parse(slurp(dir / "tiles" / "tileset.json"));
+    EXPECT_EQ(tileset["asset"]["version"], "1.1");
+    EXPECT_GT(std::abs(tileset["root"]["transform"][12].get<double>()), 1e6); // ECEF metres
+    EXPECT_EQ(tileset["root"]["refine"], "REPLACE");
+    r = mrtile("export " + (dir / "a.mrt").string() + " -o " + (dir / "lods.glb").string() + " --format lod-glb --lod-tolerances 0.05,0.01,0", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(slurp(dir / "lods.glb").find("MSFT_lod"), std::string::npos);
+    EXPECT_EQ(mrtile("export " + (dir / "a.mrt").string() + " -o " + (dir / "t2").string() +
+                         " --format 3dtiles --enu 7,95,0",
+                     dir)
+                  .code,
+              2);
     EXPECT_FALSE(fs::exists(dir / "m.xyz"));
 }
 

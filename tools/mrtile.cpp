@@ -320,11 +320,16 @@ struct ExportArgs
     std::size_t max_tile_triangles = LodSetOptions{}.max_tile_triangles;
     std::vector<double> tolerances;
     std::size_t levels = 0;
+    std::string enu;
 
     void add(CLI::App* cmd)
     {
-        cmd->add_option("--format", format, "3dtiles (a directory), or by the output's extension")
-            ->check(CLI::IsMember({"3dtiles", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om", "lods"}));
+        cmd->add_option("--format", format,
+                        "3dtiles (a directory), lod-glb (one .glb with every level, MSFT_lod), or by the output's extension")
+            ->check(CLI::IsMember({"3dtiles", "lod-glb", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om", "lods"}));
+        cmd->add_option("--enu", enu,
+                        "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); the root "
+                        "transform maps it to ECEF");
         cmd->add_option("--max-tile-triangles", max_tile_triangles, "largest number of triangles in one 3D Tiles tile")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
@@ -349,6 +354,12 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     const LodSet set = make_lod_set(h, e.options(m));
     TilesetOptions t;
     t.gltf = o.gltf();
+    if (!e.enu.empty()) {
+        const auto v = parse_numbers(e.enu, ',', "--enu");
+        if (v.size() != 3 || std::abs(v[1]) > 90)
+            throw UsageError("--enu: expected LON,LAT,HEIGHT with |LAT| <= 90");
+        t.root_transform = enu_to_ecef_transform(v[0], v[1], v[2]);
+    }
     write_lod_tileset(set, h.cloud.origin, dir, t);
     std::size_t contents = 0, triangles = 0;
     for (const LodTile& tile : set.tiles)
@@ -358,6 +369,23 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         }
     std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
                 dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+}
+
+// One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
+void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& out)
+{
+    const auto start = Clock::now();
+    LodSetOptions options = e.options(m);
+    options.tileset = false;
+    const LodSet set = make_lod_set(h, options);
+    std::vector<const Mesh*> fine_to_coarse;
+    for (std::size_t l = set.levels.size(); l-- > 0;)
+        fine_to_coarse.push_back(&set.levels[l].mesh);
+    GltfLodOptions g;
+    g.gltf = o.gltf();
+    write_glb_lods(fine_to_coarse, h.cloud.origin, out, g);
+    std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
+                seconds_since(start));
 }
 
 void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& dir)
@@ -569,6 +597,8 @@ int run(int argc, char** argv)
         naming_input(rec_in, [&] {
             if (rec_export.format == "3dtiles")
                 write_tileset(h, rec_export, rec_mesh, rec_output, rec_out);
+            else if (rec_export.format == "lod-glb")
+                write_lod_glb(h, rec_export, rec_mesh, rec_output, rec_out);
             else
                 mesh_and_write(h, rec_cut, rec_mesh, rec_output, rec_out);
         });
@@ -584,6 +614,8 @@ int run(int argc, char** argv)
         naming_input(exp_in, [&] {
             if (exp_export.format == "3dtiles")
                 write_tileset(h, exp_export, exp_mesh, exp_output, exp_out);
+            else if (exp_export.format == "lod-glb")
+                write_lod_glb(h, exp_export, exp_mesh, exp_output, exp_out);
             else
                 mesh_and_write(h, exp_cut, exp_mesh, exp_output, exp_out);
         });
