@@ -379,22 +379,28 @@ void Builder::split(std::uint32_t id)
             const double reach = 2.0 * n.radius;
             if (reach * reach < std::min(squared_distance(cn, ca), squared_distance(cn, cb)) && incoming[k].empty())
                 continue;
-            std::size_t kept = 0;
-            for (const Member& mb : n.members) {
-                const double dn = squared_distance(mb.p, cn), da = squared_distance(mb.p, ca),
-                             db = squared_distance(mb.p, cb);
-                if (da < dn && da <= db) {
-                    clusters_[a].members.push_back(mb);
-                    leaving[k].push_back(mb);
-                } else if (db < dn) {
-                    clusters_[b].members.push_back(mb);
-                    leaving[k].push_back(mb);
-                } else {
-                    n.members[kept++] = mb;
+            // Nearer to ca than to cn ⟺ dot(p, ca − cn) > (|ca|² − |cn|²) / 2: one dot product per
+            // comparison. Leaving members are swapped with the last one, so members that stay are
+            // never rewritten (most of them stay).
+            const Vec3 ua = ca - cn, ub = cb - cn, uab = ca - cb;
+            const double ta = 0.5 * (squared_norm(ca) - squared_norm(cn));
+            const double tb = 0.5 * (squared_norm(cb) - squared_norm(cn));
+            const double tab = 0.5 * (squared_norm(ca) - squared_norm(cb));
+            std::vector<Member>& list = n.members;
+            for (std::size_t i = 0; i < list.size();) {
+                const Vec3& p = list[i].p;
+                const bool nearer_a = dot(p, ua) > ta, nearer_b = dot(p, ub) > tb;
+                if (!nearer_a && !nearer_b) {
+                    ++i;
+                    continue;
                 }
+                const std::uint32_t target = nearer_a && (!nearer_b || dot(p, uab) >= tab) ? a : b;
+                clusters_[target].members.push_back(list[i]);
+                leaving[k].push_back(list[i]);
+                list[i] = list.back();
+                list.pop_back();
             }
-            n.members.resize(kept);
-            n.members.insert(n.members.end(), incoming[k].begin(), incoming[k].end());
+            list.insert(list.end(), incoming[k].begin(), incoming[k].end());
         }
     }
 
