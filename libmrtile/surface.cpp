@@ -976,9 +976,10 @@ bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 
 // Candidates from local Delaunay triangulations: for every tile, its loop and its surface neighbours'
 // loops projected into its own plane (the surface is nearly flat at that scale, so the 2D Delaunay
-// triangulation there is a fold-free piece of the restricted Delaunay triangulation). A triangle is
-// proposed by each of its tiles whose triangulation has it; triangles all of their tiles propose come
-// first in the front (relative radius as is), the others after them (+1).
+// triangulation there is a fold-free piece of the restricted Delaunay triangulation). A triangle is a
+// candidate only when every tile it touches proposes it (consensus): triangles that look Delaunay from
+// one tile's plane only are where the planes disagree, and taking them made folds and handles. The
+// gaps they leave are closed by hole filling.
 Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
 {
     std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
@@ -1042,7 +1043,7 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
         if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
             continue;
         if (votes < fan_tiles.size())
-            r += 1.0;
+            continue;
         out.triangles.push_back(tri);
         out.relative_radius.push_back(r);
     }
@@ -1230,16 +1231,26 @@ struct FillResult
     std::size_t faces = 0;
 };
 
-// A tile is interior when its surface neighbours surround it: seen from its centre in its plane, no
-// angular sector wider than max_gap_degrees is free of neighbour centres. Tiles on the sample's border
-// have the empty outside there.
+// A tile is interior (not on the sample's border) when its surface neighbours surround it: seen from
+// its centre in its plane, the centres of its neighbours and theirs leave no empty angular sector wider
+// than max_gap_degrees, or its neighbours form a closed ring around it (each meets two others of them;
+// at a sharp edge the tile's own plane can hide a direction, the ring cannot). Tiles on the sample's
+// border have the empty outside on one side and an open ring.
 std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees)
 {
     std::vector<bool> out(tiles.size(), false);
     std::vector<double> angles;
+    std::vector<std::uint32_t> ring;
     for (std::size_t t = 0; t < tiles.size(); ++t) {
         angles.clear();
+        ring.clear();
         for (std::uint32_t n : tiles[t].neighbours) {
+            ring.push_back(n);
+            ring.insert(ring.end(), tiles[n].neighbours.begin(), tiles[n].neighbours.end());
+        }
+        for (std::uint32_t n : ring) {
+            if (n == t)
+                continue;
             const Vec3 d = tiles[n].centre - tiles[t].centre;
             angles.push_back(std::atan2(dot(d, tiles[t].axis_v), dot(d, tiles[t].axis_u)));
         }
@@ -1249,7 +1260,17 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
         double gap = angles.front() + 2.0 * kPi - angles.back();
         for (std::size_t i = 1; i < angles.size(); ++i)
             gap = std::max(gap, angles[i] - angles[i - 1]);
-        out[t] = gap <= max_gap_degrees * kPi / 180.0;
+        // Or the neighbours form a closed ring around it (each meets two others of them): on a sharp
+        // edge the tile's own plane can hide a neighbour's direction, but not the ring.
+        bool ring_closed = true;
+        const auto& around = tiles[t].neighbours;
+        for (std::uint32_t n : around) {
+            std::size_t inside = 0;
+            for (std::uint32_t m : tiles[n].neighbours)
+                inside += std::binary_search(around.begin(), around.end(), m) ? 1 : 0;
+            ring_closed = ring_closed && inside >= 2;
+        }
+        out[t] = gap <= max_gap_degrees * kPi / 180.0 || ring_closed;
     }
     return out;
 }

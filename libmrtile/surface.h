@@ -66,8 +66,9 @@ struct SurfaceOptions
     //! Largest number of edges of a hole that is filled.
     std::size_t max_hole_edges = 300;
     //! A tile is interior (not on the sample's border) when, seen from its centre in its plane, its
-    //! surface neighbours (Tile::neighbours) leave no empty angular sector wider than this. A hole whose
-    //! loop touches only interior tiles is filled whatever its size (up to max_hole_edges).
+    //! surface neighbours (Tile::neighbours) and theirs leave no empty angular sector wider than this,
+    //! or its neighbours form a closed ring around it. A hole whose loop touches only interior tiles is
+    //! filled whatever its size (up to max_hole_edges).
     double interior_gap_degrees = 170.0;
 };
 
