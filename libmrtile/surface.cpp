@@ -4,23 +4,31 @@
 // Pipeline:
 //  1. T1 fans and ε-splitting: every tile with a fan gets a centre vertex and its boundary loop, with
 //     long edges split so that gap triangles are not long and skinny (§4.3).
-//  2. Delaunay of the boundary points (gap_triangulation.h), 2D for height fields, 3D otherwise; a
-//     triangle is pruned when all its vertices lie in one tile, when one of its edges joins two
-//     non-adjacent points of a tile (it would cross the fan), or when it does not fit in a sphere of the
-//     local alpha radius b (§4.3).
-//  3. Manifold extraction: the Delaunay triangles left are only candidates. An advancing front, seeded
-//     with one tile fan, accepts a candidate across a front edge only if every half-edge is new (edges
-//     keep <= 2 faces with opposite orientation) and every vertex stays a set of fans whose union can
-//     still become a disk (never a closed fan plus another one); among valid candidates the one with the
-//     smallest radius relative to b and the least turn from its neighbour wins (like Cohen-Steiner & Da's
-//     advancing front). A tile's fan is placed when the front first reaches one of its points, oriented
-//     like the triangle that reached it, so orientation propagates over the surface instead of trusting
-//     the sign of PCA normals.
-//  4. Holes whose perimeter is small next to their tiles are gaps between tiles: they are filled with a
-//     minimum-area triangulation of the loop (every face checked as in 3). Larger loops are the sample's
-//     borders and stay open. Vertices still pinched (two fans touching) are duplicated per fan.
+//  2. Delaunay of the boundary points (gap_triangulation.h). With the tiles' surface neighbours
+//     (Tile::neighbours, from the Voronoi partition in tiles.cpp) every tile triangulates its loop and
+//     its neighbours' loops in 2D in its own plane; a triangle is a candidate only if every tile it
+//     touches proposes it, so candidates are locally Delaunay on the surface and never fold. Without
+//     neighbours: one 3D Delaunay of all boundary points; height fields: one 2D Delaunay on the axis
+//     (§4.3). A triangle is pruned when all its vertices lie in one tile, when one of its edges joins two
+//     non-adjacent points of a tile (it would cross the fan), when it joins tiles that do not meet on the
+//     surface, or when it does not fit in a sphere of the local alpha radius b (§4.3).
+//  3. Manifold extraction: the Delaunay triangles left are only candidates. The tiles are first
+//     oriented consistently over their neighbour graph (Hoppe-style spanning tree; normals compared
+//     through the reflection across the bisector of the centres, which works across sharp edges). An
+//     advancing front, seeded with the largest tile's fan, accepts a candidate across a front edge only
+//     if every half-edge is new (edges keep <= 2 faces with opposite orientation), every vertex stays a
+//     set of fans whose union can still become a disk (never a closed fan plus another one), and the
+//     face looks the way its tiles do; among valid candidates the one with the smallest radius relative
+//     to b and the least turn from its neighbour wins (like Cohen-Steiner & Da's advancing front). A
+//     tile's fan is placed, with its precomputed orientation, when the front first reaches its points.
+//  4. Holes are filled with a minimum-area triangulation of the loop whose faces look like the hole or
+//     like the surface at their corners (every face checked as in 3) when they are gaps between tiles:
+//     the loop touches only interior tiles (surrounded by neighbours), or its perimeter is small next to
+//     its tiles. Other loops are the sample's borders and stay open. Vertices still pinched (two fans
+//     touching) are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
-//     attaches to an existing boundary; closed components are flipped to positive volume.
+//     attaches to an existing boundary; components are flipped to positive volume (height fields: to
+//     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
 //
 // GCC 12 at -O2 warns inside OpenMesh's PropertyT<Vec3d>::push_back that it copies a default,
 // deliberately uninitialised normal; harmless, and attributed to a standard header, so it can only be

@@ -3,15 +3,15 @@
 //! \brief Reconstruction (paper §4.3, Algorithm 2), extended to always give a valid 2-manifold.
 //! \details T1: every tile with a fan is triangulated from its centre (a new vertex at the node mean) to
 //! its pseudo-tile boundary. T2: tile boundary edges longer than ε are split, the boundary points are
-//! Delaunay-triangulated (2D on the projection plane for height fields, 3D otherwise), and triangles
-//! with all vertices in one tile, with an edge crossing a tile (a chord), or not fitting in a sphere of
-//! the local alpha radius b are removed. Beyond the paper, the remaining Delaunay triangles are only
-//! *candidates*: an advancing front seeded by the T1 fans accepts them one at a time (best-shaped
-//! first) only if the surface stays an oriented 2-manifold, gaps left between tiles are filled, and the
-//! sample's own borders stay open. See surface.cpp for the rules.
+//! Delaunay-triangulated (locally in each tile's plane with its surface neighbours when the tiles know
+//! them, 2D on the projection plane for height fields, else 3D), and triangles with all vertices in one
+//! tile, with an edge crossing a tile (a chord), between tiles that do not meet on the surface, or not
+//! fitting in a sphere of the local alpha radius b are removed. Beyond the paper, the remaining
+//! triangles are only *candidates*: an advancing front seeded by the consistently oriented T1 fans
+//! accepts them one at a time (best-shaped first) only if the surface stays an oriented 2-manifold,
+//! gaps left between tiles are filled, and the sample's own borders stay open. See surface.cpp.
 //! The result is always a valid oriented 2-manifold; its *topology* is right when neighbouring tiles do
-//! not overlap in their planes (Voronoi-like clusters). Overlapping pseudo tiles cover some surface twice
-//! and the extraction then closes the surface with extra handles.
+//! not overlap (make_tiles' default Voronoi partition) and the sampling is dense next to the tiles.
 //! Properties on the mesh (names in mesh.h): "f:tile", "f:gap", "v:cluster"; vertex normals.
 
 #include "libmrtile/hierarchy.h"

@@ -7,6 +7,8 @@
 
 #include "cut_fixtures.h"
 #include "formats/read_points.h"
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/shapes.h"
@@ -40,6 +42,17 @@ Result mesh_cut(const testing::FlatCut& fc, const SurfaceOptions& options = {})
 Result mesh_of(const PointCloud& cloud, std::size_t k, const SurfaceOptions& options = {})
 {
     return mesh_cut(testing::kmeans_cut(cloud, k), options);
+}
+
+// The mesh of a real cut: the hierarchy builder's nodes at a tolerance (coarse nodes are unions of
+// leaves, unlike the k-means fixture's).
+Result mesh_real_cut(const Hierarchy& h, double tolerance, const SurfaceOptions& options = {})
+{
+    const std::vector<Tile> tiles = make_tiles(h, cut_by_tolerance(h, tolerance));
+    Result r;
+    r.mesh = build_surface(h, tiles, options, &r.stats);
+    r.topo = topology_stats(r.mesh);
+    return r;
 }
 
 double signed_volume(const Mesh& mesh)
@@ -289,6 +302,56 @@ TEST(Surface, alpha_insensitive_with_splitting)
     const Result r = mesh_cut(fc, unsplit);
     expect_valid(r);
     EXPECT_EQ(r.stats.split_points, 0u);
+}
+
+// Closed shapes on real hierarchy cuts, coarse and fine: closed, one component, the right genus,
+// outward. Three holes has sharp 90-degree edges and a plate thinner than the coarse tiles are wide.
+struct ClosedCase
+{
+    const char* name;
+    PointCloud cloud;
+    int genus;
+};
+
+TEST(Surface, real_cuts_of_closed_shapes_are_closed_with_their_genus)
+{
+    PointCloud noisy = shapes::three_holes(20000);
+    shapes::add_noise(noisy, 0.05);
+    const ClosedCase cases[] = {{"sphere", shapes::sphere(20000), 0},
+                                {"torus", shapes::torus(20000), 1},
+                                {"three_holes", shapes::three_holes(20000), 3},
+                                {"noisy three_holes", noisy, 3}};
+    for (const ClosedCase& c : cases) {
+        const Hierarchy h = build_hierarchy(c.cloud);
+        for (double tolerance : {0.005, 0.001}) {
+            SCOPED_TRACE(std::string(c.name) + " at tolerance " + std::to_string(tolerance));
+            const Result r = mesh_real_cut(h, tolerance);
+            expect_valid(r);
+            EXPECT_EQ(r.topo.boundary_loops, 0u);
+            EXPECT_EQ(r.topo.components, 1u);
+            EXPECT_EQ(r.topo.genus, c.genus);
+            EXPECT_GT(signed_volume(r.mesh), 0.0);
+        }
+    }
+}
+
+// An open sample keeps exactly its border open: the height field's square outline is the one loop,
+// whether meshed as a height field (2D Delaunay) or in 3D.
+TEST(Surface, real_cuts_of_a_height_field_have_one_border_loop)
+{
+    const Hierarchy h = build_hierarchy(shapes::smooth_height_field(20000));
+    SurfaceOptions in_3d;
+    in_3d.height_field = HeightField::Off;
+    for (double tolerance : {0.005, 0.001})
+        for (const SurfaceOptions& options : {SurfaceOptions{}, in_3d}) {
+            SCOPED_TRACE("tolerance " + std::to_string(tolerance) + (options.height_field == HeightField::Off ? " 3D" : " 2D"));
+            const Result r = mesh_real_cut(h, tolerance, options);
+            expect_valid(r);
+            EXPECT_EQ(r.stats.height_field_used, options.height_field != HeightField::Off);
+            EXPECT_EQ(r.topo.boundary_loops, 1u);
+            EXPECT_EQ(r.topo.components, 1u);
+            EXPECT_EQ(r.topo.genus, 0);
+        }
 }
 
 } // namespace
