@@ -24,7 +24,9 @@
 //  4. Holes are filled with a minimum-area triangulation of the loop whose faces look like the hole or
 //     like the surface at their corners (every face checked as in 3) when they are gaps between tiles:
 //     the loop touches only interior tiles (surrounded by neighbours), or its perimeter is small next to
-//     its tiles. Other loops are the sample's borders and stay open. Vertices still pinched (two fans
+//     its tiles, and it is not much wider than a point spacing (every point lies in a tile, so a hole
+//     holds none: a wide one is a hole in the sample). Other loops are the sample's borders and holes
+//     and stay open. Vertices still pinched (two fans
 //     touching) are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
@@ -108,6 +110,7 @@ struct TileLoop
     std::vector<std::uint32_t> loop;  // boundary loop (counter-clockwise seen from the tile normal)
     double perimeter = 0.0;
     double edge_length = 0.0;         // mean loop edge length (0 for fanless tiles)
+    double spacing = 0.0;             // the tile's point spacing (Tile::spacing)
     bool placed = false;
 };
 
@@ -165,6 +168,7 @@ Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             }
         }
         tl.perimeter = perimeter;
+        tl.spacing = tile.spacing();
         tl.edge_length = perimeter / static_cast<double>(tl.loop.size());
         total_length += perimeter;
         total_edges += tl.loop.size();
@@ -1307,7 +1311,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
             if (!current)
                 continue;
             std::vector<std::int32_t> loop_tiles;
-            double perimeter = 0.0, largest_tile = 0.0;
+            double perimeter = 0.0, largest_tile = 0.0, spacing = 0.0;
             bool was_widened = false, surrounded = true;
             for (std::size_t i = 0; i < n; ++i) {
                 // A height field's holes are measured in its domain: a gap at a jump is small there.
@@ -1319,6 +1323,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
                 loop_tiles.push_back(t);
                 surrounded = surrounded && interior[static_cast<std::size_t>(t)];
                 largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
+                spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(t)].spacing);
                 was_widened = was_widened || widened[loop[i]];
             }
             std::sort(loop_tiles.begin(), loop_tiles.end());
@@ -1329,6 +1334,16 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
             if (loop_tiles.size() < 2 || (perimeter > limit && !surrounded))
                 continue;
             const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
+            // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
+            // point spacing wide, and a hole much wider than that (mean width 2 area / perimeter) is a
+            // hole in the sample itself (the bunny's base), which stays open.
+            double area = 0.0;
+            for (const Tri& t : patch) {
+                const Vec3 c = triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+                area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
+            }
+            if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter)
+                continue;
             std::size_t added = 0;
             for (const Tri& t : patch) {
                 if (!s.can_add(t[0], t[1], t[2]))
@@ -1399,8 +1414,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         throw InvalidInput("build_surface: the cut has no tiles");
     if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
         !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
-        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length) || !(options.interior_gap_degrees > 0.0))
-        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor must be >= 0 and alpha_factor, "
+        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length) || !(options.interior_gap_degrees > 0.0) ||
+        !(options.max_gap_width >= 0.0))
+        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width must be >= 0 and alpha_factor, "
                            "split_factor, max_turn_degrees, max_tilt_degrees, interior_gap_degrees > 0");
     std::size_t fan_tiles = 0;
     for (const Tile& t : tiles) {

@@ -70,6 +70,10 @@ struct SurfaceOptions
     //! or its neighbours form a closed ring around it. A hole whose loop touches only interior tiles is
     //! filled whatever its size (up to max_hole_edges).
     double interior_gap_degrees = 170.0;
+    //! A hole whose mean width (2 area / perimeter of its fill) exceeds this many point spacings of its
+    //! tiles (Tile::spacing) is a hole in the sample, not a gap between tiles, and stays open (every
+    //! point lies in some tile, so gaps are about one spacing wide). 0 = no limit.
+    double max_gap_width = 4.0;
 };
 
 struct SurfaceStats
