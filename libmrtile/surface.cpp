@@ -1065,6 +1065,76 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
 // ---------------------------------------------------------------------------------------------------
 // Step 4: boundary loops and hole filling.
 
+struct UnionFind
+{
+    std::vector<std::uint32_t> parent;
+    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+    std::uint32_t find(std::uint32_t x)
+    {
+        while (parent[x] != x)
+            x = parent[x] = parent[parent[x]];
+        return x;
+    }
+    void unite(std::uint32_t a, std::uint32_t b)
+    {
+        a = find(a);
+        b = find(b);
+        if (a != b)
+            parent[std::max(a, b)] = std::min(a, b);
+    }
+};
+
+// Removes every component of the surface that is smaller than a component one of its tiles' surface
+// neighbours belongs to: such an island meets the rest of the surface in the sampled data but failed
+// to join it (typically at a thin or sharp feature), and the larger surface around it then has a hole
+// with the island inside that no disk can fill. Once it is gone, the hole is an ordinary one. Returns
+// the number of tiles whose fans were removed.
+std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+{
+    const auto count = static_cast<std::uint32_t>(s.faces().size());
+    UnionFind parts(count);
+    for (std::uint32_t f = 0; f < count; ++f) {
+        if (!s.alive(f))
+            continue;
+        const Tri& t = s.faces()[f];
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t g = s.face_of(t[(k + 1) % 3], t[k]);
+            if (g != kNone)
+                parts.unite(f, g);
+        }
+    }
+    std::vector<std::uint32_t> size(count, 0);
+    std::vector<std::uint32_t> part_of_tile(tiles.size(), kNone);
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f)) {
+            ++size[parts.find(f)];
+            if (s.face_tile()[f] >= 0)
+                part_of_tile[static_cast<std::size_t>(s.face_tile()[f])] = parts.find(f);
+        }
+    std::vector<bool> doomed(count, false);
+    std::size_t dropped = 0;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        const std::uint32_t p = part_of_tile[t];
+        if (p == kNone)
+            continue;
+        for (std::uint32_t n : tiles[t].neighbours) {
+            const std::uint32_t q = part_of_tile[n];
+            if (q != kNone && (size[q] > size[p] || (size[q] == size[p] && q < p)) && !doomed[p]) {
+                doomed[p] = true;
+                break;
+            }
+        }
+    }
+    for (std::size_t t = 0; t < tiles.size(); ++t)
+        dropped += part_of_tile[t] != kNone && doomed[part_of_tile[t]] ? 1 : 0;
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f) && doomed[parts.find(f)])
+            s.remove(f);
+    return dropped;
+}
+
+
+
 // Boundary loops as vertex sequences v0 -> v1 -> ... (each step a half-edge without a face). At a
 // pinched vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around
 // the vertex normal), so a loop never crosses itself.
@@ -1386,24 +1456,6 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 // ---------------------------------------------------------------------------------------------------
 // Step 5: components, orientation, OpenMesh.
 
-struct UnionFind
-{
-    std::vector<std::uint32_t> parent;
-    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    std::uint32_t find(std::uint32_t x)
-    {
-        while (parent[x] != x)
-            x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b)
-    {
-        a = find(a);
-        b = find(b);
-        if (a != b)
-            parent[std::max(a, b)] = std::min(a, b);
-    }
-};
 
 } // namespace
 
@@ -1467,9 +1519,17 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     for (const SurfaceVertex& v : layout.vertices)
         positions.push_back(v.position);
     FillResult filled;
-    if (options.fill_holes)
-        filled = fill_holes(surface, layout, positions, projection, interior_tiles(tiles, options.interior_gap_degrees),
-                            options);
+    std::size_t islands = 0;
+    if (options.fill_holes) {
+        const std::vector<bool> interior = interior_tiles(tiles, options.interior_gap_degrees);
+        filled = fill_holes(surface, layout, positions, projection, interior, options);
+        islands = drop_islands(surface, tiles);
+        if (islands > 0) {
+            const FillResult more = fill_holes(surface, layout, positions, projection, interior, options);
+            filled.holes += more.holes;
+            filled.faces += more.faces;
+        }
+    }
 
     // Pinched vertices become one vertex per fan.
     const std::vector<std::uint32_t> copies = surface.split_pinches();
@@ -1608,7 +1668,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     st.hole_faces = filled.faces;
     st.split_vertices = copies.size();
     st.components = roots.size();
-    st.dropped_fans = dropped_components;
+    st.dropped_fans = islands + dropped_components;
     st.height_field_used = projection.used;
     st.alpha = alpha;
     {
