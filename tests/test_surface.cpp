@@ -335,6 +335,49 @@ TEST(Surface, real_cuts_of_closed_shapes_are_closed_with_their_genus)
     }
 }
 
+// A CAD part with sharp edges, sampled at its mesh vertices (very uneven spacing): closed, genus 0.
+TEST(Surface, real_cuts_of_fandisk_are_closed_genus_0)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/fandisk.obj"));
+    for (double tolerance : {0.005, 0.001}) {
+        SCOPED_TRACE("tolerance " + std::to_string(tolerance));
+        const Result r = mesh_real_cut(h, tolerance);
+        expect_valid(r);
+        EXPECT_EQ(r.topo.boundary_loops, 0u);
+        EXPECT_EQ(r.topo.components, 1u);
+        EXPECT_EQ(r.topo.genus, 0);
+        EXPECT_GT(signed_volume(r.mesh), 0.0);
+    }
+}
+
+// The zippered bunny is closed but for holes in its base: the mesh is one genus-0 surface whose only
+// loops are there (the two largest base holes are wider than the gaps the filling closes).
+TEST(Surface, real_cut_of_the_bunny_keeps_its_base_holes_open)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const Result r = mesh_real_cut(h, 0.001);
+    expect_valid(r);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.genus, 0);
+    EXPECT_GE(r.topo.boundary_loops, 1u);
+    EXPECT_LE(r.topo.boundary_loops, 5u);
+    const BoundingBox box = h.bbox();
+    const double base = box.min.y + 0.1 * (box.max.y - box.min.y); // the bunny sits on y = min
+    std::set<int> seen;
+    for (auto heh : r.mesh.halfedges()) {
+        if (!r.mesh.is_boundary(heh) || seen.count(heh.idx()))
+            continue;
+        double y = 0.0;
+        int count = 0;
+        for (auto x = heh; !seen.count(x.idx()); x = r.mesh.next_halfedge_handle(x)) {
+            seen.insert(x.idx());
+            y += r.mesh.point(r.mesh.from_vertex_handle(x))[1];
+            ++count;
+        }
+        EXPECT_LT(y / count, base) << "a loop away from the base";
+    }
+}
+
 // An open sample keeps exactly its border open: the height field's square outline is the one loop,
 // whether meshed as a height field (2D Delaunay) or in 3D.
 TEST(Surface, real_cuts_of_a_height_field_have_one_border_loop)
