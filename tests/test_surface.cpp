@@ -81,6 +81,16 @@ void expect_valid(const Result& r)
     EXPECT_EQ(r.stats.boundary_loops, r.topo.boundary_loops);
 }
 
+// One closed surface of the given genus, facing outward.
+void expect_closed(const Result& r, int genus)
+{
+    expect_valid(r);
+    EXPECT_EQ(r.topo.boundary_loops, 0u);
+    EXPECT_EQ(r.topo.components, 1u);
+    EXPECT_EQ(r.topo.genus, genus);
+    EXPECT_GT(signed_volume(r.mesh), 0.0);
+}
+
 // Fans are closed disks around their centre: per tile, the fan faces share one vertex (the centre, at
 // the node mean) and their outer edges form a single loop through the tile's boundary vertices.
 void expect_fans(const Result& r, const testing::FlatCut& fc)
@@ -138,21 +148,13 @@ TEST(Surface, sphere_is_closed_genus_0_outward)
 TEST(Surface, torus_is_closed_genus_1)
 {
     const Result r = mesh_of(shapes::torus(20000), 400);
-    expect_valid(r);
-    EXPECT_EQ(r.topo.boundary_loops, 0u);
-    EXPECT_EQ(r.topo.components, 1u);
-    EXPECT_EQ(r.topo.genus, 1);
-    EXPECT_GT(signed_volume(r.mesh), 0.0);
+    expect_closed(r, 1);
 }
 
 TEST(Surface, three_holes_is_closed_genus_3)
 {
     const Result r = mesh_of(shapes::three_holes(4000), 200);
-    expect_valid(r);
-    EXPECT_EQ(r.topo.boundary_loops, 0u);
-    EXPECT_EQ(r.topo.components, 1u);
-    EXPECT_EQ(r.topo.genus, 3);
-    EXPECT_GT(signed_volume(r.mesh), 0.0);
+    expect_closed(r, 3);
 }
 
 TEST(Surface, height_field_is_one_disk_facing_up)
@@ -325,12 +327,7 @@ TEST(Surface, real_cuts_of_closed_shapes_are_closed_with_their_genus)
         const Hierarchy h = build_hierarchy(c.cloud);
         for (double tolerance : {0.005, 0.001}) {
             SCOPED_TRACE(std::string(c.name) + " at tolerance " + std::to_string(tolerance));
-            const Result r = mesh_real_cut(h, tolerance);
-            expect_valid(r);
-            EXPECT_EQ(r.topo.boundary_loops, 0u);
-            EXPECT_EQ(r.topo.components, 1u);
-            EXPECT_EQ(r.topo.genus, c.genus);
-            EXPECT_GT(signed_volume(r.mesh), 0.0);
+            expect_closed(mesh_real_cut(h, tolerance), c.genus);
         }
     }
 }
@@ -341,12 +338,7 @@ TEST(Surface, real_cuts_of_fandisk_are_closed_genus_0)
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/fandisk.obj"));
     for (double tolerance : {0.005, 0.001}) {
         SCOPED_TRACE("tolerance " + std::to_string(tolerance));
-        const Result r = mesh_real_cut(h, tolerance);
-        expect_valid(r);
-        EXPECT_EQ(r.topo.boundary_loops, 0u);
-        EXPECT_EQ(r.topo.components, 1u);
-        EXPECT_EQ(r.topo.genus, 0);
-        EXPECT_GT(signed_volume(r.mesh), 0.0);
+        expect_closed(mesh_real_cut(h, tolerance), 0);
     }
 }
 
