@@ -64,6 +64,9 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kPi = 3.14159265358979323846;
+// Largest angle between a gap face and its tiles' oriented normals (a 90-degree edge bends a gap face by
+// about 45 degrees from either tile).
+constexpr double kMaxTileDeviationDegrees = 80.0;
 using Tri = std::array<std::uint32_t, 3>;
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b)
@@ -637,8 +640,9 @@ private:
         return normalized(n);
     }
 
-    // +1: fan counter-clockwise about the tile normal. A new seed copies the orientation of the placed
-    // surface it is a candidate neighbour of, so a surface reached from two seeds still agrees.
+    // +1: fan counter-clockwise about the tile normal. Height fields face up the axis; otherwise the
+    // precomputed orientation, or (without one) that of the placed surface the seed is a candidate
+    // neighbour of, so a surface reached from two seeds still agrees.
     int seed_orientation(std::uint32_t t) const
     {
         const Vec3& n = tiles_[t].normal;
@@ -706,8 +710,6 @@ private:
                 continue;
             if (!merge_in_order(b, a, c) || !merge_in_order(a, c, b) || !merge_in_order(c, b, a))
                 continue;
-            // The face must look the way its placed tiles look (a fold through a sliver hinge can pass
-            // the turn test edge by edge).
             if (!projection_.used && !faces_like_tiles(a, b, c, nt))
                 continue;
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
@@ -722,6 +724,9 @@ private:
         return out;
     }
 
+    // Whether a face with normal nt looks the way its tiles do (their oriented normals, summed) to within
+    // kMaxTileDeviationDegrees: a face folded back through a sliver hinge can pass the turn test edge by
+    // edge, never this one.
     bool faces_like_tiles(std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vec3& nt) const
     {
         Vec3 ref;
@@ -734,7 +739,7 @@ private:
         }
         if (squared_norm(ref) == 0.0)
             return true;
-        return dot(nt, normalized(ref)) >= min_normal_cos_;
+        return dot(nt, normalized(ref)) >= std::cos(kMaxTileDeviationDegrees * kPi / 180.0);
     }
 
     // The new face adds link edge x -> y at v. When that joins the end of one fan of v to the start of
@@ -853,7 +858,6 @@ private:
     double min_cos_;
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
-    double min_normal_cos_ = std::cos(80.0 * kPi / 180.0);
     std::vector<std::vector<std::uint32_t>> neighbours_;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
