@@ -10,9 +10,9 @@
 // nearest centre, found by a greedy walk on the centres' Delaunay graph (exact: a site that is not the
 // nearest always has a Delaunay neighbour nearer to the point). Cells are convex and disjoint, so the
 // fans are too, and every point lies in some tile, so gaps stay one spacing wide. The same pass finds
-// the restricted Delaunay neighbours (tiles whose cells meet on the sampled surface): a point whose two
-// nearest centres are A and B and that lies close to their bisector plane witnesses that the surface
-// crosses the Voronoi face of A and B. The surface stage uses them to keep gap triangles between
+// the restricted Delaunay neighbours (tiles whose cells meet on the sampled surface): a point of cell A
+// that lies within about a point spacing of the bisector plane of A and a Delaunay neighbour B
+// witnesses that the sampled surface reaches the Voronoi face of A and B. The surface stage uses them to keep gap triangles between
 // tiles that really meet (not across a thin plate or a handle's hole).
 #include "libmrtile/tiles.h"
 
@@ -28,7 +28,6 @@
 
 namespace mrt {
 namespace {
-
 
 struct Projected
 {
