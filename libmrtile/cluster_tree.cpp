@@ -155,12 +155,7 @@ void Builder::refresh(std::uint32_t id)
     for (const Member& mb : c.members) {
         const Vec3 d = mb.p - m.mean;
         radius2 = std::max(radius2, dot(d, d));
-        m.m2[0] += d.x * d.x;
-        m.m2[1] += d.x * d.y;
-        m.m2[2] += d.x * d.z;
-        m.m2[3] += d.y * d.y;
-        m.m2[4] += d.y * d.z;
-        m.m2[5] += d.z * d.z;
+        add_outer_product(m.m2, d);
         error += std::sqrt(dot(d, d));
     }
     c.moments = m;

@@ -74,15 +74,8 @@ Moments compute_moments(const Vec3* points, std::size_t count)
         sum += points[i];
     m.count = count;
     m.mean = sum / static_cast<double>(count);
-    for (std::size_t i = 0; i < count; ++i) {
-        const Vec3 d = points[i] - m.mean;
-        m.m2[0] += d.x * d.x;
-        m.m2[1] += d.x * d.y;
-        m.m2[2] += d.x * d.z;
-        m.m2[3] += d.y * d.y;
-        m.m2[4] += d.y * d.z;
-        m.m2[5] += d.z * d.z;
-    }
+    for (std::size_t i = 0; i < count; ++i)
+        add_outer_product(m.m2, points[i] - m.mean);
     return m;
 }
 

@@ -30,6 +30,17 @@ struct Moments
     double sum_squared_distances() const { return m2[0] + m2[3] + m2[5]; }
 };
 
+//! Adds the outer product d dᵀ to the upper triangle m2 (xx, xy, xz, yy, yz, zz).
+inline void add_outer_product(std::array<double, 6>& m2, const Vec3& d)
+{
+    m2[0] += d.x * d.x;
+    m2[1] += d.x * d.y;
+    m2[2] += d.x * d.z;
+    m2[3] += d.y * d.y;
+    m2[4] += d.y * d.z;
+    m2[5] += d.z * d.z;
+}
+
 //! Statistics of a range of points (two-pass: mean first, then M, for accuracy).
 Moments compute_moments(const Vec3* points, std::size_t count);
 

@@ -413,6 +413,34 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), set.levels.size(), seconds_since(start));
 }
 
+// The options every producing command shares, and the one place that picks the writer.
+struct ProduceArgs
+{
+    CutArgs cut;
+    MeshArgs mesh;
+    OutputArgs output;
+    ExportArgs exp;
+
+    void add(CLI::App* cmd, bool with_cut = true)
+    {
+        if (with_cut)
+            cut.add(cmd);
+        mesh.add(cmd);
+        output.add(cmd);
+        exp.add(cmd);
+    }
+
+    void write(const Hierarchy& h, const fs::path& out) const
+    {
+        if (exp.format == "3dtiles")
+            write_tileset(h, exp, mesh, output, out);
+        else if (exp.format == "lod-glb")
+            write_lod_glb(h, exp, mesh, output, out);
+        else
+            mesh_and_write(h, cut, mesh, output, out);
+    }
+};
+
 Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const Globals& g)
 {
     const auto start = Clock::now();
@@ -523,44 +551,28 @@ int run(int argc, char** argv)
     auto* rec = app.add_subcommand("reconstruct", "build and mesh in one step (or write 3D Tiles with --format 3dtiles)");
     fs::path rec_in, rec_out, rec_model;
     BuildArgs rec_build;
-    CutArgs rec_cut;
-    MeshArgs rec_mesh;
-    OutputArgs rec_output;
-    ExportArgs rec_export;
+    ProduceArgs rec_args;
     rec->add_option("POINTS", rec_in, "point file")->required();
     rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
     rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
     rec_build.add(rec, "build-");
-    rec_cut.add(rec);
-    rec_mesh.add(rec);
-    rec_output.add(rec);
-    rec_export.add(rec);
+    rec_args.add(rec);
 
     // lods
     auto* lods = app.add_subcommand("lods", "write one mesh per level of detail and a JSON index");
     fs::path lods_in, lods_out;
-    MeshArgs lods_mesh;
-    OutputArgs lods_output;
-    ExportArgs lods_export;
+    ProduceArgs lods_args;
     lods->add_option("MODEL", lods_in, "model file")->required();
     lods->add_option("-o,--output", lods_out, "directory")->required();
-    lods_mesh.add(lods);
-    lods_output.add(lods);
-    lods_export.add(lods);
+    lods_args.add(lods, false);
 
     // export
     auto* exp = app.add_subcommand("export", "export a model: 3D Tiles (directory) or one mesh file");
     fs::path exp_in, exp_out;
-    CutArgs exp_cut;
-    MeshArgs exp_mesh;
-    OutputArgs exp_output;
-    ExportArgs exp_export;
+    ProduceArgs exp_args;
     exp->add_option("MODEL", exp_in, "model file")->required();
     exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->required();
-    exp_cut.add(exp);
-    exp_mesh.add(exp);
-    exp_output.add(exp);
-    exp_export.add(exp);
+    exp_args.add(exp);
 
     // demo
     auto* demo = app.add_subcommand("demo", "the whole pipeline on a built-in genus-3 test shape");
@@ -594,31 +606,17 @@ int run(int argc, char** argv)
         const Hierarchy h = build_from_points(rec_in, rec_build, g);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        naming_input(rec_in, [&] {
-            if (rec_export.format == "3dtiles")
-                write_tileset(h, rec_export, rec_mesh, rec_output, rec_out);
-            else if (rec_export.format == "lod-glb")
-                write_lod_glb(h, rec_export, rec_mesh, rec_output, rec_out);
-            else
-                mesh_and_write(h, rec_cut, rec_mesh, rec_output, rec_out);
-        });
+        naming_input(rec_in, [&] { rec_args.write(h, rec_out); });
         return 0;
     }
     if (*lods) {
         const Hierarchy h = load_model(lods_in);
-        naming_input(lods_in, [&] { write_lods(h, lods_export, lods_mesh, lods_output, lods_out); });
+        naming_input(lods_in, [&] { write_lods(h, lods_args.exp, lods_args.mesh, lods_args.output, lods_out); });
         return 0;
     }
     if (*exp) {
         const Hierarchy h = load_model(exp_in);
-        naming_input(exp_in, [&] {
-            if (exp_export.format == "3dtiles")
-                write_tileset(h, exp_export, exp_mesh, exp_output, exp_out);
-            else if (exp_export.format == "lod-glb")
-                write_lod_glb(h, exp_export, exp_mesh, exp_output, exp_out);
-            else
-                mesh_and_write(h, exp_cut, exp_mesh, exp_output, exp_out);
-        });
+        naming_input(exp_in, [&] { exp_args.write(h, exp_out); });
         return 0;
     }
     if (*demo) {
