@@ -56,7 +56,6 @@
 #include <numeric>
 #include <queue>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 namespace mrt {
@@ -379,11 +378,19 @@ public:
     const std::vector<Tri>& faces() const { return faces_; }
     const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
     const std::vector<std::uint32_t>& faces_at(std::uint32_t v) const { return vertex_faces_[v]; }
-    bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return halfedges_.count(edge_key(a, b)) != 0; }
+    bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
+    //! The face with half-edge a -> b, or kNone. Scans the faces of a or b, whichever has fewer (a
+    //! surface vertex has a handful; only fan centres have many): cheaper than hashing half-edges.
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
     {
-        const auto it = halfedges_.find(edge_key(a, b));
-        return it == halfedges_.end() ? kNone : it->second;
+        const auto& fa = vertex_faces_[a];
+        const auto& fb = vertex_faces_[b];
+        for (std::uint32_t f : fa.size() <= fb.size() ? fa : fb) {
+            const Tri& t = faces_[f];
+            if ((t[0] == a && t[1] == b) || (t[1] == a && t[2] == b) || (t[2] == a && t[0] == b))
+                return f;
+        }
+        return kNone;
     }
     bool on_surface(std::uint32_t v) const { return !vertex_faces_[v].empty(); }
 
@@ -405,9 +412,6 @@ public:
         faces_.push_back({a, b, c});
         face_tile_.push_back(tile);
         alive_.push_back(true);
-        halfedges_[edge_key(a, b)] = f;
-        halfedges_[edge_key(b, c)] = f;
-        halfedges_[edge_key(c, a)] = f;
         vertex_faces_[a].push_back(f);
         vertex_faces_[b].push_back(f);
         vertex_faces_[c].push_back(f);
@@ -420,10 +424,8 @@ public:
         faces_.pop_back();
         face_tile_.pop_back();
         alive_.pop_back();
-        for (int i = 0; i < 3; ++i) {
-            halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
+        for (int i = 0; i < 3; ++i)
             vertex_faces_[t[i]].pop_back();
-        }
     }
 
     //! Removes face f (it stays in faces() as a dead entry).
@@ -433,7 +435,6 @@ public:
         alive_[f] = false;
         const Tri& t = faces_[f];
         for (int i = 0; i < 3; ++i) {
-            halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
             auto& fs = vertex_faces_[t[i]];
             fs.erase(std::find(fs.begin(), fs.end(), f));
         }
@@ -501,13 +502,7 @@ public:
                             found = f;
                     assert(found != kNone);
                     x = link_edge(found, v).second;
-                    const Tri t = faces_[found];
-                    for (int i = 0; i < 3; ++i)
-                        halfedges_.erase(edge_key(t[i], t[(i + 1) % 3]));
                     relabel(found, v, copy);
-                    const Tri u = faces_[found];
-                    for (int i = 0; i < 3; ++i)
-                        halfedges_[edge_key(u[i], u[(i + 1) % 3])] = found;
                     auto& fs = vertex_faces_[v];
                     fs.erase(std::find(fs.begin(), fs.end(), found));
                     vertex_faces_[copy].push_back(found);
@@ -560,7 +555,6 @@ private:
     std::vector<Tri> faces_;
     std::vector<std::int32_t> face_tile_;
     std::vector<bool> alive_;
-    std::unordered_map<std::uint64_t, std::uint32_t> halfedges_;
     std::vector<std::vector<std::uint32_t>> vertex_faces_;
 };
 
