@@ -1082,11 +1082,13 @@ struct UnionFind
     }
 };
 
-// Removes every component of the surface that is smaller than a component one of its tiles' surface
-// neighbours belongs to: such an island meets the rest of the surface in the sampled data but failed
-// to join it (typically at a thin or sharp feature), and the larger surface around it then has a hole
-// with the island inside that no disk can fill. Once it is gone, the hole is an ordinary one. Returns
-// the number of tiles whose fans were removed.
+// Removes the pieces of the surface that broke off a larger one: a part with a tile whose surface
+// neighbour lies in a larger part, a small part (under 5% of the largest) with a tile whose neighbour
+// lies outside it, and a part of gap faces only. Such an island meets the rest of the surface in the
+// sampled data but failed to join it (typically at a thin or sharp feature), and the larger surface
+// around it then has a hole with the island inside that no disk can fill; once it is gone, the hole is
+// an ordinary one. Parts whose tiles have no neighbours elsewhere (separate objects) stay. Returns the
+// number of tiles whose fans were removed.
 std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
 {
     const auto count = static_cast<std::uint32_t>(s.faces().size());
@@ -1111,13 +1113,31 @@ std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
         }
     std::vector<bool> doomed(count, false);
     std::size_t dropped = 0;
+    // A part made of gap faces only (a bubble closed between two sides of a thin feature) represents
+    // no tile at all: it goes unless it is the largest part.
+    std::vector<bool> has_fan(count, false);
+    std::uint32_t largest = kNone;
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f)) {
+            const std::uint32_t p = parts.find(f);
+            has_fan[p] = has_fan[p] || s.face_tile()[f] >= 0;
+            if (largest == kNone || size[p] > size[largest])
+                largest = p;
+        }
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f) && parts.find(f) == f && !has_fan[f] && f != largest)
+            doomed[f] = true;
     for (std::size_t t = 0; t < tiles.size(); ++t) {
         const std::uint32_t p = part_of_tile[t];
         if (p == kNone)
             continue;
         for (std::uint32_t n : tiles[t].neighbours) {
             const std::uint32_t q = part_of_tile[n];
-            if (q != kNone && (size[q] > size[p] || (size[q] == size[p] && q < p)) && !doomed[p]) {
+            // A neighbour in a larger part, or (for a small part) anywhere else: this part is a piece
+            // broken off a larger surface (its neighbours may be broken-off pieces themselves).
+            const bool larger = q != kNone && (size[q] > size[p] || (size[q] == size[p] && q < p));
+            const bool small_piece = q != p && p != largest && 20 * size[p] < size[largest];
+            if (larger || small_piece) {
                 doomed[p] = true;
                 break;
             }
