@@ -143,7 +143,7 @@ Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             continue;
         }
         tl.centre = static_cast<std::uint32_t>(out.vertices.size());
-        out.vertices.push_back({tile.centre, ti, kNone});
+        out.vertices.push_back({tile.apex, ti, kNone}); // on the surface, not the patch's mean
         double perimeter = 0.0;
         const std::size_t n = tile.boundary.size();
         for (std::size_t i = 0; i < n; ++i)

@@ -106,9 +106,26 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
     t.points = static_cast<std::uint32_t>(count);
     std::vector<Projected> pts;
     pts.reserve(count);
+    double sum_r2 = 0.0;
     for (std::size_t k = 0; k < count; ++k) {
         const Vec3 d = h.cloud.positions[indices[k]] - t.centre;
         pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), indices[k]});
+        sum_r2 += pts.back().x * pts.back().x + pts.back().y * pts.back().y;
+    }
+    // Apex: the mean height over the points within half the RMS radius of the centre (for a disc, the
+    // inner quarter of the area); all points if there are too few there.
+    t.apex = t.centre;
+    if (count > 0) {
+        const double inner = 0.25 * sum_r2 / static_cast<double>(count);
+        double height = 0.0;
+        std::size_t used = 0;
+        for (const Projected& q : pts)
+            if (q.x * q.x + q.y * q.y <= inner) {
+                height += dot(h.cloud.positions[q.index] - t.centre, t.normal);
+                ++used;
+            }
+        if (used >= 3)
+            t.apex = t.centre + t.normal * (height / static_cast<double>(used));
     }
     t.boundary = convex_hull(pts, options.collinear_tolerance);
     if (t.has_fan()) {

@@ -38,7 +38,12 @@ struct TileOptions
 struct Tile
 {
     std::int32_t node = -1; //!< hierarchy node id
-    Vec3 centre;            //!< node mean (the fan centre, paper §4.3 T1)
+    Vec3 centre;            //!< node mean (paper §4.3 T1's fan centre; used for all tile geometry)
+    //! Where the fan's centre vertex is placed: `centre` moved along the normal to the mean height of
+    //! the points near it. The mean of a curved patch lies off the surface (below a cap, by about two
+    //! thirds of its sag); the fan then cuts through the surface, which the apex avoids. Equal to
+    //! `centre` on flat tiles.
+    Vec3 apex;
     Vec3 normal;            //!< unit PCA normal (frame.vectors[0]); its sign is the frame's, not outward
     Vec3 axis_u;            //!< unit in-plane axis (largest PCA direction)
     Vec3 axis_v;            //!< unit in-plane axis, cross(axis_u, axis_v) == normal

@@ -3,6 +3,8 @@
 #include "libmrtile/tiles.h"
 
 #include "cut_fixtures.h"
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/shapes.h"
 
@@ -188,6 +190,21 @@ TEST(Tiles, trimmed_tiles_are_voronoi_cells)
         degree += t.neighbours.size();
     }
     EXPECT_NEAR(static_cast<double>(degree) / static_cast<double>(tiles.size()), 6.0, 1.0);
+}
+
+// The apex (the fan's centre vertex) lies on the surface: on a unit sphere it is much nearer to the
+// sphere than the patch's mean, which sits below the cap.
+TEST(Tiles, apex_lies_on_a_curved_surface)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(20000));
+    const std::vector<Tile> tiles = make_tiles(h, cut_by_budget(h, 60));
+    double apex_error = 0.0, mean_error = 0.0;
+    for (const Tile& t : tiles) {
+        apex_error += std::abs(norm(t.apex) - 1.0);
+        mean_error += std::abs(norm(t.centre) - 1.0);
+        EXPECT_LE(norm(cross(t.apex - t.centre, t.normal)), 1e-12);
+    }
+    EXPECT_LT(apex_error, 0.25 * mean_error);
 }
 
 } // namespace
