@@ -164,5 +164,26 @@ TEST(Cli, build_info_mesh_and_determinism)
     EXPECT_FALSE(fs::exists(dir / "m.xyz"));
 }
 
+// `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
+// coarser level to a finer one (levels that would not improve are not written).
+TEST(Cli, lods_on_the_bunny_are_consistent)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    ASSERT_EQ(mrtile("build " + std::string(MRTILE_SHARED_DATA) + "/bun_zipper.ply -o " + (dir / "bun.mrt").string(), dir).code, 0);
+    const Result r = mrtile("lods " + (dir / "bun.mrt").string() + " -o " + (dir / "lods").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto index = nlohmann::json::parse(slurp(dir / "lods" / "lods.json"));
+    ASSERT_GE(index.size(), 2u);
+    for (std::size_t l = 0; l < index.size(); ++l) {
+        EXPECT_TRUE(fs::exists(dir / "lods" / index[l]["file"].get<std::string>()));
+        for (const char* key : {"level", "tolerance", "tiles", "faces", "mean_error", "max_error"})
+            EXPECT_TRUE(index[l].contains(key)) << key;
+        if (l > 0) {
+            EXPECT_LE(index[l]["mean_error"].get<double>(), index[l - 1]["mean_error"].get<double>());
+            EXPECT_GT(index[l]["tiles"].get<std::size_t>(), index[l - 1]["tiles"].get<std::size_t>());
+        }
+    }
+}
+
 } // namespace
 } // namespace mrt

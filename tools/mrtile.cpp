@@ -394,14 +394,25 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     LodSetOptions options = e.options(m);
     options.tileset = false;
     const LodSet set = make_lod_set(h, options);
+    // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
+    // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
+    // of a scan are too fine for its sampling, the extra levels would only add faces.
+    std::vector<QualityReport> quality;
+    for (const LodLevel& l : set.levels) {
+        quality.push_back(measure_quality(h, l.cut, l.mesh));
+        if (quality.size() > 1 && quality.back().point_to_mesh.mean > quality[quality.size() - 2].point_to_mesh.mean) {
+            quality.pop_back();
+            break;
+        }
+    }
     ensure_directory(dir);
     nlohmann::json index = nlohmann::json::array();
     const std::string ext = lower_extension(dir / ("x." + (e.format.empty() || e.format == "lods" ? std::string("ply") : e.format)));
-    for (std::size_t level = 0; level < set.levels.size(); ++level) {
+    for (std::size_t level = 0; level < quality.size(); ++level) {
         const LodLevel& l = set.levels[level];
+        const QualityReport& q = quality[level];
         const std::string name = "level" + std::to_string(level) + ext;
         write_any_mesh(l.mesh, h.cloud.origin, dir / name, o);
-        const QualityReport q = measure_quality(h, l.cut, l.mesh);
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
@@ -409,8 +420,10 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, mean/max distance %.3g/%.3g\n", level, l.tolerance,
                     l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.point_to_mesh.mean, q.point_to_mesh.max);
     }
+    if (quality.size() < set.levels.size())
+        std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
     write_file_atomically(dir / "lods.json", index.dump(2) + "\n");
-    std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), set.levels.size(), seconds_since(start));
+    std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), quality.size(), seconds_since(start));
 }
 
 // The options every producing command shares, and the one place that picks the writer.
