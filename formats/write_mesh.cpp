@@ -31,31 +31,6 @@ MeshFormat mesh_format(const std::filesystem::path& path, std::string& ext)
                        "'; expected .ply, .obj, .off, .stl or .om");
 }
 
-// OpenMesh reports progress and problems on its global log streams; the library never prints, so they
-// are muted for the duration of a write and restored afterwards.
-class MutedOpenMeshLogs
-{
-public:
-    MutedOpenMeshLogs()
-        : log_(omlog().is_enabled()), out_(omout().is_enabled()), err_(omerr().is_enabled())
-    {
-        omlog().disable();
-        omout().disable();
-        omerr().disable();
-    }
-    ~MutedOpenMeshLogs()
-    {
-        if (log_) omlog().enable();
-        if (out_) omout().enable();
-        if (err_) omerr().enable();
-    }
-    MutedOpenMeshLogs(const MutedOpenMeshLogs&) = delete;
-    MutedOpenMeshLogs& operator=(const MutedOpenMeshLogs&) = delete;
-
-private:
-    bool log_, out_, err_;
-};
-
 OpenMesh::IO::Options io_options(MeshFormat format, const Mesh& mesh, const WriteMeshOptions& options)
 {
     using O = OpenMesh::IO::Options;
@@ -111,7 +86,7 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
     AtomicFile file(path);
     bool ok = false;
     {
-        const MutedOpenMeshLogs muted;
+        const QuietOpenMesh muted;
         // 9 significant digits round-trip the float coordinates of the text formats.
         ok = OpenMesh::IO::write_mesh(out, file.stream(), ext, io, 9);
     }
