@@ -223,11 +223,9 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         throw InvalidInput("lods: empty hierarchy");
     LodSet set;
     double previous_error = std::numeric_limits<double>::infinity();
+    // Levels arrive meshed and strictly finer than the one before (the finer ones are filtered below).
     auto add_level = [&](LodLevel level) {
-        if (!set.levels.empty() && level.cut.size() <= set.levels.back().cut.size())
-            return; // no finer than the previous level (e.g. below the build tolerance)
-        if (level.mesh.n_faces() == 0)
-            level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        assert(set.levels.empty() || level.cut.size() > set.levels.back().cut.size());
         level.max_plane_distance = level_max_plane_distance(h, level.cut);
         level.geometric_error = std::min(previous_error, level.max_plane_distance);
         previous_error = level.geometric_error;
@@ -250,7 +248,7 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         level.tolerance = tol;
         level.cut = cut_by_tolerance(h, tol);
         const std::size_t previous = finer.empty() ? (set.levels.empty() ? 0 : set.levels.back().cut.size()) : finer.back().cut.size();
-        if (level.cut.size() > previous)
+        if (level.cut.size() > previous) // no finer than the previous level (e.g. below the build tolerance): skip
             finer.push_back(std::move(level));
     }
     std::vector<std::size_t> order(finer.size());
