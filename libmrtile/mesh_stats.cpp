@@ -423,6 +423,15 @@ DistanceStats summarize(const std::vector<double>& squared_distances, double dia
     stats.mean = sum / n / diagonal;
     stats.max = max / diagonal;
     stats.rms = std::sqrt(sum_squares / n) / diagonal;
+    // Order statistics on a copy: nth_element is linear and the input order stays what the caller gave.
+    std::vector<double> sorted = squared_distances;
+    const auto at_fraction = [&](double fraction) {
+        const auto k = static_cast<std::ptrdiff_t>(fraction * (n - 1.0));
+        std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+        return std::sqrt(sorted[static_cast<std::size_t>(k)]) / diagonal;
+    };
+    stats.median = at_fraction(0.5);
+    stats.p99 = at_fraction(0.99);
     return stats;
 }
 

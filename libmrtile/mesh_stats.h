@@ -63,6 +63,8 @@ struct DistanceStats
     double mean = 0.0;
     double max = 0.0;
     double rms = 0.0;
+    double median = 0.0;    //!< separates a uniformly loose fit from a few far-off points (holes, bridges)
+    double p99 = 0.0;       //!< 99th percentile
     double diagonal = 0.0;  //!< absolute, in the units of the positions
 };
 

@@ -278,6 +278,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["e_rms"] = q->e_rms;
         j["mean_distance"] = q->point_to_mesh.mean;
         j["max_distance"] = q->point_to_mesh.max;
+        j["median_distance"] = q->point_to_mesh.median;
+        j["p99_distance"] = q->point_to_mesh.p99;
     }
     j["seconds"] = seconds;
     return j;
