@@ -182,8 +182,9 @@ BoundingBox mesh_box(const Mesh& m, BoundingBox box)
 // correct it from the measured mesh (meshing a coarse cut is cheap).
 LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
 {
-    const auto budget = static_cast<double>(o.max_tile_triangles * 3 / 4);
-    std::size_t tiles = std::max<std::size_t>(1, o.max_tile_triangles / 32);
+    const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
+    const auto budget = static_cast<double>(triangles * 3 / 4);
+    std::size_t tiles = std::max<std::size_t>(1, triangles / 32);
     LodLevel level;
     for (int attempt = 0; attempt < 6; ++attempt) {
         level.cut = cut_by_budget(h, tiles);

@@ -28,6 +28,9 @@ struct LodSetOptions
 {
     //! Largest number of triangles in one tile (skirts included).
     std::size_t max_tile_triangles = 65536;
+    //! Triangle budget of level 0 (when no tolerances are given); 0 = max_tile_triangles, since a
+    //! tileset's root must fit one tile. A plain LOD chain (`mrtile lods`) starts coarser.
+    std::size_t first_level_triangles = 0;
     //! Number of levels; 0 = halve the tolerance until the cut reaches the hierarchy's leaves (at most
     //! max_levels).
     std::size_t levels = 0;

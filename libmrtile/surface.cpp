@@ -21,13 +21,19 @@
 //     face looks the way its tiles do; among valid candidates the one with the smallest radius relative
 //     to b and the least turn from its neighbour wins (like Cohen-Steiner & Da's advancing front). A
 //     tile's fan is placed, with its precomputed orientation, when the front first reaches its points.
+//     Triangles proposed by only some of their tiles are fallback candidates: where the consensus front
+//     strands tiles (thin features such as the bunny's ear tips, whose tiles would otherwise be dropped
+//     and covered over), the front is resumed with the fallback candidates that touch them. A face
+//     that would join two boundary loops of one piece adds a handle: fallback faces never do, and
+//     consensus ones wait until everything else is placed (a torus still closes with its handle).
 //  4. Holes are filled with a minimum-area triangulation of the loop whose faces look like the hole or
 //     like the surface at their corners (every face checked as in 3) when they are gaps between tiles:
 //     the loop touches only interior tiles (surrounded by neighbours), or its perimeter is small next to
 //     its tiles, and it is not much wider than a point spacing (every point lies in a tile, so a hole
 //     holds none: a wide one is a hole in the sample). Other loops are the sample's borders and holes
-//     and stay open. Vertices still pinched (two fans
-//     touching) are duplicated per fan.
+//     and stay open. A fill through a pinched vertex that would add a handle (counted locally with
+//     Euler's formula) is refused and the hole widened. Vertices still pinched (two fans touching)
+//     are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
 //     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
@@ -417,6 +423,13 @@ public:
         vertex_faces_[c].push_back(f);
     }
 
+    //! Removes the `count` most recently added faces.
+    void pop_n(std::size_t count)
+    {
+        for (; count > 0; --count)
+            pop();
+    }
+
     //! Removes the most recently added face (used to roll back a hole fill).
     void pop()
     {
@@ -558,13 +571,95 @@ private:
     std::vector<std::vector<std::uint32_t>> vertex_faces_;
 };
 
+struct UnionFind
+{
+    std::vector<std::uint32_t> parent;
+    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+    std::uint32_t find(std::uint32_t x)
+    {
+        while (parent[x] != x)
+            x = parent[x] = parent[parent[x]];
+        return x;
+    }
+    void unite(std::uint32_t a, std::uint32_t b)
+    {
+        a = find(a);
+        b = find(b);
+        if (a != b)
+            parent[std::max(a, b)] = std::min(a, b);
+    }
+};
+
+// The vertex after v on the boundary loop that arrives at v by the free half-edge u -> v. At a pinched
+// vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around the
+// vertex normal), so a loop never crosses itself.
+// The fans (link arcs) of v in counter-clockwise order around its normal.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> ordered_fans(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t v)
+{
+    auto fans = s.arcs(v);
+    if (fans.size() < 2)
+        return fans;
+    Vec3 n;
+    for (std::uint32_t f : s.faces_at(v)) {
+        const Tri& t = s.faces()[f];
+        n += triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+    }
+    n = normalized(n);
+    const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
+    auto angle = [&](std::uint32_t x) {
+        const Vec3 d = positions[x] - positions[v];
+        return std::atan2(dot(d, e2), dot(d, e1));
+    };
+    std::sort(fans.begin(), fans.end(), [&](const auto& a, const auto& b) {
+        const double aa = angle(a.first), ab = angle(b.first);
+        return aa != ab ? aa < ab : a.first < b.first;
+    });
+    return fans;
+}
+
+// The loop arriving by u -> v leaves v along the free edge of the fan before u's (a fan (first, last)
+// has the free half-edges first -> v and v -> last).
+std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
+{
+    const auto fans = ordered_fans(s, positions, v);
+    for (std::size_t j = 0; j < fans.size(); ++j)
+        if (fans[j].first == u)
+            return fans[(j + fans.size() - 1) % fans.size()].second;
+    assert(false);
+    return fans[0].second;
+}
+
+// The inverse step: the vertex before u on the loop that leaves u by the free half-edge u -> v.
+std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
+{
+    const auto fans = ordered_fans(s, positions, u);
+    for (std::size_t j = 0; j < fans.size(); ++j)
+        if (fans[j].second == v)
+            return fans[(j + 1) % fans.size()].first;
+    assert(false);
+    return fans[0].first;
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Step 3: advancing front over the candidate triangles.
+
+struct Candidates
+{
+    std::vector<Tri> triangles;
+    std::vector<double> relative_radius; // radius / local b, in (0, 1]
+    std::vector<bool> fallback;          // proposed by some of its tiles but not all (local candidates)
+};
+
+// Fallback candidates (proposed by some but not all of their tiles) rank after every consensus one:
+// consensus priorities are relative radius (<= 1) times (2 - turn) (<= 3).
+constexpr double kFallbackRank = 4.0;
 
 struct Candidate
 {
     double priority;
     std::uint32_t a, b, c; // front half-edge a -> b (in an existing face), new face (b, a, c)
+    std::uint32_t index;   // into the candidate list
     bool operator>(const Candidate& o) const
     {
         if (priority != o.priority)
@@ -577,18 +672,22 @@ class Front
 {
 public:
     //! `relative_radius[i]`: radius of candidate i divided by its local alpha radius b (<= 1).
+    //! `fallback[i]`: candidate i lacks consensus and is taken only where no consensus one fits.
     //! `orientation`: +1/-1 per tile (orient_tiles), or empty to orient each fan from the face reaching it.
     Front(const Layout& layout, const std::vector<Tile>& tiles, Surface& surface, const Projection& projection,
-          const std::vector<Tri>& candidates, const std::vector<double>& relative_radius, double max_turn_degrees,
+          const std::vector<Vec3>& positions, const Candidates& candidates, double max_turn_degrees,
           const std::vector<int>& orientation)
-        : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), orientation_(orientation),
-          candidates_(candidates),
-          relative_radius_(relative_radius), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
+        : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), positions_(positions),
+          orientation_(orientation), candidates_(candidates.triangles), relative_radius_(candidates.relative_radius),
+          fallback_(candidates.fallback), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
           placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
-          neighbours_(layout.vertices.size())
+          neighbours_(layout.vertices.size()), banned_(candidates.triangles.size(), false),
+          held_(candidates.triangles.size(), false), rescuing_(candidates.triangles.size(), false),
+          parts_(layout.vertices.size())
     {
-        for (std::uint32_t i = 0; i < candidates.size(); ++i) {
-            const Tri& t = candidates[i];
+        const std::vector<Tri>& triangles = candidates.triangles;
+        for (std::uint32_t i = 0; i < triangles.size(); ++i) {
+            const Tri& t = triangles[i];
             for (int k = 0; k < 3; ++k) {
                 edge_candidates_.push_back({undirected_key(t[k], t[(k + 1) % 3]), i});
                 neighbours_[t[k]].push_back(t[(k + 1) % 3]);
@@ -596,6 +695,35 @@ public:
             }
         }
         std::sort(edge_candidates_.begin(), edge_candidates_.end());
+    }
+
+    //! Second chance for the stranded tiles, whose islands the caller removed from the surface: the
+    //! fallback candidates that touch them become usable, and the front grows again from where it is.
+    void rescue(const std::vector<bool>& stranded)
+    {
+        for (std::uint32_t i = 0; i < candidates_.size(); ++i)
+            for (std::uint32_t v : candidates_[i])
+                if (stranded[static_cast<std::size_t>(layout_.vertices[v].tile)])
+                    rescuing_[i] = true;
+        for (std::size_t t = 0; t < placed_.size(); ++t)
+            if (stranded[t])
+                placed_[t] = false;
+        parts_ = UnionFind(layout_.vertices.size());
+        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
+            if (surface_.alive(f)) {
+                const Tri& t = surface_.faces()[f];
+                parts_.unite(t[0], t[1]);
+                parts_.unite(t[0], t[2]);
+            }
+        grow_whole_front();
+        run();
+    }
+
+    //! Last: the faces held back because they add a handle.
+    void finish()
+    {
+        allow_handles_ = true;
+        grow_whole_front();
     }
 
     //! Grows from every tile in seed order until no candidate can be added.
@@ -665,6 +793,7 @@ private:
                 surface_.add(tl.centre, p, q, node_tile);
             else
                 surface_.add(tl.centre, q, p, node_tile);
+            parts_.unite(tl.centre, p);
         }
         for (std::size_t i = 0; i < n; ++i) {
             const std::uint32_t p = tl.loop[i], q = tl.loop[(i + 1) % n];
@@ -678,7 +807,7 @@ private:
     // Best valid candidate for the front half-edge a -> b, or priority = inf.
     Candidate best(std::uint32_t a, std::uint32_t b) const
     {
-        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone};
+        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone, kNone};
         const std::uint32_t f = surface_.face_of(a, b);
         if (f == kNone || surface_.has_halfedge(b, a))
             return out;
@@ -687,6 +816,8 @@ private:
         const std::uint64_t key = undirected_key(a, b);
         auto it = std::lower_bound(edge_candidates_.begin(), edge_candidates_.end(), std::make_pair(key, 0u));
         for (; it != edge_candidates_.end() && it->first == key; ++it) {
+            if (banned_[it->second] || (held_[it->second] && !allow_handles_) || (fallback_[it->second] && !rescuing_[it->second]))
+                continue;
             const Tri& cand = candidates_[it->second];
             const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
             if (!surface_.can_add(b, a, c))
@@ -709,10 +840,11 @@ private:
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
-            const double p = relative_radius_[it->second] * (2.0 - turn);
+            const double p = relative_radius_[it->second] * (2.0 - turn) + (fallback_[it->second] ? kFallbackRank : 0.0);
             if (p < out.priority || (p == out.priority && c < out.c)) {
                 out.priority = p;
                 out.c = c;
+                out.index = it->second;
             }
         }
         return out;
@@ -790,6 +922,47 @@ private:
         return dot(face_normal(t[0], t[1], t[2]), nt) >= min_cos_;
     }
 
+    // Whether face (b, a, c) on the front half-edge a -> b would join two different boundary loops of
+    // one connected piece: that adds a handle (Euler: the face changes V - E + F by -1 and the loop count
+    // by -1, so the genus grows by 1). Joining another piece, or a vertex of the same loop (which splits
+    // it in two), keeps the genus. Consensus faces may make the handles a torus needs; fallback faces,
+    // taken where the tiles' planes disagree, must not.
+    bool makes_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c)
+    {
+        if (!surface_.on_surface(c) || parts_.find(c) != parts_.find(a))
+            return false;
+        // Walk the loop of the free half-edge b -> a both ways at once: c is usually a few steps away
+        // (the face closes a notch), and only a handle costs the whole loop.
+        std::uint32_t u = b, v = a; // forward: free half-edge u -> v
+        std::uint32_t x = b, y = a; // backward: free half-edge x -> y
+        for (;;) {
+            if (v == c || x == c)
+                return false;
+            const std::uint32_t w = next_boundary_vertex(surface_, positions_, u, v);
+            u = v;
+            v = w;
+            if (u == x && v == y)
+                return true; // forward met backward: the whole loop seen
+            const std::uint32_t z = previous_boundary_vertex(surface_, positions_, x, y);
+            y = x;
+            x = z;
+            if (u == x && v == y)
+                return true;
+        }
+    }
+
+    void grow_whole_front()
+    {
+        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
+            if (surface_.alive(f)) {
+                const Tri& t = surface_.faces()[f];
+                for (int k = 0; k < 3; ++k)
+                    if (!surface_.has_halfedge(t[(k + 1) % 3], t[k]))
+                        push_best(t[k], t[(k + 1) % 3]);
+            }
+        grow();
+    }
+
     void push_best(std::uint32_t a, std::uint32_t b)
     {
         const Candidate c = best(a, b);
@@ -823,6 +996,14 @@ private:
                 continue;
             }
             const std::uint32_t a = top.a, b = top.b, c = top.c;
+            // A face that would add a handle waits until every tile is in (finish): a torus needs its
+            // handle once the surface has closed around it; a spurious one across a local gap is
+            // usually made impossible by the faces that fill the gap first. Fallback faces never add one.
+            if (!allow_handles_ && makes_handle(a, b, c)) {
+                (fallback_[top.index] ? banned_ : held_)[top.index] = true;
+                push_best(a, b);
+                continue;
+            }
             const std::int32_t ct = layout_.vertices[c].tile;
             if (ct >= 0 && layout_.tiles[static_cast<std::size_t>(ct)].centre != kNone && !placed_[static_cast<std::size_t>(ct)]) {
                 const Vec3 nt = face_normal(b, a, c);
@@ -834,6 +1015,7 @@ private:
                     continue; // cannot happen: the fan only touches its own points
             }
             surface_.add(b, a, c, -1);
+            parts_.unite(a, c);
             push_best(a, c);
             push_best(c, b);
             refresh(a);
@@ -846,25 +1028,26 @@ private:
     const std::vector<Tile>& tiles_;
     Surface& surface_;
     const Projection& projection_;
+    const std::vector<Vec3>& positions_;
     const std::vector<int>& orientation_;
     const std::vector<Tri>& candidates_;
     const std::vector<double>& relative_radius_;
+    const std::vector<bool>& fallback_;
     double min_cos_;
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
     std::vector<std::vector<std::uint32_t>> neighbours_;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
+    std::vector<bool> banned_;   // fallback candidates found to add a handle
+    std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
+    bool allow_handles_ = false;
+    std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
+    UnionFind parts_;          // connected pieces of the surface, over vertices
 };
 
 // ---------------------------------------------------------------------------------------------------
 // Step 2b: pruning of the Delaunay triangles (paper §4.3's removal rules, plus chords).
-
-struct Candidates
-{
-    std::vector<Tri> triangles;
-    std::vector<double> relative_radius; // radius / local b, in (0, 1]
-};
 
 // The removal rules of paper §4.3 (one-tile triangles, local alpha radius b) plus chords across a
 // fan, slivers, and triangles joining tiles that do not meet on the surface.
@@ -960,6 +1143,7 @@ Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, 
             continue;
         out.triangles.push_back(t);
         out.relative_radius.push_back(r);
+        out.fallback.push_back(false);
     }
     return out;
 }
@@ -1052,10 +1236,9 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
                                layout.vertices[tri[2]].position) / 3.0;
         if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
             continue;
-        if (votes < fan_tiles.size())
-            continue;
         out.triangles.push_back(tri);
         out.relative_radius.push_back(r);
+        out.fallback.push_back(votes < fan_tiles.size());
     }
     return out;
 }
@@ -1063,33 +1246,20 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
 // ---------------------------------------------------------------------------------------------------
 // Step 4: boundary loops and hole filling.
 
-struct UnionFind
+// The pieces of the surface that broke off a larger one: a part with a tile whose surface neighbour
+// lies in a larger part, a small part (under 5% of the largest) with a tile whose neighbour lies
+// outside it, and a part of gap faces only. Such an island meets the rest of the surface in the
+// sampled data but failed to join it (typically at a thin or sharp feature), and the larger surface
+// around it then has a hole with the island inside that no disk can fill. Parts whose tiles have no
+// neighbours elsewhere (separate objects) are not islands.
+struct Islands
 {
-    std::vector<std::uint32_t> parent;
-    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    std::uint32_t find(std::uint32_t x)
-    {
-        while (parent[x] != x)
-            x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b)
-    {
-        a = find(a);
-        b = find(b);
-        if (a != b)
-            parent[std::max(a, b)] = std::min(a, b);
-    }
+    UnionFind parts{0};                      // faces -> part
+    std::vector<bool> doomed;                // per part root: an island
+    std::vector<std::uint32_t> part_of_tile; // kNone for tiles without faces
 };
 
-// Removes the pieces of the surface that broke off a larger one: a part with a tile whose surface
-// neighbour lies in a larger part, a small part (under 5% of the largest) with a tile whose neighbour
-// lies outside it, and a part of gap faces only. Such an island meets the rest of the surface in the
-// sampled data but failed to join it (typically at a thin or sharp feature), and the larger surface
-// around it then has a hole with the island inside that no disk can fill; once it is gone, the hole is
-// an ordinary one. Parts whose tiles have no neighbours elsewhere (separate objects) stay. Returns the
-// number of tiles whose fans were removed.
-std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
 {
     const auto count = static_cast<std::uint32_t>(s.faces().size());
     UnionFind parts(count);
@@ -1112,7 +1282,6 @@ std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
                 part_of_tile[static_cast<std::size_t>(s.face_tile()[f])] = parts.find(f);
         }
     std::vector<bool> doomed(count, false);
-    std::size_t dropped = 0;
     // A part made of gap faces only (a bubble closed between two sides of a thin feature) represents
     // no tile at all: it goes unless it is the largest part.
     std::vector<bool> has_fan(count, false);
@@ -1143,10 +1312,29 @@ std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
             }
         }
     }
+    return Islands{std::move(parts), std::move(doomed), std::move(part_of_tile)};
+}
+
+// Tiles whose fans are in a piece that broke off (see find_islands).
+std::vector<bool> broken_off_tiles(const Surface& s, const std::vector<Tile>& tiles)
+{
+    const Islands islands = find_islands(s, tiles);
+    std::vector<bool> out(tiles.size(), false);
     for (std::size_t t = 0; t < tiles.size(); ++t)
-        dropped += part_of_tile[t] != kNone && doomed[part_of_tile[t]] ? 1 : 0;
-    for (std::uint32_t f = 0; f < count; ++f)
-        if (s.alive(f) && doomed[parts.find(f)])
+        out[t] = islands.part_of_tile[t] != kNone && islands.doomed[islands.part_of_tile[t]];
+    return out;
+}
+
+// Removes the islands: once one is gone, its hole is an ordinary one. Returns the number of tiles
+// whose fans were removed.
+std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+{
+    Islands islands = find_islands(s, tiles);
+    std::size_t dropped = 0;
+    for (std::size_t t = 0; t < tiles.size(); ++t)
+        dropped += islands.part_of_tile[t] != kNone && islands.doomed[islands.part_of_tile[t]] ? 1 : 0;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+        if (s.alive(f) && islands.doomed[islands.parts.find(f)])
             s.remove(f);
     return dropped;
 }
@@ -1169,32 +1357,7 @@ std::vector<std::vector<std::uint32_t>> boundary_loops(const Surface& s, const s
     }
     std::sort(free_halfedges.begin(), free_halfedges.end());
 
-    auto next_vertex = [&](std::uint32_t u, std::uint32_t v) {
-        auto fans = s.arcs(v);
-        if (fans.size() == 1)
-            return fans[0].second;
-        Vec3 n;
-        for (std::uint32_t f : s.faces_at(v)) {
-            const Tri& t = s.faces()[f];
-            n += triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
-        }
-        n = normalized(n);
-        const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
-        auto angle = [&](std::uint32_t x) {
-            const Vec3 d = positions[x] - positions[v];
-            return std::atan2(dot(d, e2), dot(d, e1));
-        };
-        std::sort(fans.begin(), fans.end(), [&](const auto& a, const auto& b) {
-            const double aa = angle(a.first), ab = angle(b.first);
-            return aa != ab ? aa < ab : a.first < b.first;
-        });
-        for (std::size_t j = 0; j < fans.size(); ++j)
-            if (fans[j].first == u)
-                return fans[(j + fans.size() - 1) % fans.size()].second;
-        assert(false);
-        return fans[0].second;
-    };
+    auto next_vertex = [&](std::uint32_t u, std::uint32_t v) { return next_boundary_vertex(s, positions, u, v); };
 
     std::vector<std::vector<std::uint32_t>> loops;
     std::vector<bool> used(free_halfedges.size(), false);
@@ -1375,6 +1538,59 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
     return out;
 }
 
+// What the genus of the final mesh depends on near a set of vertices, counted as split_pinches will
+// leave the surface (each fan of a pinched vertex its own vertex): vertex copies, and the boundary
+// cycles through those vertices (in the split surface a cycle arriving at a fan leaves from that fan).
+struct LocalTopology
+{
+    std::size_t vertex_copies = 0;
+    std::size_t cycles = 0;
+};
+
+LocalTopology local_topology(const Surface& s, const std::vector<std::uint32_t>& vertices)
+{
+    LocalTopology out;
+    std::vector<std::uint64_t> seen; // free half-edges already walked
+    const auto next = [&](std::uint32_t u, std::uint32_t v) {
+        for (const auto& fan : s.arcs(v))
+            if (fan.first == u)
+                return fan.second;
+        assert(false);
+        return kNone;
+    };
+    for (std::uint32_t v : vertices) {
+        const auto fans = s.arcs(v);
+        out.vertex_copies += std::max<std::size_t>(1, fans.size());
+        for (const auto& fan : fans) {
+            // Free half-edge fan.first -> v; walk its cycle unless an earlier walk passed it.
+            if (std::find(seen.begin(), seen.end(), edge_key(fan.first, v)) != seen.end())
+                continue;
+            ++out.cycles;
+            std::uint32_t u = fan.first, w = v;
+            do {
+                seen.push_back(edge_key(u, w));
+                const std::uint32_t x = next(u, w);
+                u = w;
+                w = x;
+            } while (!(u == fan.first && w == v));
+        }
+    }
+    return out;
+}
+
+// Whether a patch of `faces` triangles closing a simple loop of `loop_edges` edges raised the genus,
+// from the local counts before and after (Euler: 2 Δg = -Δχ - Δb on a connected surface; the patch
+// adds its faces and (3 faces - loop edges) / 2 inner edges, and changes vertex copies and boundary
+// cycles only at the loop's vertices).
+bool adds_handle(const LocalTopology& before, const LocalTopology& after, std::size_t faces, std::size_t loop_edges)
+{
+    const long new_edges = (3 * static_cast<long>(faces) - static_cast<long>(loop_edges)) / 2;
+    const long d_chi = (static_cast<long>(after.vertex_copies) - static_cast<long>(before.vertex_copies)) - new_edges +
+                       static_cast<long>(faces);
+    const long d_b = static_cast<long>(after.cycles) - static_cast<long>(before.cycles);
+    return -d_chi - d_b > 0;
+}
+
 FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>& positions, const Projection& projection,
                       const std::vector<bool>& interior, const SurfaceOptions& options)
 {
@@ -1432,6 +1648,8 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
             }
             if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter)
                 continue;
+            const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
+            const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};
             std::size_t added = 0;
             for (const Tri& t : patch) {
                 if (!s.can_add(t[0], t[1], t[2]))
@@ -1439,7 +1657,11 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
                 s.add(t[0], t[1], t[2], -1);
                 ++added;
             }
-            if (!patch.empty() && added == patch.size()) {
+            // Through a pinched vertex a fill can join two fans of one surface: a handle. Such a loop is
+            // treated like one that cannot be triangulated (widened below).
+            const bool complete = !patch.empty() && added == patch.size() &&
+                                  !(pinched && adds_handle(before, local_topology(s, loop), patch.size(), n));
+            if (complete) {
                 ++result.holes;
                 result.faces += patch.size();
                 changed = true;
@@ -1526,16 +1748,25 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     else
         candidates = global_candidates(pruner, delaunay_triangles(gap_points, dopt), vertex_of);
 
-    Surface surface(layout.vertices.size());
-    {
-        const std::vector<int> orientation = pruner.know_neighbours() ? orient_tiles(tiles) : std::vector<int>{};
-        Front front(layout, tiles, surface, projection, candidates.triangles, candidates.relative_radius,
-                    options.max_turn_degrees, orientation);
-        front.run();
-    }
     std::vector<Vec3> positions;
     for (const SurfaceVertex& v : layout.vertices)
         positions.push_back(v.position);
+    // The front runs on consensus candidates first. Where it strands tiles (at a thin feature such as
+    // the tip of an ear, the planes of neighbouring tiles disagree too much for consensus, the tiles
+    // are seeded one by one and end up as islands that would be dropped and covered over), it runs
+    // again with the fallback candidates that touch a stranded tile.
+    const std::vector<int> orientation = pruner.know_neighbours() ? orient_tiles(tiles) : std::vector<int>{};
+    Surface surface(layout.vertices.size());
+    {
+        Front front(layout, tiles, surface, projection, positions, candidates, options.max_turn_degrees, orientation);
+        front.run();
+        const std::vector<bool> stranded = broken_off_tiles(surface, tiles);
+        if (std::find(stranded.begin(), stranded.end(), true) != stranded.end()) {
+            drop_islands(surface, tiles);
+            front.rescue(stranded);
+        }
+        front.finish();
+    }
     FillResult filled;
     std::size_t islands = 0;
     if (options.fill_holes) {

@@ -395,6 +395,8 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     options.tileset = false;
+    // A LOD chain for renderers starts at a few thousand triangles, not at what fits one 3D Tiles tile.
+    options.first_level_triangles = std::min<std::size_t>(options.max_tile_triangles, 4096);
     const LodSet set = make_lod_set(h, options);
     // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
     // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
