@@ -373,26 +373,73 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 class Surface
 {
 public:
-    explicit Surface(std::size_t vertex_count) : vertex_faces_(vertex_count) {}
+    //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
+    //! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
+    //! short contiguous list instead of the faces themselves.
+    struct Corner
+    {
+        std::uint32_t face, first, second;
+    };
+
+    //! The faces at a vertex, in the order they were added (iterates face ids).
+    class FaceRange
+    {
+    public:
+        class Iterator
+        {
+        public:
+            explicit Iterator(const Corner* at) : at_(at) {}
+            std::uint32_t operator*() const { return at_->face; }
+            Iterator& operator++()
+            {
+                ++at_;
+                return *this;
+            }
+            bool operator!=(const Iterator& o) const { return at_ != o.at_; }
+
+        private:
+            const Corner* at_;
+        };
+        explicit FaceRange(const std::vector<Corner>& corners) : corners_(corners) {}
+        Iterator begin() const { return Iterator(corners_.data()); }
+        Iterator end() const { return Iterator(corners_.data() + corners_.size()); }
+        std::size_t size() const { return corners_.size(); }
+        bool empty() const { return corners_.empty(); }
+
+    private:
+        const std::vector<Corner>& corners_;
+    };
+
+    explicit Surface(std::size_t vertex_count) : corners_(vertex_count), changed_(vertex_count, 0) {}
 
     const std::vector<Tri>& faces() const { return faces_; }
     const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
-    const std::vector<std::uint32_t>& faces_at(std::uint32_t v) const { return vertex_faces_[v]; }
+    FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
+    const std::vector<Corner>& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
-    //! The face with half-edge a -> b, or kNone. Scans the faces of a or b, whichever has fewer (a
-    //! surface vertex has a handful; only fan centres have many): cheaper than hashing half-edges.
+    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
+    //! the corners of a or b, whichever has fewer (only fan centres have many).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
     {
-        const auto& fa = vertex_faces_[a];
-        const auto& fb = vertex_faces_[b];
-        for (std::uint32_t f : fa.size() <= fb.size() ? fa : fb) {
-            const Tri& t = faces_[f];
-            if ((t[0] == a && t[1] == b) || (t[1] == a && t[2] == b) || (t[2] == a && t[0] == b))
-                return f;
+        const std::vector<Corner>& ca = corners_[a];
+        const std::vector<Corner>& cb = corners_[b];
+        if (ca.size() <= cb.size()) {
+            for (const Corner& c : ca)
+                if (c.first == b)
+                    return c.face;
+        } else {
+            for (const Corner& c : cb)
+                if (c.second == a)
+                    return c.face;
         }
         return kNone;
     }
-    bool on_surface(std::uint32_t v) const { return !vertex_faces_[v].empty(); }
+    bool on_surface(std::uint32_t v) const { return !corners_[v].empty(); }
+    //! Number of face changes so far (a logical clock for changed_at).
+    std::uint64_t clock() const { return clock_; }
+    //! The clock value of the last change of the faces at v (0 = never changed): anything computed from
+    //! v's faces at clock t is still valid while changed_at(v) <= t.
+    std::uint64_t changed_at(std::uint32_t v) const { return changed_[v]; }
 
     //! Whether face (a, b, c) can be added keeping the surface an oriented manifold-in-progress.
     bool can_add(std::uint32_t a, std::uint32_t b, std::uint32_t c) const
@@ -412,9 +459,10 @@ public:
         faces_.push_back({a, b, c});
         face_tile_.push_back(tile);
         alive_.push_back(true);
-        vertex_faces_[a].push_back(f);
-        vertex_faces_[b].push_back(f);
-        vertex_faces_[c].push_back(f);
+        corners_[a].push_back({f, b, c});
+        corners_[b].push_back({f, c, a});
+        corners_[c].push_back({f, a, b});
+        touch(faces_.back());
     }
 
     //! Removes the most recently added face (used to roll back a hole fill).
@@ -425,7 +473,8 @@ public:
         face_tile_.pop_back();
         alive_.pop_back();
         for (int i = 0; i < 3; ++i)
-            vertex_faces_[t[i]].pop_back();
+            corners_[t[i]].pop_back();
+        touch(t);
     }
 
     //! Removes face f (it stays in faces() as a dead entry).
@@ -434,28 +483,24 @@ public:
         assert(alive_[f]);
         alive_[f] = false;
         const Tri& t = faces_[f];
-        for (int i = 0; i < 3; ++i) {
-            auto& fs = vertex_faces_[t[i]];
-            fs.erase(std::find(fs.begin(), fs.end(), f));
-        }
+        for (int i = 0; i < 3; ++i)
+            erase_corner(t[i], f);
+        touch(t);
     }
 
     //! Link arcs of v: (first, last) link vertex of each maximal path, counter-clockwise order unknown.
     //! A closed link (interior vertex) gives no arc.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
     {
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> link; // directed link edges
-        for (std::uint32_t f : vertex_faces_[v])
-            link.push_back(link_edge(f, v));
+        const std::vector<Corner>& link = corners_[v]; // directed link edges first -> second
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
-        for (const auto& e : link) {
-            const bool has_in = std::any_of(link.begin(), link.end(), [&](const auto& o) { return o.second == e.first; });
-            if (has_in)
+        for (const Corner& e : link) {
+            if (has_link_edge_into(link, e.first))
                 continue;
             std::uint32_t end = e.second;
             for (bool moved = true; moved;) {
                 moved = false;
-                for (const auto& o : link)
+                for (const Corner& o : link)
                     if (o.first == end) {
                         end = o.second;
                         moved = true;
@@ -467,6 +512,16 @@ public:
         return out;
     }
 
+    //! arcs(v).size() without building them.
+    std::size_t arc_count(std::uint32_t v) const
+    {
+        const std::vector<Corner>& link = corners_[v];
+        std::size_t count = 0;
+        for (const Corner& e : link)
+            count += has_link_edge_into(link, e.first) ? 0 : 1;
+        return count;
+    }
+
     std::pair<std::uint32_t, std::uint32_t> link_edge(std::uint32_t f, std::uint32_t v) const
     {
         const Tri& t = faces_[f];
@@ -474,12 +529,27 @@ public:
         return {t[(k + 1) % 3], t[(k + 2) % 3]};
     }
 
-    //! Replaces vertex `from` by `to` in face f (only used after the construction, for pinch splits).
+    //! Replaces vertex `from` by `to` in face f, moving f's corner at `from` to `to` (only used after the
+    //! construction, for pinch splits).
     void relabel(std::uint32_t f, std::uint32_t from, std::uint32_t to)
     {
         for (auto& x : faces_[f])
             if (x == from)
                 x = to;
+        for (std::uint32_t w : faces_[f]) {
+            if (w == to)
+                continue;
+            for (Corner& c : corners_[w])
+                if (c.face == f) {
+                    c.first = c.first == from ? to : c.first;
+                    c.second = c.second == from ? to : c.second;
+                }
+        }
+        const auto it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        assert(it != corners_[from].end());
+        const Corner moved = *it;
+        corners_[from].erase(it);
+        corners_[to].push_back(moved);
     }
 
     //! Duplicates every vertex whose faces form more than one fan: each extra fan gets a new vertex id
@@ -487,25 +557,23 @@ public:
     std::vector<std::uint32_t> split_pinches()
     {
         std::vector<std::uint32_t> origin;
-        const auto n = static_cast<std::uint32_t>(vertex_faces_.size());
+        const auto n = static_cast<std::uint32_t>(corners_.size());
         for (std::uint32_t v = 0; v < n; ++v) {
             const auto fans = arcs(v);
             for (std::size_t k = 1; k < fans.size(); ++k) {
-                const auto copy = static_cast<std::uint32_t>(vertex_faces_.size());
-                vertex_faces_.emplace_back();
+                const auto copy = static_cast<std::uint32_t>(corners_.size());
+                corners_.emplace_back();
+                changed_.push_back(clock_);
                 origin.push_back(v);
                 // Walk the fan from its first link vertex, moving its faces to the copy.
                 for (std::uint32_t x = fans[k].first; x != fans[k].second;) {
                     std::uint32_t found = kNone;
-                    for (std::uint32_t f : vertex_faces_[v])
-                        if (link_edge(f, v).first == x)
-                            found = f;
+                    for (const Corner& c : corners_[v])
+                        if (c.first == x)
+                            found = c.face;
                     assert(found != kNone);
                     x = link_edge(found, v).second;
                     relabel(found, v, copy);
-                    auto& fs = vertex_faces_[v];
-                    fs.erase(std::find(fs.begin(), fs.end(), found));
-                    vertex_faces_[copy].push_back(found);
                 }
             }
         }
@@ -513,12 +581,26 @@ public:
     }
 
 private:
+    static bool has_link_edge_into(const std::vector<Corner>& link, std::uint32_t x)
+    {
+        for (const Corner& o : link)
+            if (o.second == x)
+                return true;
+        return false;
+    }
+
+    void erase_corner(std::uint32_t v, std::uint32_t f)
+    {
+        auto& cs = corners_[v];
+        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face == f; }));
+    }
+
     // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
     // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
     bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        const auto& fs = vertex_faces_[v];
-        if (fs.empty())
+        const std::vector<Corner>& link = corners_[v];
+        if (link.empty())
             return true;
         if (is_closed(v))
             return false; // an interior vertex takes no more faces
@@ -528,8 +610,7 @@ private:
         std::size_t steps = 1;
         for (bool moved = true; moved && end != x;) {
             moved = false;
-            for (std::uint32_t f : fs) {
-                const auto e = link_edge(f, v);
+            for (const Corner& e : link) {
                 if (e.first == end) {
                     end = e.second;
                     ++steps;
@@ -540,22 +621,31 @@ private:
         }
         if (end != x)
             return true; // no cycle through the new edge
-        return steps == fs.size() + 1;
+        return steps == link.size() + 1;
     }
 
     // Every edge at v has two faces: v's fan is a closed disk.
     bool is_closed(std::uint32_t v) const
     {
-        for (std::uint32_t f : vertex_faces_[v])
-            if (!has_halfedge(link_edge(f, v).first, v))
+        for (const Corner& c : corners_[v])
+            if (!has_halfedge(c.first, v))
                 return false;
         return true;
+    }
+
+    void touch(const Tri& t)
+    {
+        ++clock_;
+        for (std::uint32_t v : t)
+            changed_[v] = clock_;
     }
 
     std::vector<Tri> faces_;
     std::vector<std::int32_t> face_tile_;
     std::vector<bool> alive_;
-    std::vector<std::vector<std::uint32_t>> vertex_faces_;
+    std::vector<std::vector<Corner>> corners_; // per vertex, in the order its faces were added
+    std::vector<std::uint64_t> changed_;
+    std::uint64_t clock_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -565,6 +655,7 @@ struct Candidate
 {
     double priority;
     std::uint32_t a, b, c; // front half-edge a -> b (in an existing face), new face (b, a, c)
+    std::uint64_t clock;   // Surface::clock() when it was evaluated (not part of the order)
     bool operator>(const Candidate& o) const
     {
         if (priority != o.priority)
@@ -587,15 +678,28 @@ public:
           placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
           neighbours_(layout.vertices.size())
     {
+        // Candidates by vertex (compressed rows, candidate order within a row): for every edge (u, w) of
+        // candidate i, the entry {w, i} in u's row and {u, i} in w's. Looking up an edge scans one short
+        // row instead of binary-searching all edges.
+        std::vector<std::uint32_t> degree(layout.vertices.size() + 1, 0);
+        for (const Tri& t : candidates)
+            for (std::uint32_t v : t)
+                degree[v + 1] += 2;
+        row_start_.assign(degree.size(), 0);
+        for (std::size_t v = 1; v < degree.size(); ++v)
+            row_start_[v] = row_start_[v - 1] + degree[v];
+        rows_.resize(row_start_.back());
+        std::vector<std::uint32_t> fill(row_start_.begin(), row_start_.end() - 1);
         for (std::uint32_t i = 0; i < candidates.size(); ++i) {
             const Tri& t = candidates[i];
             for (int k = 0; k < 3; ++k) {
-                edge_candidates_.push_back({undirected_key(t[k], t[(k + 1) % 3]), i});
-                neighbours_[t[k]].push_back(t[(k + 1) % 3]);
-                neighbours_[t[(k + 1) % 3]].push_back(t[k]);
+                const std::uint32_t u = t[k], w = t[(k + 1) % 3];
+                rows_[fill[u]++] = {w, i};
+                rows_[fill[w]++] = {u, i};
+                neighbours_[u].push_back(w);
+                neighbours_[w].push_back(u);
             }
         }
-        std::sort(edge_candidates_.begin(), edge_candidates_.end());
     }
 
     //! Grows from every tile in seed order until no candidate can be added.
@@ -678,16 +782,17 @@ private:
     // Best valid candidate for the front half-edge a -> b, or priority = inf.
     Candidate best(std::uint32_t a, std::uint32_t b) const
     {
-        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone};
+        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone, surface_.clock()};
         const std::uint32_t f = surface_.face_of(a, b);
         if (f == kNone || surface_.has_halfedge(b, a))
             return out;
         const Tri& s = surface_.faces()[f];
         const Vec3 ns = face_normal(s[0], s[1], s[2]);
-        const std::uint64_t key = undirected_key(a, b);
-        auto it = std::lower_bound(edge_candidates_.begin(), edge_candidates_.end(), std::make_pair(key, 0u));
-        for (; it != edge_candidates_.end() && it->first == key; ++it) {
-            const Tri& cand = candidates_[it->second];
+        for (std::uint32_t r = row_start_[a]; r < row_start_[a + 1]; ++r) {
+            if (rows_[r].first != b)
+                continue;
+            const std::uint32_t index = rows_[r].second;
+            const Tri& cand = candidates_[index];
             const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
             if (!surface_.can_add(b, a, c))
                 continue;
@@ -709,7 +814,7 @@ private:
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
-            const double p = relative_radius_[it->second] * (2.0 - turn);
+            const double p = relative_radius_[index] * (2.0 - turn);
             if (p < out.priority || (p == out.priority && c < out.c)) {
                 out.priority = p;
                 out.c = c;
@@ -741,11 +846,9 @@ private:
     // joining fans out of their angular order makes the surface wind twice around v (a handle).
     bool merge_in_order(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        if (surface_.faces_at(v).size() < 2)
+        if (surface_.faces_at(v).size() < 2 || surface_.arc_count(v) < 3)
             return true;
         const auto fans = surface_.arcs(v);
-        if (fans.size() < 3)
-            return true;
         std::size_t from = kNone, to = kNone;
         for (std::size_t k = 0; k < fans.size(); ++k) {
             if (fans[k].second == x)
@@ -790,6 +893,22 @@ private:
         return dot(face_normal(t[0], t[1], t[2]), nt) >= min_cos_;
     }
 
+    // Whether no face changed at the ends of c's edge or at any apex of its candidates after c was
+    // evaluated (tile placement adds faces at all the tile's vertices, so placed_ is covered too).
+    bool unchanged_since(const Candidate& c) const
+    {
+        if (surface_.changed_at(c.a) > c.clock || surface_.changed_at(c.b) > c.clock)
+            return false;
+        for (std::uint32_t r = row_start_[c.a]; r < row_start_[c.a + 1]; ++r) {
+            if (rows_[r].first != c.b)
+                continue;
+            for (std::uint32_t v : candidates_[rows_[r].second])
+                if (surface_.changed_at(v) > c.clock)
+                    return false;
+        }
+        return true;
+    }
+
     void push_best(std::uint32_t a, std::uint32_t b)
     {
         const Candidate c = best(a, b);
@@ -815,7 +934,9 @@ private:
         while (!queue_.empty()) {
             const Candidate top = queue_.top();
             queue_.pop();
-            const Candidate now = best(top.a, top.b);
+            // best() of an edge depends only on the faces at its ends and at its candidates' apexes: if
+            // none changed since `top` was evaluated, evaluating again would give `top`.
+            const Candidate now = unchanged_since(top) ? top : best(top.a, top.b);
             if (now.c == kNone)
                 continue;
             if (now.c != top.c || now.priority != top.priority) {
@@ -853,7 +974,8 @@ private:
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
     std::vector<std::vector<std::uint32_t>> neighbours_;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
+    std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
 };
 
