@@ -909,11 +909,63 @@ private:
         return true;
     }
 
+    // Per front half-edge (face f, edge k from faces()[f][k]): the last best() result, and the key of
+    // the entry last pushed for it while that entry is still queued.
+    struct EdgeState
+    {
+        Candidate best{0.0, kNone, kNone, kNone, 0};
+        bool evaluated = false;
+        bool queued = false;
+        double queued_priority = 0.0;
+        std::uint32_t queued_c = kNone;
+    };
+
+    EdgeState& edge_state(std::uint32_t a, std::uint32_t b)
+    {
+        const std::uint32_t f = surface_.face_of(a, b);
+        assert(f != kNone);
+        const Tri& t = surface_.faces()[f];
+        const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
+        if (slot >= edges_.size())
+            edges_.resize(3 * surface_.faces().size());
+        return edges_[slot];
+    }
+
+    // best(a, b), reusing the last result for the edge while nothing it depends on changed (see
+    // unchanged_since): refreshes around a new face ask for the same edges several times.
+    Candidate cached_best(std::uint32_t a, std::uint32_t b)
+    {
+        if (!surface_.has_halfedge(a, b))
+            return best(a, b);
+        EdgeState& e = edge_state(a, b);
+        if (!e.evaluated || !unchanged_since(e.best)) {
+            e.best = best(a, b);
+            e.evaluated = true;
+        }
+        return e.best;
+    }
+
+    // Queues c unless an entry with the same key for the same edge is still queued. Such a duplicate
+    // changes nothing: identical keys pop one after the other, and the second finds the edge either
+    // closed (the first was accepted), in the same state (the first was dropped or re-queued with a
+    // larger key, which the second would re-queue again), or already handled (re-queued with a smaller
+    // key, which popped first and was accepted).
+    void enqueue(const Candidate& c)
+    {
+        EdgeState& e = edge_state(c.a, c.b);
+        if (e.queued && e.queued_priority == c.priority && e.queued_c == c.c)
+            return;
+        e.queued = true;
+        e.queued_priority = c.priority;
+        e.queued_c = c.c;
+        queue_.push(c);
+    }
+
     void push_best(std::uint32_t a, std::uint32_t b)
     {
-        const Candidate c = best(a, b);
+        const Candidate c = cached_best(a, b);
         if (c.c != kNone)
-            queue_.push(c);
+            enqueue(c);
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
@@ -934,13 +986,18 @@ private:
         while (!queue_.empty()) {
             const Candidate top = queue_.top();
             queue_.pop();
+            {
+                EdgeState& e = edge_state(top.a, top.b); // a queued edge has its face
+                if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
+                    e.queued = false;
+            }
             // best() of an edge depends only on the faces at its ends and at its candidates' apexes: if
             // none changed since `top` was evaluated, evaluating again would give `top`.
-            const Candidate now = unchanged_since(top) ? top : best(top.a, top.b);
+            const Candidate now = unchanged_since(top) ? top : cached_best(top.a, top.b);
             if (now.c == kNone)
                 continue;
             if (now.c != top.c || now.priority != top.priority) {
-                queue_.push(now);
+                enqueue(now);
                 continue;
             }
             const std::uint32_t a = top.a, b = top.b, c = top.c;
@@ -977,6 +1034,7 @@ private:
     std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
+    std::vector<EdgeState> edges_; // by face and edge, see edge_state
 };
 
 // ---------------------------------------------------------------------------------------------------
