@@ -47,15 +47,19 @@
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
-#include <cassert>
 #include <array>
+#include <atomic>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <queue>
 #include <string>
+#include <thread>
 #include <utility>
 
 namespace mrt {
@@ -1144,6 +1148,37 @@ Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, 
     return out;
 }
 
+// Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per hardware
+// thread), the calling thread included. The first exception thrown is rethrown after all have ended.
+template <typename Work>
+void run_blocks(std::size_t count, std::size_t threads, const Work& work)
+{
+    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto worker = [&] {
+        for (std::size_t k = next++; k < count; k = next++) {
+            try {
+                work(k);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure)
+                    failure = std::current_exception();
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < workers; ++t)
+        pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool)
+        t.join();
+    if (failure)
+        std::rethrow_exception(failure);
+}
+
 // True when p, projected into the tile's plane, lies strictly inside its (convex) outline.
 bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 {
@@ -1170,7 +1205,8 @@ bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 // candidate only when every tile it touches proposes it (consensus): triangles that look Delaunay from
 // one tile's plane only are where the planes disagree, and taking them made folds and handles. The
 // gaps they leave are closed by hole filling.
-Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
+Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles,
+                            std::size_t threads)
 {
     std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
     for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
@@ -1178,35 +1214,47 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
         if (layout.tiles[t].centre != v)
             members[t].push_back(v);
     }
-    std::vector<std::pair<Tri, std::uint32_t>> proposals; // (sorted triangle, proposing tile)
-    std::vector<Vec3> points;
-    std::vector<std::uint32_t> ids;
-    for (std::uint32_t t = 0; t < layout.tiles.size(); ++t) {
-        if (layout.tiles[t].centre == kNone)
-            continue;
-        points.clear();
-        ids.clear();
-        for (std::uint32_t v : members[t])
-            ids.push_back(v);
-        for (std::uint32_t n : tiles[t].neighbours)
-            for (std::uint32_t v : members[n])
-                ids.push_back(v);
-        for (std::uint32_t v : ids)
-            points.push_back(layout.vertices[v].position);
-        DelaunayOptions o;
-        o.projected = true;
-        o.axis_u = tiles[t].axis_u;
-        o.axis_v = tiles[t].axis_v;
-        const DelaunayTriangles dt = delaunay_triangles(points, o);
-        for (const auto& d : dt.triangles) {
-            Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
-            const auto tile_of = [&](std::uint32_t v) { return static_cast<std::uint32_t>(layout.vertices[v].tile); };
-            if (tile_of(tri[0]) != t && tile_of(tri[1]) != t && tile_of(tri[2]) != t)
+    // The tiles' triangulations are independent: blocks of tiles go to worker threads, and since the
+    // proposals are sorted afterwards (no two are equal), the result does not depend on the threads.
+    constexpr std::uint32_t kBlock = 64;
+    const auto tile_count = static_cast<std::uint32_t>(layout.tiles.size());
+    std::vector<std::vector<std::pair<Tri, std::uint32_t>>> block_proposals((tile_count + kBlock - 1) / kBlock);
+    run_blocks(block_proposals.size(), threads, [&](std::size_t block) {
+        std::vector<std::pair<Tri, std::uint32_t>>& proposals = block_proposals[block]; // (sorted triangle, tile)
+        std::vector<Vec3> points;
+        std::vector<std::uint32_t> ids;
+        const auto first = static_cast<std::uint32_t>(block * kBlock);
+        for (std::uint32_t t = first; t < std::min(tile_count, first + kBlock); ++t) {
+            if (layout.tiles[t].centre == kNone)
                 continue;
-            std::sort(tri.begin(), tri.end());
-            proposals.push_back({tri, t});
+            points.clear();
+            ids.clear();
+            for (std::uint32_t v : members[t])
+                ids.push_back(v);
+            for (std::uint32_t n : tiles[t].neighbours)
+                for (std::uint32_t v : members[n])
+                    ids.push_back(v);
+            for (std::uint32_t v : ids)
+                points.push_back(layout.vertices[v].position);
+            DelaunayOptions o;
+            o.projected = true;
+            o.axis_u = tiles[t].axis_u;
+            o.axis_v = tiles[t].axis_v;
+            const DelaunayTriangles dt = delaunay_triangles(points, o);
+            for (const auto& d : dt.triangles) {
+                Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
+                const auto tile_of = [&](std::uint32_t v) { return static_cast<std::uint32_t>(layout.vertices[v].tile); };
+                if (tile_of(tri[0]) != t && tile_of(tri[1]) != t && tile_of(tri[2]) != t)
+                    continue;
+                std::sort(tri.begin(), tri.end());
+                proposals.push_back({tri, t});
+            }
         }
-    }
+    });
+    std::vector<std::pair<Tri, std::uint32_t>> proposals;
+    for (const auto& block : block_proposals)
+        proposals.insert(proposals.end(), block.begin(), block.end());
+    block_proposals = {};
     std::sort(proposals.begin(), proposals.end());
     Candidates out;
     for (std::size_t i = 0; i < proposals.size();) {
@@ -1702,7 +1750,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     const Pruner pruner(layout, tiles, projection, alpha, options);
     Candidates candidates;
     if (pruner.know_neighbours())
-        candidates = local_candidates(h, pruner, layout, tiles);
+        candidates = local_candidates(h, pruner, layout, tiles, options.threads);
     else
         candidates = global_candidates(pruner, delaunay_triangles(gap_points, dopt), vertex_of);
 
