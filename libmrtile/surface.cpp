@@ -53,15 +53,19 @@
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
-#include <cassert>
 #include <array>
+#include <atomic>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <queue>
 #include <string>
+#include <thread>
 #include <utility>
 
 namespace mrt {
@@ -379,26 +383,73 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 class Surface
 {
 public:
-    explicit Surface(std::size_t vertex_count) : vertex_faces_(vertex_count) {}
+    //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
+    //! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
+    //! short contiguous list instead of the faces themselves.
+    struct Corner
+    {
+        std::uint32_t face, first, second;
+    };
+
+    //! The faces at a vertex, in the order they were added (iterates face ids).
+    class FaceRange
+    {
+    public:
+        class Iterator
+        {
+        public:
+            explicit Iterator(const Corner* at) : at_(at) {}
+            std::uint32_t operator*() const { return at_->face; }
+            Iterator& operator++()
+            {
+                ++at_;
+                return *this;
+            }
+            bool operator!=(const Iterator& o) const { return at_ != o.at_; }
+
+        private:
+            const Corner* at_;
+        };
+        explicit FaceRange(const std::vector<Corner>& corners) : corners_(corners) {}
+        Iterator begin() const { return Iterator(corners_.data()); }
+        Iterator end() const { return Iterator(corners_.data() + corners_.size()); }
+        std::size_t size() const { return corners_.size(); }
+        bool empty() const { return corners_.empty(); }
+
+    private:
+        const std::vector<Corner>& corners_;
+    };
+
+    explicit Surface(std::size_t vertex_count) : corners_(vertex_count), changed_(vertex_count, 0) {}
 
     const std::vector<Tri>& faces() const { return faces_; }
     const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
-    const std::vector<std::uint32_t>& faces_at(std::uint32_t v) const { return vertex_faces_[v]; }
+    FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
+    const std::vector<Corner>& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
-    //! The face with half-edge a -> b, or kNone. Scans the faces of a or b, whichever has fewer (a
-    //! surface vertex has a handful; only fan centres have many): cheaper than hashing half-edges.
+    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
+    //! the corners of a or b, whichever has fewer (only fan centres have many).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
     {
-        const auto& fa = vertex_faces_[a];
-        const auto& fb = vertex_faces_[b];
-        for (std::uint32_t f : fa.size() <= fb.size() ? fa : fb) {
-            const Tri& t = faces_[f];
-            if ((t[0] == a && t[1] == b) || (t[1] == a && t[2] == b) || (t[2] == a && t[0] == b))
-                return f;
+        const std::vector<Corner>& ca = corners_[a];
+        const std::vector<Corner>& cb = corners_[b];
+        if (ca.size() <= cb.size()) {
+            for (const Corner& c : ca)
+                if (c.first == b)
+                    return c.face;
+        } else {
+            for (const Corner& c : cb)
+                if (c.second == a)
+                    return c.face;
         }
         return kNone;
     }
-    bool on_surface(std::uint32_t v) const { return !vertex_faces_[v].empty(); }
+    bool on_surface(std::uint32_t v) const { return !corners_[v].empty(); }
+    //! Number of face changes so far (a logical clock for changed_at).
+    std::uint64_t clock() const { return clock_; }
+    //! The clock value of the last change of the faces at v (0 = never changed): anything computed from
+    //! v's faces at clock t is still valid while changed_at(v) <= t.
+    std::uint64_t changed_at(std::uint32_t v) const { return changed_[v]; }
 
     //! Whether face (a, b, c) can be added keeping the surface an oriented manifold-in-progress.
     bool can_add(std::uint32_t a, std::uint32_t b, std::uint32_t c) const
@@ -418,9 +469,10 @@ public:
         faces_.push_back({a, b, c});
         face_tile_.push_back(tile);
         alive_.push_back(true);
-        vertex_faces_[a].push_back(f);
-        vertex_faces_[b].push_back(f);
-        vertex_faces_[c].push_back(f);
+        corners_[a].push_back({f, b, c});
+        corners_[b].push_back({f, c, a});
+        corners_[c].push_back({f, a, b});
+        touch(faces_.back());
     }
 
     //! Removes the `count` most recently added faces.
@@ -438,7 +490,8 @@ public:
         face_tile_.pop_back();
         alive_.pop_back();
         for (int i = 0; i < 3; ++i)
-            vertex_faces_[t[i]].pop_back();
+            corners_[t[i]].pop_back();
+        touch(t);
     }
 
     //! Removes face f (it stays in faces() as a dead entry).
@@ -447,28 +500,24 @@ public:
         assert(alive_[f]);
         alive_[f] = false;
         const Tri& t = faces_[f];
-        for (int i = 0; i < 3; ++i) {
-            auto& fs = vertex_faces_[t[i]];
-            fs.erase(std::find(fs.begin(), fs.end(), f));
-        }
+        for (int i = 0; i < 3; ++i)
+            erase_corner(t[i], f);
+        touch(t);
     }
 
     //! Link arcs of v: (first, last) link vertex of each maximal path, counter-clockwise order unknown.
     //! A closed link (interior vertex) gives no arc.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
     {
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> link; // directed link edges
-        for (std::uint32_t f : vertex_faces_[v])
-            link.push_back(link_edge(f, v));
+        const std::vector<Corner>& link = corners_[v]; // directed link edges first -> second
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
-        for (const auto& e : link) {
-            const bool has_in = std::any_of(link.begin(), link.end(), [&](const auto& o) { return o.second == e.first; });
-            if (has_in)
+        for (const Corner& e : link) {
+            if (has_link_edge_into(link, e.first))
                 continue;
             std::uint32_t end = e.second;
             for (bool moved = true; moved;) {
                 moved = false;
-                for (const auto& o : link)
+                for (const Corner& o : link)
                     if (o.first == end) {
                         end = o.second;
                         moved = true;
@@ -480,6 +529,16 @@ public:
         return out;
     }
 
+    //! arcs(v).size() without building them.
+    std::size_t arc_count(std::uint32_t v) const
+    {
+        const std::vector<Corner>& link = corners_[v];
+        std::size_t count = 0;
+        for (const Corner& e : link)
+            count += has_link_edge_into(link, e.first) ? 0 : 1;
+        return count;
+    }
+
     std::pair<std::uint32_t, std::uint32_t> link_edge(std::uint32_t f, std::uint32_t v) const
     {
         const Tri& t = faces_[f];
@@ -487,12 +546,27 @@ public:
         return {t[(k + 1) % 3], t[(k + 2) % 3]};
     }
 
-    //! Replaces vertex `from` by `to` in face f (only used after the construction, for pinch splits).
+    //! Replaces vertex `from` by `to` in face f, moving f's corner at `from` to `to` (only used after the
+    //! construction, for pinch splits).
     void relabel(std::uint32_t f, std::uint32_t from, std::uint32_t to)
     {
         for (auto& x : faces_[f])
             if (x == from)
                 x = to;
+        for (std::uint32_t w : faces_[f]) {
+            if (w == to)
+                continue;
+            for (Corner& c : corners_[w])
+                if (c.face == f) {
+                    c.first = c.first == from ? to : c.first;
+                    c.second = c.second == from ? to : c.second;
+                }
+        }
+        const auto it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        assert(it != corners_[from].end());
+        const Corner moved = *it;
+        corners_[from].erase(it);
+        corners_[to].push_back(moved);
     }
 
     //! Duplicates every vertex whose faces form more than one fan: each extra fan gets a new vertex id
@@ -500,25 +574,23 @@ public:
     std::vector<std::uint32_t> split_pinches()
     {
         std::vector<std::uint32_t> origin;
-        const auto n = static_cast<std::uint32_t>(vertex_faces_.size());
+        const auto n = static_cast<std::uint32_t>(corners_.size());
         for (std::uint32_t v = 0; v < n; ++v) {
             const auto fans = arcs(v);
             for (std::size_t k = 1; k < fans.size(); ++k) {
-                const auto copy = static_cast<std::uint32_t>(vertex_faces_.size());
-                vertex_faces_.emplace_back();
+                const auto copy = static_cast<std::uint32_t>(corners_.size());
+                corners_.emplace_back();
+                changed_.push_back(clock_);
                 origin.push_back(v);
                 // Walk the fan from its first link vertex, moving its faces to the copy.
                 for (std::uint32_t x = fans[k].first; x != fans[k].second;) {
                     std::uint32_t found = kNone;
-                    for (std::uint32_t f : vertex_faces_[v])
-                        if (link_edge(f, v).first == x)
-                            found = f;
+                    for (const Corner& c : corners_[v])
+                        if (c.first == x)
+                            found = c.face;
                     assert(found != kNone);
                     x = link_edge(found, v).second;
                     relabel(found, v, copy);
-                    auto& fs = vertex_faces_[v];
-                    fs.erase(std::find(fs.begin(), fs.end(), found));
-                    vertex_faces_[copy].push_back(found);
                 }
             }
         }
@@ -526,12 +598,26 @@ public:
     }
 
 private:
+    static bool has_link_edge_into(const std::vector<Corner>& link, std::uint32_t x)
+    {
+        for (const Corner& o : link)
+            if (o.second == x)
+                return true;
+        return false;
+    }
+
+    void erase_corner(std::uint32_t v, std::uint32_t f)
+    {
+        auto& cs = corners_[v];
+        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face == f; }));
+    }
+
     // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
     // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
     bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        const auto& fs = vertex_faces_[v];
-        if (fs.empty())
+        const std::vector<Corner>& link = corners_[v];
+        if (link.empty())
             return true;
         if (is_closed(v))
             return false; // an interior vertex takes no more faces
@@ -541,8 +627,7 @@ private:
         std::size_t steps = 1;
         for (bool moved = true; moved && end != x;) {
             moved = false;
-            for (std::uint32_t f : fs) {
-                const auto e = link_edge(f, v);
+            for (const Corner& e : link) {
                 if (e.first == end) {
                     end = e.second;
                     ++steps;
@@ -553,22 +638,31 @@ private:
         }
         if (end != x)
             return true; // no cycle through the new edge
-        return steps == fs.size() + 1;
+        return steps == link.size() + 1;
     }
 
     // Every edge at v has two faces: v's fan is a closed disk.
     bool is_closed(std::uint32_t v) const
     {
-        for (std::uint32_t f : vertex_faces_[v])
-            if (!has_halfedge(link_edge(f, v).first, v))
+        for (const Corner& c : corners_[v])
+            if (!has_halfedge(c.first, v))
                 return false;
         return true;
+    }
+
+    void touch(const Tri& t)
+    {
+        ++clock_;
+        for (std::uint32_t v : t)
+            changed_[v] = clock_;
     }
 
     std::vector<Tri> faces_;
     std::vector<std::int32_t> face_tile_;
     std::vector<bool> alive_;
-    std::vector<std::vector<std::uint32_t>> vertex_faces_;
+    std::vector<std::vector<Corner>> corners_; // per vertex, in the order its faces were added
+    std::vector<std::uint64_t> changed_;
+    std::uint64_t clock_ = 0;
 };
 
 struct UnionFind
@@ -660,6 +754,7 @@ struct Candidate
     double priority;
     std::uint32_t a, b, c; // front half-edge a -> b (in an existing face), new face (b, a, c)
     std::uint32_t index;   // into the candidate list
+    std::uint64_t clock;   // Surface::clock() when it was evaluated (not part of the order)
     bool operator>(const Candidate& o) const
     {
         if (priority != o.priority)
@@ -686,15 +781,28 @@ public:
           parts_(layout.vertices.size())
     {
         const std::vector<Tri>& triangles = candidates.triangles;
+        // Candidates by vertex (compressed rows, candidate order within a row): for every edge (u, w) of
+        // candidate i, the entry {w, i} in u's row and {u, i} in w's. Looking up an edge scans one short
+        // row instead of binary-searching all edges.
+        std::vector<std::uint32_t> degree(layout.vertices.size() + 1, 0);
+        for (const Tri& t : triangles)
+            for (std::uint32_t v : t)
+                degree[v + 1] += 2;
+        row_start_.assign(degree.size(), 0);
+        for (std::size_t v = 1; v < degree.size(); ++v)
+            row_start_[v] = row_start_[v - 1] + degree[v];
+        rows_.resize(row_start_.back());
+        std::vector<std::uint32_t> fill(row_start_.begin(), row_start_.end() - 1);
         for (std::uint32_t i = 0; i < triangles.size(); ++i) {
             const Tri& t = triangles[i];
             for (int k = 0; k < 3; ++k) {
-                edge_candidates_.push_back({undirected_key(t[k], t[(k + 1) % 3]), i});
-                neighbours_[t[k]].push_back(t[(k + 1) % 3]);
-                neighbours_[t[(k + 1) % 3]].push_back(t[k]);
+                const std::uint32_t u = t[k], w = t[(k + 1) % 3];
+                rows_[fill[u]++] = {w, i};
+                rows_[fill[w]++] = {u, i};
+                neighbours_[u].push_back(w);
+                neighbours_[w].push_back(u);
             }
         }
-        std::sort(edge_candidates_.begin(), edge_candidates_.end());
     }
 
     //! Second chance for the stranded tiles, whose islands the caller removed from the surface: the
@@ -708,6 +816,7 @@ public:
         for (std::size_t t = 0; t < placed_.size(); ++t)
             if (stranded[t])
                 placed_[t] = false;
+        edges_.clear(); // cached candidates predate the new rules (and the removed islands)
         parts_ = UnionFind(layout_.vertices.size());
         for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
             if (surface_.alive(f)) {
@@ -723,6 +832,7 @@ public:
     void finish()
     {
         allow_handles_ = true;
+        edges_.clear(); // cached candidates predate the new rule
         grow_whole_front();
     }
 
@@ -807,18 +917,19 @@ private:
     // Best valid candidate for the front half-edge a -> b, or priority = inf.
     Candidate best(std::uint32_t a, std::uint32_t b) const
     {
-        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone, kNone};
+        Candidate out{std::numeric_limits<double>::infinity(), a, b, kNone, kNone, surface_.clock()};
         const std::uint32_t f = surface_.face_of(a, b);
         if (f == kNone || surface_.has_halfedge(b, a))
             return out;
         const Tri& s = surface_.faces()[f];
         const Vec3 ns = face_normal(s[0], s[1], s[2]);
-        const std::uint64_t key = undirected_key(a, b);
-        auto it = std::lower_bound(edge_candidates_.begin(), edge_candidates_.end(), std::make_pair(key, 0u));
-        for (; it != edge_candidates_.end() && it->first == key; ++it) {
-            if (banned_[it->second] || (held_[it->second] && !allow_handles_) || (fallback_[it->second] && !rescuing_[it->second]))
+        for (std::uint32_t r = row_start_[a]; r < row_start_[a + 1]; ++r) {
+            if (rows_[r].first != b)
                 continue;
-            const Tri& cand = candidates_[it->second];
+            const std::uint32_t index = rows_[r].second;
+            if (banned_[index] || (held_[index] && !allow_handles_) || (fallback_[index] && !rescuing_[index]))
+                continue;
+            const Tri& cand = candidates_[index];
             const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
             if (!surface_.can_add(b, a, c))
                 continue;
@@ -840,11 +951,11 @@ private:
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
-            const double p = relative_radius_[it->second] * (2.0 - turn) + (fallback_[it->second] ? kFallbackRank : 0.0);
+            const double p = relative_radius_[index] * (2.0 - turn) + (fallback_[index] ? kFallbackRank : 0.0);
             if (p < out.priority || (p == out.priority && c < out.c)) {
                 out.priority = p;
                 out.c = c;
-                out.index = it->second;
+                out.index = index;
             }
         }
         return out;
@@ -873,11 +984,9 @@ private:
     // joining fans out of their angular order makes the surface wind twice around v (a handle).
     bool merge_in_order(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        if (surface_.faces_at(v).size() < 2)
+        if (surface_.faces_at(v).size() < 2 || surface_.arc_count(v) < 3)
             return true;
         const auto fans = surface_.arcs(v);
-        if (fans.size() < 3)
-            return true;
         std::size_t from = kNone, to = kNone;
         for (std::size_t k = 0; k < fans.size(); ++k) {
             if (fans[k].second == x)
@@ -963,11 +1072,79 @@ private:
         grow();
     }
 
+    // Whether no face changed at the ends of c's edge or at any apex of its candidates after c was
+    // evaluated (tile placement adds faces at all the tile's vertices, so placed_ is covered too).
+    bool unchanged_since(const Candidate& c) const
+    {
+        if (surface_.changed_at(c.a) > c.clock || surface_.changed_at(c.b) > c.clock)
+            return false;
+        for (std::uint32_t r = row_start_[c.a]; r < row_start_[c.a + 1]; ++r) {
+            if (rows_[r].first != c.b)
+                continue;
+            for (std::uint32_t v : candidates_[rows_[r].second])
+                if (surface_.changed_at(v) > c.clock)
+                    return false;
+        }
+        return true;
+    }
+
+    // Per front half-edge (face f, edge k from faces()[f][k]): the last best() result, and the key of
+    // the entry last pushed for it while that entry is still queued.
+    struct EdgeState
+    {
+        Candidate best{0.0, kNone, kNone, kNone, kNone, 0};
+        bool evaluated = false;
+        bool queued = false;
+        double queued_priority = 0.0;
+        std::uint32_t queued_c = kNone;
+    };
+
+    EdgeState& edge_state(std::uint32_t a, std::uint32_t b)
+    {
+        const std::uint32_t f = surface_.face_of(a, b);
+        assert(f != kNone);
+        const Tri& t = surface_.faces()[f];
+        const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
+        if (slot >= edges_.size())
+            edges_.resize(3 * surface_.faces().size());
+        return edges_[slot];
+    }
+
+    // best(a, b), reusing the last result for the edge while nothing it depends on changed (see
+    // unchanged_since): refreshes around a new face ask for the same edges several times.
+    Candidate cached_best(std::uint32_t a, std::uint32_t b)
+    {
+        if (!surface_.has_halfedge(a, b))
+            return best(a, b);
+        EdgeState& e = edge_state(a, b);
+        if (!e.evaluated || !unchanged_since(e.best)) {
+            e.best = best(a, b);
+            e.evaluated = true;
+        }
+        return e.best;
+    }
+
+    // Queues c unless an entry with the same key for the same edge is still queued. Such a duplicate
+    // changes nothing: identical keys pop one after the other, and the second finds the edge either
+    // closed (the first was accepted), in the same state (the first was dropped or re-queued with a
+    // larger key, which the second would re-queue again), or already handled (re-queued with a smaller
+    // key, which popped first and was accepted).
+    void enqueue(const Candidate& c)
+    {
+        EdgeState& e = edge_state(c.a, c.b);
+        if (e.queued && e.queued_priority == c.priority && e.queued_c == c.c)
+            return;
+        e.queued = true;
+        e.queued_priority = c.priority;
+        e.queued_c = c.c;
+        queue_.push(c);
+    }
+
     void push_best(std::uint32_t a, std::uint32_t b)
     {
-        const Candidate c = best(a, b);
+        const Candidate c = cached_best(a, b);
         if (c.c != kNone)
-            queue_.push(c);
+            enqueue(c);
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
@@ -988,11 +1165,18 @@ private:
         while (!queue_.empty()) {
             const Candidate top = queue_.top();
             queue_.pop();
-            const Candidate now = best(top.a, top.b);
+            {
+                EdgeState& e = edge_state(top.a, top.b); // a queued edge has its face
+                if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
+                    e.queued = false;
+            }
+            // best() of an edge depends only on the faces at its ends and at its candidates' apexes: if
+            // none changed since `top` was evaluated, evaluating again would give `top`.
+            const Candidate now = unchanged_since(top) ? top : cached_best(top.a, top.b);
             if (now.c == kNone)
                 continue;
             if (now.c != top.c || now.priority != top.priority) {
-                queue_.push(now);
+                enqueue(now);
                 continue;
             }
             const std::uint32_t a = top.a, b = top.b, c = top.c;
@@ -1001,6 +1185,7 @@ private:
             // usually made impossible by the faces that fill the gap first. Fallback faces never add one.
             if (!allow_handles_ && makes_handle(a, b, c)) {
                 (fallback_[top.index] ? banned_ : held_)[top.index] = true;
+                edge_state(a, b).evaluated = false; // the cached best is the candidate just set aside
                 push_best(a, b);
                 continue;
             }
@@ -1037,13 +1222,15 @@ private:
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
     std::vector<std::vector<std::uint32_t>> neighbours_;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_candidates_;
+    std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
     std::vector<bool> banned_;   // fallback candidates found to add a handle
     std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
     bool allow_handles_ = false;
     std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
     UnionFind parts_;          // connected pieces of the surface, over vertices
+    std::vector<EdgeState> edges_; // by face and edge, see edge_state
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -1148,6 +1335,37 @@ Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, 
     return out;
 }
 
+// Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per hardware
+// thread), the calling thread included. The first exception thrown is rethrown after all have ended.
+template <typename Work>
+void run_blocks(std::size_t count, std::size_t threads, const Work& work)
+{
+    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto worker = [&] {
+        for (std::size_t k = next++; k < count; k = next++) {
+            try {
+                work(k);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure)
+                    failure = std::current_exception();
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < workers; ++t)
+        pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool)
+        t.join();
+    if (failure)
+        std::rethrow_exception(failure);
+}
+
 // True when p, projected into the tile's plane, lies strictly inside its (convex) outline.
 bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 {
@@ -1174,7 +1392,8 @@ bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 // candidate only when every tile it touches proposes it (consensus): triangles that look Delaunay from
 // one tile's plane only are where the planes disagree, and taking them made folds and handles. The
 // gaps they leave are closed by hole filling.
-Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles)
+Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles,
+                            std::size_t threads)
 {
     std::vector<std::vector<std::uint32_t>> members(layout.tiles.size());
     for (std::uint32_t v = 0; v < layout.vertices.size(); ++v) {
@@ -1182,35 +1401,47 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
         if (layout.tiles[t].centre != v)
             members[t].push_back(v);
     }
-    std::vector<std::pair<Tri, std::uint32_t>> proposals; // (sorted triangle, proposing tile)
-    std::vector<Vec3> points;
-    std::vector<std::uint32_t> ids;
-    for (std::uint32_t t = 0; t < layout.tiles.size(); ++t) {
-        if (layout.tiles[t].centre == kNone)
-            continue;
-        points.clear();
-        ids.clear();
-        for (std::uint32_t v : members[t])
-            ids.push_back(v);
-        for (std::uint32_t n : tiles[t].neighbours)
-            for (std::uint32_t v : members[n])
-                ids.push_back(v);
-        for (std::uint32_t v : ids)
-            points.push_back(layout.vertices[v].position);
-        DelaunayOptions o;
-        o.projected = true;
-        o.axis_u = tiles[t].axis_u;
-        o.axis_v = tiles[t].axis_v;
-        const DelaunayTriangles dt = delaunay_triangles(points, o);
-        for (const auto& d : dt.triangles) {
-            Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
-            const auto tile_of = [&](std::uint32_t v) { return static_cast<std::uint32_t>(layout.vertices[v].tile); };
-            if (tile_of(tri[0]) != t && tile_of(tri[1]) != t && tile_of(tri[2]) != t)
+    // The tiles' triangulations are independent: blocks of tiles go to worker threads, and since the
+    // proposals are sorted afterwards (no two are equal), the result does not depend on the threads.
+    constexpr std::uint32_t kBlock = 64;
+    const auto tile_count = static_cast<std::uint32_t>(layout.tiles.size());
+    std::vector<std::vector<std::pair<Tri, std::uint32_t>>> block_proposals((tile_count + kBlock - 1) / kBlock);
+    run_blocks(block_proposals.size(), threads, [&](std::size_t block) {
+        std::vector<std::pair<Tri, std::uint32_t>>& proposals = block_proposals[block]; // (sorted triangle, tile)
+        std::vector<Vec3> points;
+        std::vector<std::uint32_t> ids;
+        const auto first = static_cast<std::uint32_t>(block * kBlock);
+        for (std::uint32_t t = first; t < std::min(tile_count, first + kBlock); ++t) {
+            if (layout.tiles[t].centre == kNone)
                 continue;
-            std::sort(tri.begin(), tri.end());
-            proposals.push_back({tri, t});
+            points.clear();
+            ids.clear();
+            for (std::uint32_t v : members[t])
+                ids.push_back(v);
+            for (std::uint32_t n : tiles[t].neighbours)
+                for (std::uint32_t v : members[n])
+                    ids.push_back(v);
+            for (std::uint32_t v : ids)
+                points.push_back(layout.vertices[v].position);
+            DelaunayOptions o;
+            o.projected = true;
+            o.axis_u = tiles[t].axis_u;
+            o.axis_v = tiles[t].axis_v;
+            const DelaunayTriangles dt = delaunay_triangles(points, o);
+            for (const auto& d : dt.triangles) {
+                Tri tri{ids[d[0]], ids[d[1]], ids[d[2]]};
+                const auto tile_of = [&](std::uint32_t v) { return static_cast<std::uint32_t>(layout.vertices[v].tile); };
+                if (tile_of(tri[0]) != t && tile_of(tri[1]) != t && tile_of(tri[2]) != t)
+                    continue;
+                std::sort(tri.begin(), tri.end());
+                proposals.push_back({tri, t});
+            }
         }
-    }
+    });
+    std::vector<std::pair<Tri, std::uint32_t>> proposals;
+    for (const auto& block : block_proposals)
+        proposals.insert(proposals.end(), block.begin(), block.end());
+    block_proposals = {};
     std::sort(proposals.begin(), proposals.end());
     Candidates out;
     for (std::size_t i = 0; i < proposals.size();) {
@@ -1744,7 +1975,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     const Pruner pruner(layout, tiles, projection, alpha, options);
     Candidates candidates;
     if (pruner.know_neighbours())
-        candidates = local_candidates(h, pruner, layout, tiles);
+        candidates = local_candidates(h, pruner, layout, tiles, options.threads);
     else
         candidates = global_candidates(pruner, delaunay_triangles(gap_points, dopt), vertex_of);
 

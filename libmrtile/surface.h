@@ -74,6 +74,9 @@ struct SurfaceOptions
     //! tiles (Tile::spacing) is a hole in the sample, not a gap between tiles, and stays open (every
     //! point lies in some tile, so gaps are about one spacing wide). 0 = no limit.
     double max_gap_width = 4.0;
+    //! Threads for the tiles' local Delaunay triangulations (0 = one per hardware thread). The result
+    //! does not depend on it.
+    std::size_t threads = 0;
 };
 
 struct SurfaceStats

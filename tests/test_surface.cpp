@@ -207,10 +207,8 @@ TEST(Surface, bunny_scan_is_valid)
     EXPECT_FALSE(r.stats.height_field_used);
 }
 
-TEST(Surface, deterministic)
+void expect_same_mesh(const Result& a, const Result& b)
 {
-    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(6000), 120);
-    const Result a = mesh_cut(fc), b = mesh_cut(fc);
     ASSERT_EQ(a.mesh.n_vertices(), b.mesh.n_vertices());
     ASSERT_EQ(a.mesh.n_faces(), b.mesh.n_faces());
     for (auto v : a.mesh.vertices())
@@ -223,6 +221,26 @@ TEST(Surface, deterministic)
             fb.push_back(v.idx());
         EXPECT_EQ(fa, fb);
     }
+}
+
+TEST(Surface, deterministic)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(6000), 120);
+    expect_same_mesh(mesh_cut(fc), mesh_cut(fc));
+}
+
+// The local triangulations run on worker threads in blocks of tiles: the mesh must not depend on how
+// many (more tiles than one block, so that several threads get work).
+TEST(Surface, same_mesh_whatever_the_thread_count)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(20000), 400);
+    SurfaceOptions one, three;
+    one.threads = 1;
+    three.threads = 3;
+    const Result a = mesh_cut(fc, one);
+    EXPECT_EQ(a.stats.refused_faces, 0u);
+    EXPECT_GT(a.mesh.n_faces(), 0u);
+    expect_same_mesh(a, mesh_cut(fc, three));
 }
 
 TEST(Surface, degenerate_cuts)
