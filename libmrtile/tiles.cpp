@@ -35,6 +35,52 @@ struct Projected
     std::uint32_t index;
 };
 
+// The fan apex's height above the centre (along the normal) that fits the fan to the tile's points in
+// least squares. A point at barycentric (λ_apex, λ_i, λ_j) in its fan triangle (apex, q_i, q_j) sees the
+// fan at height λ_apex h + λ_i z_i + λ_j z_j, so the best h is Σ λ_apex (z - λ_i z_i - λ_j z_j) / Σ λ_apex².
+// On a spherical cap this puts the apex about 1.4 sags above the rim and cuts the mean distance inside the
+// fan about threefold against an apex on the surface (a cone under a dome). Returns false when the
+// points do not determine h (all of them on the hull).
+bool fitted_apex_height(const std::vector<Projected>& pts, const std::vector<double>& heights,
+                        const std::vector<Projected>& hull, const std::vector<double>& hull_heights, double& h)
+{
+    // Hull vertices in angular order around the centre (the mean lies inside the hull).
+    const std::size_t m = hull.size();
+    std::vector<double> angle(m);
+    for (std::size_t i = 0; i < m; ++i)
+        angle[i] = std::atan2(hull[i].y, hull[i].x);
+    const std::size_t first = static_cast<std::size_t>(std::min_element(angle.begin(), angle.end()) - angle.begin());
+    std::vector<std::size_t> order(m); // hull positions by increasing angle (the hull is counter-clockwise)
+    std::vector<double> sorted(m);
+    for (std::size_t k = 0; k < m; ++k) {
+        order[k] = (first + k) % m;
+        sorted[k] = angle[order[k]];
+    }
+    double numerator = 0.0, denominator = 0.0;
+    for (std::size_t p = 0; p < pts.size(); ++p) {
+        const double a = std::atan2(pts[p].y, pts[p].x);
+        // Sector [sorted[k], sorted[k + 1]) (the last one wraps around).
+        std::size_t k = static_cast<std::size_t>(std::upper_bound(sorted.begin(), sorted.end(), a) - sorted.begin());
+        k = (k + m - 1) % m;
+        const Projected& qi = hull[order[k]];
+        const Projected& qj = hull[order[(k + 1) % m]];
+        // Barycentric coordinates of p in (origin, qi, qj).
+        const double det = qi.x * qj.y - qi.y * qj.x;
+        if (!(std::abs(det) > 0.0))
+            continue;
+        const double li = (pts[p].x * qj.y - pts[p].y * qj.x) / det;
+        const double lj = (qi.x * pts[p].y - qi.y * pts[p].x) / det;
+        const double la = std::clamp(1.0 - li - lj, 0.0, 1.0);
+        const double rest = heights[p] - li * hull_heights[order[k]] - lj * hull_heights[order[(k + 1) % m]];
+        numerator += la * rest;
+        denominator += la * la;
+    }
+    if (!(denominator > 1e-9 * static_cast<double>(pts.size())))
+        return false;
+    h = numerator / denominator;
+    return true;
+}
+
 double turn(const Projected& o, const Projected& a, const Projected& b)
 {
     return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
@@ -128,6 +174,21 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             t.apex = t.centre + t.normal * (height / static_cast<double>(used));
     }
     t.boundary = convex_hull(pts, options.collinear_tolerance);
+    if (t.has_fan() && options.fit_apex) {
+        std::vector<double> heights(pts.size());
+        for (std::size_t k = 0; k < pts.size(); ++k)
+            heights[k] = dot(h.cloud.positions[pts[k].index] - t.centre, t.normal);
+        std::vector<Projected> hull;
+        std::vector<double> hull_heights;
+        for (std::uint32_t i : t.boundary) {
+            const Vec3 d = h.cloud.positions[i] - t.centre;
+            hull.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
+            hull_heights.push_back(dot(d, t.normal));
+        }
+        double height = 0.0;
+        if (fitted_apex_height(pts, heights, hull, hull_heights, height))
+            t.apex = t.centre + t.normal * height;
+    }
     if (t.has_fan()) {
         double twice = 0.0;
         auto uv = [&](std::uint32_t i) {

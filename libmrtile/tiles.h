@@ -33,16 +33,21 @@ struct TileOptions
     //! the larger of their point spacings of the bisector plane of the two centres (the sampled surface
     //! comes that close to their Voronoi face).
     double adjacency_factor = 1.5;
+    //! Place the fan apex at the height (along the normal) that fits the fan to the tile's points in
+    //! least squares; false: the mean height of the points near the centre (on the surface).
+    bool fit_apex = true;
 };
 
 struct Tile
 {
     std::int32_t node = -1; //!< hierarchy node id
     Vec3 centre;            //!< node mean (paper §4.3 T1's fan centre; used for all tile geometry)
-    //! Where the fan's centre vertex is placed: `centre` moved along the normal to the mean height of
-    //! the points near it. The mean of a curved patch lies off the surface (below a cap, by about two
-    //! thirds of its sag); the fan then cuts through the surface, which the apex avoids. Equal to
-    //! `centre` on flat tiles.
+    //! Where the fan's centre vertex is placed: `centre` moved along the normal to the height that fits
+    //! the fan to the tile's points in least squares (TileOptions::fit_apex; otherwise the mean height
+    //! of the points near the centre). The mean of a curved patch lies below it by about two thirds of
+    //! its sag, and a fan whose apex is on the surface is a cone under a dome; the fitted apex sits
+    //! above the surface and halves the mean distance or better on curved tiles. Equal to `centre` on
+    //! flat tiles.
     Vec3 apex;
     Vec3 normal;            //!< unit PCA normal (frame.vectors[0]); its sign is the frame's, not outward
     Vec3 axis_u;            //!< unit in-plane axis (largest PCA direction)
