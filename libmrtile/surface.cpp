@@ -37,6 +37,8 @@
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
 //     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
+//  6. The ε-split points that carry no shape are collapsed into their loop neighbours (they lie on the
+//     fans' straight edges, so the fans do not change): a third to a half fewer faces, same error.
 //
 // GCC 12 at -O2 warns inside OpenMesh's PropertyT<Vec3d>::push_back that it copies a default,
 // deliberately uninitialised normal; harmless, and attributed to a standard header, so it can only be
@@ -114,6 +116,7 @@ struct SurfaceVertex
     Vec3 position;
     std::int32_t tile = -1;      // index into the tiles vector
     std::uint32_t loop_pos = kNone; // position in the tile's boundary loop; kNone for centres and fanless tiles
+    bool split = false;             // inserted on a long hull edge (step 1), not an input point
 };
 
 struct TileLoop
@@ -175,7 +178,7 @@ Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             for (std::size_t k = 1; k < pieces; ++k) {
                 const double s = static_cast<double>(k) / static_cast<double>(pieces);
                 tl.loop.push_back(static_cast<std::uint32_t>(out.vertices.size()));
-                out.vertices.push_back({a + (b - a) * s, ti, static_cast<std::uint32_t>(tl.loop.size() - 1)});
+                out.vertices.push_back({a + (b - a) * s, ti, static_cast<std::uint32_t>(tl.loop.size() - 1), true});
                 ++out.split_points;
             }
         }
@@ -1930,6 +1933,68 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 
 } // namespace
 
+// ---------------------------------------------------------------------------------------------------
+// Step 6: removing the split points that carry no shape.
+
+// Largest turn of a face when a split point is collapsed away.
+constexpr double kMaxCollapseTurnDegrees = 20.0;
+
+// The ε-splitting of step 1 puts points on long hull edges so that the gap triangles are well shaped
+// while candidates are chosen (§4.3). Once the surface is fixed, most of them carry no shape: a split
+// point lies on the straight segment between its loop neighbours, so collapsing it into one of them
+// leaves its fan exactly as it was and only re-attaches the gap faces around it. A collapse is made
+// only across a fan edge, when OpenMesh's link condition holds (the topology stays the same), and when
+// no face around the point turns by more than kMaxCollapseTurnDegrees or becomes a sliver. Returns
+// the number of points removed (the caller collects the garbage).
+std::size_t collapse_split_points(Mesh& mesh, const std::vector<bool>& is_split)
+{
+    auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+    const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
+    auto point = [&](Mesh::VertexHandle v) {
+        const Mesh::Point& p = mesh.point(v);
+        return Vec3{p[0], p[1], p[2]};
+    };
+    std::size_t removed = 0;
+    const std::size_t n = mesh.n_vertices();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Mesh::VertexHandle v(static_cast<int>(i));
+        if (!is_split[i] || mesh.status(v).deleted())
+            continue;
+        for (const Mesh::HalfedgeHandle h : mesh.voh_range(v)) {
+            const Mesh::VertexHandle w = mesh.to_vertex_handle(h);
+            const Mesh::FaceHandle left = mesh.face_handle(h), right = mesh.opposite_face_handle(h);
+            // A loop edge has the fan on one side only (the edge to the apex has it on both).
+            const bool fan_edge = (left.is_valid() && tile_of_face[left] >= 0) != (right.is_valid() && tile_of_face[right] >= 0);
+            if (!fan_edge || !mesh.is_collapse_ok(h))
+                continue;
+            bool keeps_shape = true;
+            for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
+                if (f == left || f == right)
+                    continue; // removed by the collapse
+                std::array<Vec3, 3> before, after;
+                int k = 0;
+                for (const Mesh::VertexHandle x : mesh.fv_range(f)) {
+                    before[k] = point(x);
+                    after[k] = x == v ? point(w) : point(x);
+                    ++k;
+                }
+                const Vec3 n0 = normalized(triangle_cross(before[0], before[1], before[2]));
+                const Vec3 n1 = normalized(triangle_cross(after[0], after[1], after[2]));
+                if (is_sliver(after[0], after[1], after[2]) || dot(n0, n1) < min_cos) {
+                    keeps_shape = false;
+                    break;
+                }
+            }
+            if (!keeps_shape)
+                continue;
+            mesh.collapse(h);
+            ++removed;
+            break;
+        }
+    }
+    return removed;
+}
+
 Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options, SurfaceStats* stats)
 {
     const auto start = std::chrono::steady_clock::now();
@@ -2132,11 +2197,25 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         const std::int32_t ti = face_tile[f];
         tile_of_face[fh] = ti >= 0 ? tiles[static_cast<std::size_t>(ti)].node : -1;
         gap[fh] = ti < 0;
-        if (ti >= 0)
-            ++st.fan_faces;
-        else
-            ++st.gap_faces;
     }
+    if (options.collapse_split_points) {
+        std::vector<bool> is_split(mesh.n_vertices(), false);
+        for (std::uint32_t v = 0; v < origin.size(); ++v)
+            if (used[v])
+                is_split[static_cast<std::size_t>(handle[v].idx())] = layout.vertices[origin[v]].split;
+        mesh.request_vertex_status();
+        mesh.request_edge_status();
+        mesh.request_halfedge_status();
+        mesh.request_face_status();
+        st.collapsed_split_points = collapse_split_points(mesh, is_split);
+        mesh.garbage_collection();
+        mesh.release_face_status();
+        mesh.release_halfedge_status();
+        mesh.release_edge_status();
+        mesh.release_vertex_status();
+    }
+    for (const Mesh::FaceHandle f : mesh.faces())
+        ++(gap[f] ? st.gap_faces : st.fan_faces);
     mesh.update_normals();
 
     st.tiles = tiles.size();

@@ -74,6 +74,9 @@ struct SurfaceOptions
     //! tiles (Tile::spacing) is a hole in the sample, not a gap between tiles, and stays open (every
     //! point lies in some tile, so gaps are about one spacing wide). 0 = no limit.
     double max_gap_width = 4.0;
+    //! After assembly, collapse the ε-split points that carry no shape into their loop neighbours (the
+    //! fans stay exactly as they were; gap faces re-attach; topology unchanged). Fewer faces, same error.
+    bool collapse_split_points = true;
     //! Threads for the tiles' local Delaunay triangulations (0 = one per hardware thread). The result
     //! does not depend on it.
     std::size_t threads = 0;
@@ -93,6 +96,7 @@ struct SurfaceStats
     std::size_t hole_faces = 0;      //!< faces added by hole filling (part of gap_faces)
     std::size_t boundary_loops = 0;  //!< boundary loops left open
     std::size_t split_vertices = 0;  //!< pinched vertices duplicated to keep the mesh manifold
+    std::size_t collapsed_split_points = 0; //!< ε-split points removed after assembly
     std::size_t components = 0;
     //! Tiles whose fan ended up alone while their neighbours' surface closed over them (left out).
     std::size_t dropped_fans = 0;

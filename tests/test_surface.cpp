@@ -421,6 +421,28 @@ TEST(Surface, real_cuts_of_the_rocker_arm_have_genus_1)
     }
 }
 
+// Collapsing the ε-split points after assembly: far fewer faces on a coarse cut (long hull edges carry
+// many split points), the same closed torus, and the same distances (a split point lies on its fan's
+// straight edge, so the fans do not change).
+TEST(Surface, collapsing_split_points_keeps_shape_and_topology)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(40000));
+    SurfaceOptions keep;
+    keep.collapse_split_points = false;
+    const Result collapsed = mesh_real_cut(h, 0.005);
+    const Result kept = mesh_real_cut(h, 0.005, keep);
+    expect_closed(collapsed, 1);
+    expect_closed(kept, 1);
+    EXPECT_GT(collapsed.stats.collapsed_split_points, 0u);
+    EXPECT_EQ(kept.stats.collapsed_split_points, 0u);
+    EXPECT_EQ(kept.mesh.n_faces(), collapsed.mesh.n_faces() + 2 * collapsed.stats.collapsed_split_points);
+    EXPECT_LT(collapsed.mesh.n_faces(), 0.7 * static_cast<double>(kept.mesh.n_faces()));
+    const DistanceStats a = point_to_mesh_distance(h.cloud.positions, collapsed.mesh);
+    const DistanceStats b = point_to_mesh_distance(h.cloud.positions, kept.mesh);
+    EXPECT_LT(a.mean, 1.03 * b.mean);
+    EXPECT_LT(a.max, 1.10 * b.max);
+}
+
 // An open sample keeps exactly its border open: the height field's square outline is the one loop,
 // whether meshed as a height field (2D Delaunay) or in 3D.
 TEST(Surface, real_cuts_of_a_height_field_have_one_border_loop)
