@@ -135,8 +135,9 @@ DracoEncoded encode_draco(const MeshBuffers& buffers, const DracoOptions& option
         for (std::size_t i = 0; i < buffers.positions.size(); ++i) {
             const float v = buffers.positions[i];
             if (!(v >= 0.0f && v <= range))
-                throw InvalidInput("DracoOptions::grid: vertex " + std::to_string(i / 3) +
-                                   " lies outside the explicit quantization cube");
+                throw InvalidInput("DracoOptions::grid: vertex " + std::to_string(i / 3) + " lies outside the explicit " +
+                                   "quantization cube (coordinate " + std::to_string(v) + " not in [0, " +
+                                   std::to_string(range) + "])");
         }
         const float grid_origin[3] = {0.0f, 0.0f, 0.0f};
         encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3,

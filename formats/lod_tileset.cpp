@@ -27,9 +27,12 @@ void write_lod_tileset(const LodSet& set, const Vec3& origin, const std::filesys
         throw InvalidInput(dir.string() + ": the LOD set has no tiles (was it made with tileset = false?)");
     if (options.gltf.draco && !options.gltf.draco_options.grid) {
         const BoundingBox& root = set.tiles[0].box;
+        // Padded by a millionth of the side: positions reach the encoder as floats relative to the
+        // grid, and a vertex on the box's face may round to just outside it.
+        const double side = std::max(root.largest_side(), 1e-12);
         QuantizationGrid grid;
-        grid.min = root.min;
-        grid.range = std::max(root.largest_side(), 1e-12);
+        grid.min = root.min - Vec3{1, 1, 1} * (1e-6 * side);
+        grid.range = side * (1.0 + 2e-6);
         options.gltf.draco_options.grid = grid;
     }
     write_3d_tiles(tileset_tiles(set), origin, dir, options);

@@ -1939,14 +1939,46 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 // Largest turn of a face when a split point is collapsed away.
 constexpr double kMaxCollapseTurnDegrees = 20.0;
 
+// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0)
+        return distance(p, a);
+    const Vec3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3)
+        return distance(p, b);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0)
+        return distance(p, a + ab * (d1 / (d1 - d3)));
+    const Vec3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6)
+        return distance(p, c);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0)
+        return distance(p, a + ac * (d2 / (d2 - d6)));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return distance(p, b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    const double denom = 1.0 / (va + vb + vc);
+    return distance(p, a + ab * (vb * denom) + ac * (vc * denom));
+}
+
 // The ε-splitting of step 1 puts points on long hull edges so that the gap triangles are well shaped
 // while candidates are chosen (§4.3). Once the surface is fixed, most of them carry no shape: a split
 // point lies on the straight segment between its loop neighbours, so collapsing it into one of them
-// leaves its fan exactly as it was and only re-attaches the gap faces around it. A collapse is made
-// only across a fan edge, when OpenMesh's link condition holds (the topology stays the same), and when
-// no face around the point turns by more than kMaxCollapseTurnDegrees or becomes a sliver. Returns
-// the number of points removed (the caller collects the garbage).
-std::size_t collapse_split_points(Mesh& mesh, const std::vector<bool>& is_split)
+// leaves its fan exactly as it was and only re-attaches the gap faces around it. Loop points that are
+// input points are collapsed too when the surface moves by at most their `slack` (the rim of a large
+// tile holds many nearly collinear hull points: they cost faces and carry little shape). A collapse is
+// made only across a fan edge, when OpenMesh's link condition holds (the topology stays the same),
+// when no face around the point turns by more than kMaxCollapseTurnDegrees or becomes a sliver, and
+// when no neighbour of the point was moved by an earlier collapse of an input point (so the error
+// does not add up).
+// Returns the number of points removed (the caller collects the garbage).
+std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
@@ -1956,18 +1988,21 @@ std::size_t collapse_split_points(Mesh& mesh, const std::vector<bool>& is_split)
     };
     std::size_t removed = 0;
     const std::size_t n = mesh.n_vertices();
+    std::vector<bool> touched(n, false);
     for (std::size_t i = 0; i < n; ++i) {
         const Mesh::VertexHandle v(static_cast<int>(i));
-        if (!is_split[i] || mesh.status(v).deleted())
+        if (!(slack[i] >= 0.0) || touched[i] || mesh.status(v).deleted())
             continue;
+        const Vec3 at = point(v);
         for (const Mesh::HalfedgeHandle h : mesh.voh_range(v)) {
             const Mesh::VertexHandle w = mesh.to_vertex_handle(h);
             const Mesh::FaceHandle left = mesh.face_handle(h), right = mesh.opposite_face_handle(h);
             // A loop edge has the fan on one side only (the edge to the apex has it on both).
             const bool fan_edge = (left.is_valid() && tile_of_face[left] >= 0) != (right.is_valid() && tile_of_face[right] >= 0);
-            if (!fan_edge || !mesh.is_collapse_ok(h))
+            if (!fan_edge || touched[static_cast<std::size_t>(w.idx())] || !mesh.is_collapse_ok(h))
                 continue;
             bool keeps_shape = true;
+            double moved = std::numeric_limits<double>::infinity();
             for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
                 if (f == left || f == right)
                     continue; // removed by the collapse
@@ -1984,9 +2019,13 @@ std::size_t collapse_split_points(Mesh& mesh, const std::vector<bool>& is_split)
                     keeps_shape = false;
                     break;
                 }
+                moved = std::min(moved, point_triangle_distance(at, after[0], after[1], after[2]));
             }
-            if (!keeps_shape)
+            if (!keeps_shape || !(moved <= slack[i]))
                 continue;
+            if (std::isfinite(slack[i])) // a split point moves nothing: its neighbours stay free
+                for (const Mesh::VertexHandle x : mesh.vv_range(v))
+                    touched[static_cast<std::size_t>(x.idx())] = true;
             mesh.collapse(h);
             ++removed;
             break;
@@ -2199,15 +2238,31 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         gap[fh] = ti < 0;
     }
     if (options.collapse_split_points) {
-        std::vector<bool> is_split(mesh.n_vertices(), false);
-        for (std::uint32_t v = 0; v < origin.size(); ++v)
-            if (used[v])
-                is_split[static_cast<std::size_t>(handle[v].idx())] = layout.vertices[origin[v]].split;
+        // Split points may go wherever the shape allows (they carry none); input points on a loop
+        // within collapse_tolerance × their tile's RMS plane distance; apexes and fanless points never.
+        std::vector<double> slack(mesh.n_vertices(), -1.0);
+        for (std::uint32_t v = 0; v < origin.size(); ++v) {
+            if (!used[v])
+                continue;
+            const SurfaceVertex& sv = layout.vertices[origin[v]];
+            const auto t = static_cast<std::size_t>(sv.tile);
+            double& out = slack[static_cast<std::size_t>(handle[v].idx())];
+            if (sv.split)
+                out = std::numeric_limits<double>::infinity();
+            else if (sv.loop_pos != kNone)
+                out = options.collapse_tolerance * h.nodes[static_cast<std::size_t>(tiles[t].node)].rms_plane_distance;
+        }
         mesh.request_vertex_status();
         mesh.request_edge_status();
         mesh.request_halfedge_status();
         mesh.request_face_status();
-        st.collapsed_split_points = collapse_split_points(mesh, is_split);
+        // Split points first (they move nothing), then the input points on what is left of the loops.
+        std::vector<double> split_only(slack.size(), -1.0);
+        for (std::size_t i = 0; i < slack.size(); ++i)
+            if (std::isinf(slack[i]))
+                std::swap(split_only[i], slack[i]);
+        st.collapsed_split_points = collapse_loop_points(mesh, split_only);
+        st.collapsed_split_points += collapse_loop_points(mesh, slack);
         mesh.garbage_collection();
         mesh.release_face_status();
         mesh.release_halfedge_status();

@@ -77,6 +77,9 @@ struct SurfaceOptions
     //! After assembly, collapse the ε-split points that carry no shape into their loop neighbours (the
     //! fans stay exactly as they were; gap faces re-attach; topology unchanged). Fewer faces, same error.
     bool collapse_split_points = true;
+    //! With collapse_split_points, loop points that are input points are collapsed too when the surface
+    //! moves by at most this × their tile's RMS plane distance (0 = split points only).
+    double collapse_tolerance = 0.5;
     //! Threads for the tiles' local Delaunay triangulations (0 = one per hardware thread). The result
     //! does not depend on it.
     std::size_t threads = 0;
