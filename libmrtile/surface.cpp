@@ -732,6 +732,15 @@ private:
         return normalized(triangle_cross(position(a), position(b), position(c)));
     }
 
+    // face_normal of surface face f, computed once (faces are never removed while the front runs).
+    const Vec3& surface_normal(std::uint32_t f) const
+    {
+        const auto& faces = surface_.faces();
+        for (std::size_t g = face_normals_.size(); g < faces.size(); ++g)
+            face_normals_.push_back(face_normal(faces[g][0], faces[g][1], faces[g][2]));
+        return face_normals_[f];
+    }
+
     Vec3 vertex_normal(std::uint32_t v) const
     {
         Vec3 n;
@@ -790,16 +799,15 @@ private:
         const std::uint32_t f = surface_.face_of(a, b);
         if (f == kNone || surface_.has_halfedge(b, a))
             return out;
-        const Tri& s = surface_.faces()[f];
-        const Vec3 ns = face_normal(s[0], s[1], s[2]);
+        const Vec3 ns = surface_normal(f);
         for (std::uint32_t r = row_start_[a]; r < row_start_[a + 1]; ++r) {
             if (rows_[r].first != b)
                 continue;
             const std::uint32_t index = rows_[r].second;
             const Tri& cand = candidates_[index];
             const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
-            if (!surface_.can_add(b, a, c))
-                continue;
+            // The geometric tests and the priority come first: they do not depend on the surface, and a
+            // candidate that cannot beat the best one so far need not be checked against it.
             const Vec3 nt = face_normal(b, a, c);
             if (squared_norm(nt) == 0.0)
                 continue;
@@ -808,6 +816,11 @@ private:
                 continue;
             const double turn = dot(ns, nt);
             if (turn < min_cos_)
+                continue;
+            const double p = relative_radius_[index] * (2.0 - turn);
+            if (!(p < out.priority || (p == out.priority && c < out.c)))
+                continue;
+            if (!surface_.can_add(b, a, c))
                 continue;
             if (!folds_ok(a, c, nt) || !folds_ok(c, b, nt))
                 continue;
@@ -818,11 +831,8 @@ private:
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
-            const double p = relative_radius_[index] * (2.0 - turn);
-            if (p < out.priority || (p == out.priority && c < out.c)) {
-                out.priority = p;
-                out.c = c;
-            }
+            out.priority = p;
+            out.c = c;
         }
         return out;
     }
@@ -893,8 +903,7 @@ private:
         const std::uint32_t g = surface_.face_of(y, x);
         if (g == kNone)
             return true;
-        const Tri& t = surface_.faces()[g];
-        return dot(face_normal(t[0], t[1], t[2]), nt) >= min_cos_;
+        return dot(surface_normal(g), nt) >= min_cos_;
     }
 
     // Whether no face changed at the ends of c's edge or at any apex of its candidates after c was
@@ -1039,6 +1048,7 @@ private:
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
+    mutable std::vector<Vec3> face_normals_; // see surface_normal
 };
 
 // ---------------------------------------------------------------------------------------------------
