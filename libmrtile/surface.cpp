@@ -679,8 +679,7 @@ public:
         : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), orientation_(orientation),
           candidates_(candidates),
           relative_radius_(relative_radius), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
-          placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
-          neighbours_(layout.vertices.size())
+          placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size())
     {
         // Candidates by vertex (compressed rows, candidate order within a row): for every edge (u, w) of
         // candidate i, the entry {w, i} in u's row and {u, i} in w's. Looking up an edge scans one short
@@ -700,8 +699,6 @@ public:
                 const std::uint32_t u = t[k], w = t[(k + 1) % 3];
                 rows_[fill[u]++] = {w, i};
                 rows_[fill[w]++] = {u, i};
-                neighbours_[u].push_back(w);
-                neighbours_[w].push_back(u);
             }
         }
     }
@@ -763,8 +760,8 @@ private:
             return orientation_[t];
         double vote = 0.0;
         for (std::uint32_t v : layout_.tiles[t].loop)
-            for (std::uint32_t w : neighbours_[v])
-                if (surface_.on_surface(w))
+            for (std::uint32_t r = row_start_[v]; r < row_start_[v + 1]; ++r) // v's candidate neighbours
+                if (const std::uint32_t w = rows_[r].first; surface_.on_surface(w))
                     vote += dot(vertex_normal(w), n);
         return vote >= 0 ? 1 : -1;
     }
@@ -926,36 +923,41 @@ private:
     // the entry last pushed for it while that entry is still queued.
     struct EdgeState
     {
-        Candidate best{0.0, kNone, kNone, kNone, 0};
+        double best_priority = 0.0;
+        double queued_priority = 0.0;
+        std::uint64_t best_clock = 0;
+        std::uint32_t best_c = kNone;
+        std::uint32_t queued_c = kNone;
         bool evaluated = false;
         bool queued = false;
-        double queued_priority = 0.0;
-        std::uint32_t queued_c = kNone;
     };
 
-    EdgeState& edge_state(std::uint32_t a, std::uint32_t b)
+    // The state of front half-edge a -> b, or nullptr when no face has that half-edge.
+    EdgeState* edge_state(std::uint32_t a, std::uint32_t b)
     {
         const std::uint32_t f = surface_.face_of(a, b);
-        assert(f != kNone);
+        if (f == kNone)
+            return nullptr;
         const Tri& t = surface_.faces()[f];
         const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
         if (slot >= edges_.size())
             edges_.resize(3 * surface_.faces().size());
-        return edges_[slot];
+        return &edges_[slot];
     }
 
-    // best(a, b), reusing the last result for the edge while nothing it depends on changed (see
-    // unchanged_since): refreshes around a new face ask for the same edges several times.
-    Candidate cached_best(std::uint32_t a, std::uint32_t b)
+    // best(a, b) for the edge with state e, reusing the last result while nothing it depends on changed
+    // (see unchanged_since): refreshes around a new face and pops ask for the same edges several times.
+    Candidate cached_best(EdgeState& e, std::uint32_t a, std::uint32_t b) const
     {
-        if (!surface_.has_halfedge(a, b))
-            return best(a, b);
-        EdgeState& e = edge_state(a, b);
-        if (!e.evaluated || !unchanged_since(e.best)) {
-            e.best = best(a, b);
+        Candidate c{e.best_priority, a, b, e.best_c, e.best_clock};
+        if (!e.evaluated || !unchanged_since(c)) {
+            c = best(a, b);
+            e.best_priority = c.priority;
+            e.best_c = c.c;
+            e.best_clock = c.clock;
             e.evaluated = true;
         }
-        return e.best;
+        return c;
     }
 
     // Queues c unless an entry with the same key for the same edge is still queued. Such a duplicate
@@ -963,9 +965,8 @@ private:
     // closed (the first was accepted), in the same state (the first was dropped or re-queued with a
     // larger key, which the second would re-queue again), or already handled (re-queued with a smaller
     // key, which popped first and was accepted).
-    void enqueue(const Candidate& c)
+    void enqueue(EdgeState& e, const Candidate& c)
     {
-        EdgeState& e = edge_state(c.a, c.b);
         if (e.queued && e.queued_priority == c.priority && e.queued_c == c.c)
             return;
         e.queued = true;
@@ -976,9 +977,12 @@ private:
 
     void push_best(std::uint32_t a, std::uint32_t b)
     {
-        const Candidate c = cached_best(a, b);
+        EdgeState* e = edge_state(a, b);
+        if (e == nullptr)
+            return; // not a front edge: best(a, b) has no candidate
+        const Candidate c = cached_best(*e, a, b);
         if (c.c != kNone)
-            enqueue(c);
+            enqueue(*e, c);
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
@@ -999,18 +1003,15 @@ private:
         while (!queue_.empty()) {
             const Candidate top = queue_.top();
             queue_.pop();
-            {
-                EdgeState& e = edge_state(top.a, top.b); // a queued edge has its face
-                if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
-                    e.queued = false;
-            }
-            // best() of an edge depends only on the faces at its ends and at its candidates' apexes: if
-            // none changed since `top` was evaluated, evaluating again would give `top`.
-            const Candidate now = unchanged_since(top) ? top : cached_best(top.a, top.b);
+            EdgeState& e = *edge_state(top.a, top.b); // a queued edge has its face (faces stay)
+            if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
+                e.queued = false;
+            // The edge's best candidate now (`top` itself if nothing changed since it was evaluated).
+            const Candidate now = cached_best(e, top.a, top.b);
             if (now.c == kNone)
                 continue;
             if (now.c != top.c || now.priority != top.priority) {
-                enqueue(now);
+                enqueue(e, now);
                 continue;
             }
             const std::uint32_t a = top.a, b = top.b, c = top.c;
@@ -1043,7 +1044,6 @@ private:
     double min_cos_;
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
-    std::vector<std::vector<std::uint32_t>> neighbours_;
     std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
@@ -1872,10 +1872,16 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
     std::vector<Mesh::VertexHandle> handle(origin.size());
     std::vector<bool> used(origin.size(), false);
+    std::size_t kept_faces = 0;
     for (std::uint32_t f = 0; f < face_count; ++f)
-        if (!dropped[components.find(f)])
+        if (!dropped[components.find(f)]) {
+            ++kept_faces;
             for (std::uint32_t v : faces[f])
                 used[v] = true;
+        }
+    // Reserve OpenMesh's arrays once instead of growing them face by face (an edge per 1.5 faces, plus
+    // some for borders).
+    mesh.reserve(static_cast<std::size_t>(std::count(used.begin(), used.end(), true)), kept_faces * 3 / 2 + 64, kept_faces);
     for (std::uint32_t v = 0; v < origin.size(); ++v) {
         if (!used[v])
             continue;
