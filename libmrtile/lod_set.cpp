@@ -32,6 +32,10 @@ struct LevelIndex
     std::vector<std::size_t> faces_below;
     // True for nodes of the cut and their ancestors (regions may not go below the cut).
     std::vector<char> at_or_above_cut;
+    // Faces with an owner, ordered by the owner's first point (then by face): the faces of the cut
+    // nodes inside a region [begin, end) are among one contiguous run of it, so extracting a region
+    // does not scan the whole level.
+    std::vector<std::uint32_t> faces_by_owner;
 };
 
 double level_max_plane_distance(const Hierarchy& h, const Cut& cut)
@@ -80,6 +84,12 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level)
         if (owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size())
             ++index.faces_below[static_cast<std::size_t>(owner)];
     }
+    for (std::size_t f = 0; f < index.face_owner.size(); ++f)
+        if (index.face_owner[f] >= 0 && static_cast<std::size_t>(index.face_owner[f]) < h.nodes.size())
+            index.faces_by_owner.push_back(static_cast<std::uint32_t>(f));
+    auto first_point = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
+    std::stable_sort(index.faces_by_owner.begin(), index.faces_by_owner.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return first_point(a) < first_point(b); });
     for (std::int32_t id : level.cut)
         index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
     // Children come after parents: accumulate upwards.
@@ -104,11 +114,21 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     Mesh out;
     std::vector<int> map(src.n_vertices(), -1);
     std::vector<char> selected(src.n_faces(), 0);
-    for (const auto f : src.faces()) {
-        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
-        if (owner < 0 || !inside(region, h.nodes[static_cast<std::size_t>(owner)]))
-            continue;
-        selected[static_cast<std::size_t>(f.idx())] = 1;
+    // The faces owned by nodes inside the region, in face order: an owner inside the region starts in
+    // it, so they are among the run of faces_by_owner whose owners start in [region.begin, region.end).
+    auto owner_begin = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
+    const auto run_begin = std::partition_point(index.faces_by_owner.begin(), index.faces_by_owner.end(),
+                                                [&](std::uint32_t f) { return owner_begin(f) < region.begin; });
+    const auto run_end = std::partition_point(run_begin, index.faces_by_owner.end(),
+                                              [&](std::uint32_t f) { return owner_begin(f) < region.end; });
+    std::vector<std::uint32_t> faces;
+    for (auto it = run_begin; it != run_end; ++it)
+        if (inside(region, h.nodes[static_cast<std::size_t>(index.face_owner[*it])]))
+            faces.push_back(*it);
+    std::sort(faces.begin(), faces.end());
+    for (const std::uint32_t fi : faces) {
+        const Mesh::FaceHandle f(static_cast<int>(fi));
+        selected[fi] = 1;
         std::array<Mesh::VertexHandle, 3> vs;
         int k = 0;
         for (const auto v : src.fv_range(f)) {
@@ -149,7 +169,14 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         }
         return Mesh::VertexHandle(l);
     };
-    for (const auto he : src.halfedges()) {
+    // The half-edges of the selected faces, in half-edge order (as a scan of all half-edges would meet them).
+    std::vector<int> inner;
+    for (const std::uint32_t fi : faces)
+        for (const auto he : src.fh_range(Mesh::FaceHandle(static_cast<int>(fi))))
+            inner.push_back(he.idx());
+    std::sort(inner.begin(), inner.end());
+    for (const int hi : inner) {
+        const Mesh::HalfedgeHandle he(hi);
         const auto f = src.face_handle(he);
         const auto g = src.opposite_face_handle(he);
         if (!f.is_valid() || !g.is_valid())

@@ -779,7 +779,7 @@ public:
           orientation_(orientation), candidates_(candidates.triangles), relative_radius_(candidates.relative_radius),
           fallback_(candidates.fallback), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
           placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
-          neighbours_(layout.vertices.size()), banned_(candidates.triangles.size(), false),
+          banned_(candidates.triangles.size(), false),
           held_(candidates.triangles.size(), false), rescuing_(candidates.triangles.size(), false),
           parts_(layout.vertices.size())
     {
@@ -802,8 +802,6 @@ public:
                 const std::uint32_t u = t[k], w = t[(k + 1) % 3];
                 rows_[fill[u]++] = {w, i};
                 rows_[fill[w]++] = {u, i};
-                neighbours_[u].push_back(w);
-                neighbours_[w].push_back(u);
             }
         }
     }
@@ -865,6 +863,15 @@ private:
         return normalized(triangle_cross(position(a), position(b), position(c)));
     }
 
+    // face_normal of surface face f, computed once (faces are never removed while the front runs).
+    const Vec3& surface_normal(std::uint32_t f) const
+    {
+        const auto& faces = surface_.faces();
+        for (std::size_t g = face_normals_.size(); g < faces.size(); ++g)
+            face_normals_.push_back(face_normal(faces[g][0], faces[g][1], faces[g][2]));
+        return face_normals_[f];
+    }
+
     Vec3 vertex_normal(std::uint32_t v) const
     {
         Vec3 n;
@@ -887,8 +894,8 @@ private:
             return orientation_[t];
         double vote = 0.0;
         for (std::uint32_t v : layout_.tiles[t].loop)
-            for (std::uint32_t w : neighbours_[v])
-                if (surface_.on_surface(w))
+            for (std::uint32_t r = row_start_[v]; r < row_start_[v + 1]; ++r) // v's candidate neighbours
+                if (const std::uint32_t w = rows_[r].first; surface_.on_surface(w))
                     vote += dot(vertex_normal(w), n);
         return vote >= 0 ? 1 : -1;
     }
@@ -924,8 +931,7 @@ private:
         const std::uint32_t f = surface_.face_of(a, b);
         if (f == kNone || surface_.has_halfedge(b, a))
             return out;
-        const Tri& s = surface_.faces()[f];
-        const Vec3 ns = face_normal(s[0], s[1], s[2]);
+        const Vec3 ns = surface_normal(f);
         for (std::uint32_t r = row_start_[a]; r < row_start_[a + 1]; ++r) {
             if (rows_[r].first != b)
                 continue;
@@ -934,8 +940,8 @@ private:
                 continue;
             const Tri& cand = candidates_[index];
             const std::uint32_t c = cand[0] != a && cand[0] != b ? cand[0] : (cand[1] != a && cand[1] != b ? cand[1] : cand[2]);
-            if (!surface_.can_add(b, a, c))
-                continue;
+            // The geometric tests and the priority come first: they do not depend on the surface, and a
+            // candidate that cannot beat the best one so far need not be checked against it.
             const Vec3 nt = face_normal(b, a, c);
             if (squared_norm(nt) == 0.0)
                 continue;
@@ -944,6 +950,11 @@ private:
                 continue;
             const double turn = dot(ns, nt);
             if (turn < min_cos_)
+                continue;
+            const double p = relative_radius_[index] * (2.0 - turn) + (fallback_[index] ? kFallbackRank : 0.0);
+            if (!(p < out.priority || (p == out.priority && c < out.c)))
+                continue;
+            if (!surface_.can_add(b, a, c))
                 continue;
             if (!folds_ok(a, c, nt) || !folds_ok(c, b, nt))
                 continue;
@@ -954,12 +965,9 @@ private:
             // Gluing onto a vertex whose surface faces the other way could never close consistently.
             if (surface_.on_surface(c) && dot(vertex_normal(c), nt) < 0.0)
                 continue;
-            const double p = relative_radius_[index] * (2.0 - turn) + (fallback_[index] ? kFallbackRank : 0.0);
-            if (p < out.priority || (p == out.priority && c < out.c)) {
-                out.priority = p;
-                out.c = c;
-                out.index = index;
-            }
+            out.priority = p;
+            out.c = c;
+            out.index = index;
         }
         return out;
     }
@@ -1030,8 +1038,7 @@ private:
         const std::uint32_t g = surface_.face_of(y, x);
         if (g == kNone)
             return true;
-        const Tri& t = surface_.faces()[g];
-        return dot(face_normal(t[0], t[1], t[2]), nt) >= min_cos_;
+        return dot(surface_normal(g), nt) >= min_cos_;
     }
 
     // Whether face (b, a, c) on the front half-edge a -> b would join two different boundary loops of
@@ -1095,36 +1102,43 @@ private:
     // the entry last pushed for it while that entry is still queued.
     struct EdgeState
     {
-        Candidate best{0.0, kNone, kNone, kNone, kNone, 0};
+        double best_priority = 0.0;
+        double queued_priority = 0.0;
+        std::uint64_t best_clock = 0;
+        std::uint32_t best_c = kNone;
+        std::uint32_t queued_c = kNone;
+        std::uint32_t best_index = kNone;
         bool evaluated = false;
         bool queued = false;
-        double queued_priority = 0.0;
-        std::uint32_t queued_c = kNone;
     };
 
-    EdgeState& edge_state(std::uint32_t a, std::uint32_t b)
+    // The state of front half-edge a -> b, or nullptr when no face has that half-edge.
+    EdgeState* edge_state(std::uint32_t a, std::uint32_t b)
     {
         const std::uint32_t f = surface_.face_of(a, b);
-        assert(f != kNone);
+        if (f == kNone)
+            return nullptr;
         const Tri& t = surface_.faces()[f];
         const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
         if (slot >= edges_.size())
             edges_.resize(3 * surface_.faces().size());
-        return edges_[slot];
+        return &edges_[slot];
     }
 
-    // best(a, b), reusing the last result for the edge while nothing it depends on changed (see
-    // unchanged_since): refreshes around a new face ask for the same edges several times.
-    Candidate cached_best(std::uint32_t a, std::uint32_t b)
+    // best(a, b) for the edge with state e, reusing the last result while nothing it depends on changed
+    // (see unchanged_since): refreshes around a new face and pops ask for the same edges several times.
+    Candidate cached_best(EdgeState& e, std::uint32_t a, std::uint32_t b) const
     {
-        if (!surface_.has_halfedge(a, b))
-            return best(a, b);
-        EdgeState& e = edge_state(a, b);
-        if (!e.evaluated || !unchanged_since(e.best)) {
-            e.best = best(a, b);
+        Candidate c{e.best_priority, a, b, e.best_c, e.best_index, e.best_clock};
+        if (!e.evaluated || !unchanged_since(c)) {
+            c = best(a, b);
+            e.best_priority = c.priority;
+            e.best_c = c.c;
+            e.best_index = c.index;
+            e.best_clock = c.clock;
             e.evaluated = true;
         }
-        return e.best;
+        return c;
     }
 
     // Queues c unless an entry with the same key for the same edge is still queued. Such a duplicate
@@ -1132,9 +1146,8 @@ private:
     // closed (the first was accepted), in the same state (the first was dropped or re-queued with a
     // larger key, which the second would re-queue again), or already handled (re-queued with a smaller
     // key, which popped first and was accepted).
-    void enqueue(const Candidate& c)
+    void enqueue(EdgeState& e, const Candidate& c)
     {
-        EdgeState& e = edge_state(c.a, c.b);
         if (e.queued && e.queued_priority == c.priority && e.queued_c == c.c)
             return;
         e.queued = true;
@@ -1145,9 +1158,12 @@ private:
 
     void push_best(std::uint32_t a, std::uint32_t b)
     {
-        const Candidate c = cached_best(a, b);
+        EdgeState* e = edge_state(a, b);
+        if (e == nullptr)
+            return; // not a front edge: best(a, b) has no candidate
+        const Candidate c = cached_best(*e, a, b);
         if (c.c != kNone)
-            enqueue(c);
+            enqueue(*e, c);
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
@@ -1168,18 +1184,15 @@ private:
         while (!queue_.empty()) {
             const Candidate top = queue_.top();
             queue_.pop();
-            {
-                EdgeState& e = edge_state(top.a, top.b); // a queued edge has its face
-                if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
-                    e.queued = false;
-            }
-            // best() of an edge depends only on the faces at its ends and at its candidates' apexes: if
-            // none changed since `top` was evaluated, evaluating again would give `top`.
-            const Candidate now = unchanged_since(top) ? top : cached_best(top.a, top.b);
+            EdgeState& e = *edge_state(top.a, top.b); // a queued edge has its face (faces stay)
+            if (e.queued && e.queued_priority == top.priority && e.queued_c == top.c)
+                e.queued = false;
+            // The edge's best candidate now (`top` itself if nothing changed since it was evaluated).
+            const Candidate now = cached_best(e, top.a, top.b);
             if (now.c == kNone)
                 continue;
             if (now.c != top.c || now.priority != top.priority) {
-                enqueue(now);
+                enqueue(e, now);
                 continue;
             }
             const std::uint32_t a = top.a, b = top.b, c = top.c;
@@ -1188,7 +1201,7 @@ private:
             // usually made impossible by the faces that fill the gap first. Fallback faces never add one.
             if (!allow_handles_ && makes_handle(a, b, c)) {
                 (fallback_[top.index] ? banned_ : held_)[top.index] = true;
-                edge_state(a, b).evaluated = false; // the cached best is the candidate just set aside
+                e.evaluated = false; // the cached best is the candidate just set aside
                 push_best(a, b);
                 continue;
             }
@@ -1224,7 +1237,6 @@ private:
     double min_cos_;
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
-    std::vector<std::vector<std::uint32_t>> neighbours_;
     std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
@@ -1234,6 +1246,7 @@ private:
     std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
     UnionFind parts_;          // connected pieces of the surface, over vertices
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
+    mutable std::vector<Vec3> face_normals_; // see surface_normal
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -2200,10 +2213,16 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
     std::vector<Mesh::VertexHandle> handle(origin.size());
     std::vector<bool> used(origin.size(), false);
+    std::size_t kept_faces = 0;
     for (std::uint32_t f = 0; f < face_count; ++f)
-        if (!dropped[components.find(f)])
+        if (!dropped[components.find(f)]) {
+            ++kept_faces;
             for (std::uint32_t v : faces[f])
                 used[v] = true;
+        }
+    // Reserve OpenMesh's arrays once instead of growing them face by face (an edge per 1.5 faces, plus
+    // some for borders).
+    mesh.reserve(static_cast<std::size_t>(std::count(used.begin(), used.end(), true)), kept_faces * 3 / 2 + 64, kept_faces);
     for (std::uint32_t v = 0; v < origin.size(); ++v) {
         if (!used[v])
             continue;
