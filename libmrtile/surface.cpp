@@ -1949,8 +1949,10 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 // ---------------------------------------------------------------------------------------------------
 // Step 6: removing the split points that carry no shape.
 
-// Largest turn of a face when a split point is collapsed away.
+// Largest turn of a fan face when a loop point is collapsed away; a gap face (thin, its normal is noise)
+// only has to stay within 75 degrees of the surface around the point.
 constexpr double kMaxCollapseTurnDegrees = 20.0;
+const double kMinGapFaceCos = std::cos(75.0 * kPi / 180.0);
 
 // Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
 double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
@@ -1991,7 +1993,7 @@ double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 // when no neighbour of the point was moved by an earlier collapse of an input point (so the error
 // does not add up).
 // Returns the number of points removed (the caller collects the garbage).
-std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack)
+std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const Projection& projection)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
@@ -2007,6 +2009,15 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack)
         if (!(slack[i] >= 0.0) || touched[i] || mesh.status(v).deleted())
             continue;
         const Vec3 at = point(v);
+        Vec3 around;
+        for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
+            std::array<Vec3, 3> p;
+            int k = 0;
+            for (const Mesh::VertexHandle x : mesh.fv_range(f))
+                p[k++] = point(x);
+            around += triangle_cross(p[0], p[1], p[2]);
+        }
+        around = normalized(around);
         for (const Mesh::HalfedgeHandle h : mesh.voh_range(v)) {
             const Mesh::VertexHandle w = mesh.to_vertex_handle(h);
             const Mesh::FaceHandle left = mesh.face_handle(h), right = mesh.opposite_face_handle(h);
@@ -2028,7 +2039,11 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack)
                 }
                 const Vec3 n0 = normalized(triangle_cross(before[0], before[1], before[2]));
                 const Vec3 n1 = normalized(triangle_cross(after[0], after[1], after[2]));
-                if (is_sliver(after[0], after[1], after[2]) || dot(n0, n1) < min_cos) {
+                // A gap face in the one-spacing strip between tiles is thin and its normal is noise:
+                // it must not fold against the surface around the point; a fan face must keep its turn.
+                const bool folds = (tile_of_face[f] < 0 ? dot(n1, around) < kMinGapFaceCos : dot(n0, n1) < min_cos) ||
+                                   (projection.used && !(dot(n1, projection.axis) > 0.0)); // a height field stays a graph
+                if (is_sliver(after[0], after[1], after[2]) || folds) {
                     keeps_shape = false;
                     break;
                 }
@@ -2280,8 +2295,15 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         for (std::size_t i = 0; i < slack.size(); ++i)
             if (std::isinf(slack[i]))
                 std::swap(split_only[i], slack[i]);
-        st.collapsed_split_points = collapse_loop_points(mesh, split_only);
-        st.collapsed_split_points += collapse_loop_points(mesh, slack);
+        st.collapsed_split_points = collapse_loop_points(mesh, split_only, projection);
+        // Three passes, halving the slack each time (a negative slack stays negative): a point removed in
+        // one pass may be moved again by the later ones, so the surface moves from it by at most
+        // 1.75 × collapse_tolerance × the RMS plane distance.
+        for (int pass = 0; pass < 3; ++pass) {
+            st.collapsed_split_points += collapse_loop_points(mesh, slack, projection);
+            for (double& x : slack)
+                x *= 0.5;
+        }
         mesh.garbage_collection();
         mesh.release_face_status();
         mesh.release_halfedge_status();

@@ -78,7 +78,8 @@ struct SurfaceOptions
     //! fans stay exactly as they were; gap faces re-attach; topology unchanged). Fewer faces, same error.
     bool collapse_split_points = true;
     //! With collapse_split_points, loop points that are input points are collapsed too when the surface
-    //! moves by at most this × their tile's RMS plane distance (0 = split points only).
+    //! moves by at most this × their tile's RMS plane distance, in three passes that halve it (so at most
+    //! 1.75 × this in all; 0 = split points only). A gap face may turn freely but not fold.
     double collapse_tolerance = 0.5;
     //! Threads for the tiles' local Delaunay triangulations (0 = one per hardware thread). The result
     //! does not depend on it.

@@ -424,8 +424,8 @@ TEST(Surface, real_cuts_of_the_rocker_arm_have_genus_1)
 // Collapsing loop points after assembly. Split points only (collapse_tolerance 0): far fewer faces on a
 // coarse cut (long hull edges carry many split points), the same closed torus, and the same distances
 // (a split point lies on its fan's straight edge, so the fans do not change). With the default
-// tolerance the input points on tile rims go too where the surface moves by at most half the tile's
-// RMS plane distance: fewer faces still, the mean distance barely higher.
+// tolerance the input points on tile rims go too where the surface moves by at most 1.75 × half the
+// tile's RMS plane distance: fewer faces still, the mean distance a little higher.
 TEST(Surface, collapsing_loop_points_keeps_shape_and_topology)
 {
     const Hierarchy h = build_hierarchy(shapes::torus(40000));
@@ -447,7 +447,7 @@ TEST(Surface, collapsing_loop_points_keeps_shape_and_topology)
     const DistanceStats d_rims = point_to_mesh_distance(h.cloud.positions, rims.mesh);
     EXPECT_LT(d_split.mean, 1.03 * d_kept.mean);
     EXPECT_LT(d_split.max, 1.10 * d_kept.max);
-    EXPECT_LT(d_rims.mean, 1.10 * d_kept.mean);
+    EXPECT_LT(d_rims.mean, 1.25 * d_kept.mean);
 }
 
 // An open sample keeps exactly its border open: the height field's square outline is the one loop,
