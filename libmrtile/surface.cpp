@@ -55,6 +55,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <numeric>
 #include <queue>
@@ -374,16 +375,58 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 // ---------------------------------------------------------------------------------------------------
 // Step 3: the manifold surface under construction.
 
+//! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
+//! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
+//! short contiguous list instead of the faces themselves.
+struct Corner
+{
+    std::uint32_t face, first, second;
+};
+
+//! A vertex's corners in the order its faces were added. Most vertices have two fan faces and a few gap
+//! faces: up to kInline corners live in place (no pointer to follow; the front's lookups all over the
+//! surface are cache misses), more move to the heap.
+class CornerList
+{
+public:
+    const Corner* begin() const { return heap_ ? heap_.get() : in_place_.data(); }
+    const Corner* end() const { return begin() + size_; }
+    Corner* begin() { return heap_ ? heap_.get() : in_place_.data(); }
+    Corner* end() { return begin() + size_; }
+    std::size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+
+    void push_back(const Corner& c)
+    {
+        const std::uint32_t capacity = heap_ ? heap_capacity_ : kInline;
+        if (size_ == capacity) {
+            const std::uint32_t grown = 2 * capacity;
+            std::unique_ptr<Corner[]> bigger(new Corner[grown]);
+            std::copy(begin(), end(), bigger.get());
+            heap_ = std::move(bigger);
+            heap_capacity_ = grown;
+        }
+        begin()[size_++] = c;
+    }
+    void pop_back() { --size_; }
+    //! Removes the corner at `at`, keeping the order of the others.
+    void erase(Corner* at)
+    {
+        std::copy(at + 1, end(), at);
+        --size_;
+    }
+
+private:
+    static constexpr std::uint32_t kInline = 6;
+    std::uint32_t size_ = 0;
+    std::uint32_t heap_capacity_ = 0;
+    std::array<Corner, kInline> in_place_{};
+    std::unique_ptr<Corner[]> heap_;
+};
+
 class Surface
 {
 public:
-    //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
-    //! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
-    //! short contiguous list instead of the faces themselves.
-    struct Corner
-    {
-        std::uint32_t face, first, second;
-    };
 
     //! The faces at a vertex, in the order they were added (iterates face ids).
     class FaceRange
@@ -404,14 +447,14 @@ public:
         private:
             const Corner* at_;
         };
-        explicit FaceRange(const std::vector<Corner>& corners) : corners_(corners) {}
-        Iterator begin() const { return Iterator(corners_.data()); }
-        Iterator end() const { return Iterator(corners_.data() + corners_.size()); }
+        explicit FaceRange(const CornerList& corners) : corners_(corners) {}
+        Iterator begin() const { return Iterator(corners_.begin()); }
+        Iterator end() const { return Iterator(corners_.end()); }
         std::size_t size() const { return corners_.size(); }
         bool empty() const { return corners_.empty(); }
 
     private:
-        const std::vector<Corner>& corners_;
+        const CornerList& corners_;
     };
 
     explicit Surface(std::size_t vertex_count) : corners_(vertex_count), changed_(vertex_count, 0) {}
@@ -419,14 +462,14 @@ public:
     const std::vector<Tri>& faces() const { return faces_; }
     const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
     FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
-    const std::vector<Corner>& corners_at(std::uint32_t v) const { return corners_[v]; }
+    const CornerList& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
     //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
     //! the corners of a or b, whichever has fewer (only fan centres have many).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
     {
-        const std::vector<Corner>& ca = corners_[a];
-        const std::vector<Corner>& cb = corners_[b];
+        const CornerList& ca = corners_[a];
+        const CornerList& cb = corners_[b];
         if (ca.size() <= cb.size()) {
             for (const Corner& c : ca)
                 if (c.first == b)
@@ -496,7 +539,7 @@ public:
     //! A closed link (interior vertex) gives no arc.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
     {
-        const std::vector<Corner>& link = corners_[v]; // directed link edges first -> second
+        const CornerList& link = corners_[v]; // directed link edges first -> second
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
         for (const Corner& e : link) {
             if (has_link_edge_into(link, e.first))
@@ -519,7 +562,7 @@ public:
     //! arcs(v).size() without building them.
     std::size_t arc_count(std::uint32_t v) const
     {
-        const std::vector<Corner>& link = corners_[v];
+        const CornerList& link = corners_[v];
         std::size_t count = 0;
         for (const Corner& e : link)
             count += has_link_edge_into(link, e.first) ? 0 : 1;
@@ -549,7 +592,7 @@ public:
                     c.second = c.second == from ? to : c.second;
                 }
         }
-        const auto it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
         assert(it != corners_[from].end());
         const Corner moved = *it;
         corners_[from].erase(it);
@@ -585,7 +628,7 @@ public:
     }
 
 private:
-    static bool has_link_edge_into(const std::vector<Corner>& link, std::uint32_t x)
+    static bool has_link_edge_into(const CornerList& link, std::uint32_t x)
     {
         for (const Corner& o : link)
             if (o.second == x)
@@ -603,7 +646,7 @@ private:
     // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
     bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        const std::vector<Corner>& link = corners_[v];
+        const CornerList& link = corners_[v];
         if (link.empty())
             return true;
         if (is_closed(v))
@@ -647,7 +690,7 @@ private:
     std::vector<Tri> faces_;
     std::vector<std::int32_t> face_tile_;
     std::vector<bool> alive_;
-    std::vector<std::vector<Corner>> corners_; // per vertex, in the order its faces were added
+    std::vector<CornerList> corners_; // per vertex
     std::vector<std::uint64_t> changed_;
     std::uint64_t clock_ = 0;
 };
@@ -986,15 +1029,22 @@ private:
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
+    // v's corners alone tell which of its edges are on the front: edge v -> x (corner first x) has a twin
+    // when a corner has second x, edge x -> v (corner second x) when one has first x. The order of the
+    // pushes does not matter (the queue orders them).
     void refresh(std::uint32_t v)
     {
-        for (std::uint32_t f : surface_.faces_at(v)) {
-            const Tri& t = surface_.faces()[f];
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-                if ((a == v || b == v) && !surface_.has_halfedge(b, a))
-                    push_best(a, b);
+        const CornerList& corners = surface_.corners_at(v); // push_best leaves the surface as it is
+        for (const Corner& c : corners) {
+            bool out_twin = false, in_twin = false;
+            for (const Corner& o : corners) {
+                out_twin = out_twin || o.second == c.first;
+                in_twin = in_twin || o.first == c.second;
             }
+            if (!out_twin)
+                push_best(v, c.first);
+            if (!in_twin)
+                push_best(c.second, v);
         }
     }
 
