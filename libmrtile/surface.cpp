@@ -1322,25 +1322,29 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
         while (j < proposals.size() && proposals[j].first == proposals[i].first)
             ++j;
         const Tri& tri = proposals[i].first;
-        std::vector<std::uint32_t> fan_tiles;
+        std::array<std::uint32_t, 3> fan_tiles{};
+        std::size_t fans = 0;
         for (std::uint32_t v : tri) {
             const auto t = static_cast<std::uint32_t>(layout.vertices[v].tile);
             if (layout.tiles[t].centre != kNone)
-                fan_tiles.push_back(t);
+                fan_tiles[fans++] = t;
         }
-        std::sort(fan_tiles.begin(), fan_tiles.end());
-        fan_tiles.erase(std::unique(fan_tiles.begin(), fan_tiles.end()), fan_tiles.end());
+        std::sort(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans));
+        fans = static_cast<std::size_t>(std::unique(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans)) -
+                                        fan_tiles.begin());
         const std::size_t votes = j - i;
         i = j;
+        // The rules below only remove triangles; the cheapest goes first.
+        if (votes < fans)
+            continue;
         double r = pruner.relative_radius(tri);
         if (r < 0.0)
             continue;
         // A triangle over a fan (its tiles seen in their own planes) would overlap it.
         const Vec3 centroid = (layout.vertices[tri[0]].position + layout.vertices[tri[1]].position +
                                layout.vertices[tri[2]].position) / 3.0;
-        if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
-            continue;
-        if (votes < fan_tiles.size())
+        if (std::any_of(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans),
+                        [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
             continue;
         out.triangles.push_back(tri);
         out.relative_radius.push_back(r);
