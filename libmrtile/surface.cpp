@@ -671,11 +671,13 @@ private:
         return steps == link.size() + 1;
     }
 
-    // Every edge at v has two faces: v's fan is a closed disk.
+    // Every edge at v has two faces: v's fan is a closed disk. Edge v -> x (a corner's first) has its
+    // twin x -> v exactly when another face at v has x as its corner's second: v's corners suffice.
     bool is_closed(std::uint32_t v) const
     {
-        for (const Corner& c : corners_[v])
-            if (!has_halfedge(c.first, v))
+        const CornerList& link = corners_[v];
+        for (const Corner& c : link)
+            if (!has_link_edge_into(link, c.first))
                 return false;
         return true;
     }
@@ -781,14 +783,22 @@ private:
         return face_normals_[f];
     }
 
+    // The normalized sum of the face normals at v, remembered until v's faces change (it reads every
+    // face at v and their corners' positions: many cache misses for a value asked for again and again).
     Vec3 vertex_normal(std::uint32_t v) const
     {
+        if (vertex_normals_.empty())
+            vertex_normals_.resize(layout_.vertices.size());
+        CachedNormal& cached = vertex_normals_[v];
+        if (cached.valid && surface_.changed_at(v) <= cached.clock)
+            return cached.normal;
         Vec3 n;
         for (std::uint32_t f : surface_.faces_at(v)) {
             const Tri& t = surface_.faces()[f];
             n += triangle_cross(position(t[0]), position(t[1]), position(t[2]));
         }
-        return normalized(n);
+        cached = {normalized(n), surface_.clock(), true};
+        return cached.normal;
     }
 
     // +1: fan counter-clockwise about the tile normal. Height fields face up the axis; otherwise the
@@ -1099,6 +1109,13 @@ private:
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
     mutable std::vector<Vec3> face_normals_; // see surface_normal
+    struct CachedNormal
+    {
+        Vec3 normal;
+        std::uint64_t clock = 0;
+        bool valid = false;
+    };
+    mutable std::vector<CachedNormal> vertex_normals_; // see vertex_normal
 };
 
 // ---------------------------------------------------------------------------------------------------
