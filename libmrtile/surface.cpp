@@ -63,6 +63,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <numeric>
 #include <queue>
@@ -383,16 +384,58 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 // ---------------------------------------------------------------------------------------------------
 // Step 3: the manifold surface under construction.
 
+//! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
+//! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
+//! short contiguous list instead of the faces themselves.
+struct Corner
+{
+    std::uint32_t face, first, second;
+};
+
+//! A vertex's corners in the order its faces were added. Most vertices have two fan faces and a few gap
+//! faces: up to kInline corners live in place (no pointer to follow; the front's lookups all over the
+//! surface are cache misses), more move to the heap.
+class CornerList
+{
+public:
+    const Corner* begin() const { return heap_ ? heap_.get() : in_place_.data(); }
+    const Corner* end() const { return begin() + size_; }
+    Corner* begin() { return heap_ ? heap_.get() : in_place_.data(); }
+    Corner* end() { return begin() + size_; }
+    std::size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+
+    void push_back(const Corner& c)
+    {
+        const std::uint32_t capacity = heap_ ? heap_capacity_ : kInline;
+        if (size_ == capacity) {
+            const std::uint32_t grown = 2 * capacity;
+            std::unique_ptr<Corner[]> bigger(new Corner[grown]);
+            std::copy(begin(), end(), bigger.get());
+            heap_ = std::move(bigger);
+            heap_capacity_ = grown;
+        }
+        begin()[size_++] = c;
+    }
+    void pop_back() { --size_; }
+    //! Removes the corner at `at`, keeping the order of the others.
+    void erase(Corner* at)
+    {
+        std::copy(at + 1, end(), at);
+        --size_;
+    }
+
+private:
+    static constexpr std::uint32_t kInline = 6;
+    std::uint32_t size_ = 0;
+    std::uint32_t heap_capacity_ = 0;
+    std::array<Corner, kInline> in_place_{};
+    std::unique_ptr<Corner[]> heap_;
+};
+
 class Surface
 {
 public:
-    //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
-    //! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
-    //! short contiguous list instead of the faces themselves.
-    struct Corner
-    {
-        std::uint32_t face, first, second;
-    };
 
     //! The faces at a vertex, in the order they were added (iterates face ids).
     class FaceRange
@@ -413,14 +456,14 @@ public:
         private:
             const Corner* at_;
         };
-        explicit FaceRange(const std::vector<Corner>& corners) : corners_(corners) {}
-        Iterator begin() const { return Iterator(corners_.data()); }
-        Iterator end() const { return Iterator(corners_.data() + corners_.size()); }
+        explicit FaceRange(const CornerList& corners) : corners_(corners) {}
+        Iterator begin() const { return Iterator(corners_.begin()); }
+        Iterator end() const { return Iterator(corners_.end()); }
         std::size_t size() const { return corners_.size(); }
         bool empty() const { return corners_.empty(); }
 
     private:
-        const std::vector<Corner>& corners_;
+        const CornerList& corners_;
     };
 
     explicit Surface(std::size_t vertex_count) : corners_(vertex_count), changed_(vertex_count, 0) {}
@@ -428,14 +471,14 @@ public:
     const std::vector<Tri>& faces() const { return faces_; }
     const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
     FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
-    const std::vector<Corner>& corners_at(std::uint32_t v) const { return corners_[v]; }
+    const CornerList& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
     //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
     //! the corners of a or b, whichever has fewer (only fan centres have many).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
     {
-        const std::vector<Corner>& ca = corners_[a];
-        const std::vector<Corner>& cb = corners_[b];
+        const CornerList& ca = corners_[a];
+        const CornerList& cb = corners_[b];
         if (ca.size() <= cb.size()) {
             for (const Corner& c : ca)
                 if (c.first == b)
@@ -512,7 +555,7 @@ public:
     //! A closed link (interior vertex) gives no arc.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
     {
-        const std::vector<Corner>& link = corners_[v]; // directed link edges first -> second
+        const CornerList& link = corners_[v]; // directed link edges first -> second
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
         for (const Corner& e : link) {
             if (has_link_edge_into(link, e.first))
@@ -535,7 +578,7 @@ public:
     //! arcs(v).size() without building them.
     std::size_t arc_count(std::uint32_t v) const
     {
-        const std::vector<Corner>& link = corners_[v];
+        const CornerList& link = corners_[v];
         std::size_t count = 0;
         for (const Corner& e : link)
             count += has_link_edge_into(link, e.first) ? 0 : 1;
@@ -565,7 +608,7 @@ public:
                     c.second = c.second == from ? to : c.second;
                 }
         }
-        const auto it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
         assert(it != corners_[from].end());
         const Corner moved = *it;
         corners_[from].erase(it);
@@ -601,7 +644,7 @@ public:
     }
 
 private:
-    static bool has_link_edge_into(const std::vector<Corner>& link, std::uint32_t x)
+    static bool has_link_edge_into(const CornerList& link, std::uint32_t x)
     {
         for (const Corner& o : link)
             if (o.second == x)
@@ -619,7 +662,7 @@ private:
     // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
     bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
     {
-        const std::vector<Corner>& link = corners_[v];
+        const CornerList& link = corners_[v];
         if (link.empty())
             return true;
         if (is_closed(v))
@@ -644,11 +687,13 @@ private:
         return steps == link.size() + 1;
     }
 
-    // Every edge at v has two faces: v's fan is a closed disk.
+    // Every edge at v has two faces: v's fan is a closed disk. Edge v -> x (a corner's first) has its
+    // twin x -> v exactly when another face at v has x as its corner's second: v's corners suffice.
     bool is_closed(std::uint32_t v) const
     {
-        for (const Corner& c : corners_[v])
-            if (!has_halfedge(c.first, v))
+        const CornerList& link = corners_[v];
+        for (const Corner& c : link)
+            if (!has_link_edge_into(link, c.first))
                 return false;
         return true;
     }
@@ -663,7 +708,7 @@ private:
     std::vector<Tri> faces_;
     std::vector<std::int32_t> face_tile_;
     std::vector<bool> alive_;
-    std::vector<std::vector<Corner>> corners_; // per vertex, in the order its faces were added
+    std::vector<CornerList> corners_; // per vertex
     std::vector<std::uint64_t> changed_;
     std::uint64_t clock_ = 0;
 };
@@ -872,14 +917,22 @@ private:
         return face_normals_[f];
     }
 
+    // The normalized sum of the face normals at v, remembered until v's faces change (it reads every
+    // face at v and their corners' positions: many cache misses for a value asked for again and again).
     Vec3 vertex_normal(std::uint32_t v) const
     {
+        if (vertex_normals_.empty())
+            vertex_normals_.resize(layout_.vertices.size());
+        CachedNormal& cached = vertex_normals_[v];
+        if (cached.valid && surface_.changed_at(v) <= cached.clock)
+            return cached.normal;
         Vec3 n;
         for (std::uint32_t f : surface_.faces_at(v)) {
             const Tri& t = surface_.faces()[f];
             n += triangle_cross(position(t[0]), position(t[1]), position(t[2]));
         }
-        return normalized(n);
+        cached = {normalized(n), surface_.clock(), true};
+        return cached.normal;
     }
 
     // +1: fan counter-clockwise about the tile normal. Height fields face up the axis; otherwise the
@@ -1167,15 +1220,22 @@ private:
     }
 
     // Re-examines the front edges around v (their candidates may have become valid or invalid).
+    // v's corners alone tell which of its edges are on the front: edge v -> x (corner first x) has a twin
+    // when a corner has second x, edge x -> v (corner second x) when one has first x. The order of the
+    // pushes does not matter (the queue orders them).
     void refresh(std::uint32_t v)
     {
-        for (std::uint32_t f : surface_.faces_at(v)) {
-            const Tri& t = surface_.faces()[f];
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-                if ((a == v || b == v) && !surface_.has_halfedge(b, a))
-                    push_best(a, b);
+        const CornerList& corners = surface_.corners_at(v); // push_best leaves the surface as it is
+        for (const Corner& c : corners) {
+            bool out_twin = false, in_twin = false;
+            for (const Corner& o : corners) {
+                out_twin = out_twin || o.second == c.first;
+                in_twin = in_twin || o.first == c.second;
             }
+            if (!out_twin)
+                push_best(v, c.first);
+            if (!in_twin)
+                push_best(c.second, v);
         }
     }
 
@@ -1247,6 +1307,13 @@ private:
     UnionFind parts_;          // connected pieces of the surface, over vertices
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
     mutable std::vector<Vec3> face_normals_; // see surface_normal
+    struct CachedNormal
+    {
+        Vec3 normal;
+        std::uint64_t clock = 0;
+        bool valid = false;
+    };
+    mutable std::vector<CachedNormal> vertex_normals_; // see vertex_normal
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -1465,27 +1532,31 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
         while (j < proposals.size() && proposals[j].first == proposals[i].first)
             ++j;
         const Tri& tri = proposals[i].first;
-        std::vector<std::uint32_t> fan_tiles;
+        std::array<std::uint32_t, 3> fan_tiles{};
+        std::size_t fans = 0;
         for (std::uint32_t v : tri) {
             const auto t = static_cast<std::uint32_t>(layout.vertices[v].tile);
             if (layout.tiles[t].centre != kNone)
-                fan_tiles.push_back(t);
+                fan_tiles[fans++] = t;
         }
-        std::sort(fan_tiles.begin(), fan_tiles.end());
-        fan_tiles.erase(std::unique(fan_tiles.begin(), fan_tiles.end()), fan_tiles.end());
+        std::sort(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans));
+        fans = static_cast<std::size_t>(std::unique(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans)) -
+                                        fan_tiles.begin());
         const std::size_t votes = j - i;
         i = j;
+        // Triangles without consensus are kept as fallback candidates (used only for stranded tiles).
         double r = pruner.relative_radius(tri);
         if (r < 0.0)
             continue;
         // A triangle over a fan (its tiles seen in their own planes) would overlap it.
         const Vec3 centroid = (layout.vertices[tri[0]].position + layout.vertices[tri[1]].position +
                                layout.vertices[tri[2]].position) / 3.0;
-        if (std::any_of(fan_tiles.begin(), fan_tiles.end(), [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
+        if (std::any_of(fan_tiles.begin(), fan_tiles.begin() + static_cast<std::ptrdiff_t>(fans),
+                        [&](std::uint32_t t) { return inside_outline(h, tiles[t], centroid); }))
             continue;
         out.triangles.push_back(tri);
         out.relative_radius.push_back(r);
-        out.fallback.push_back(votes < fan_tiles.size());
+        out.fallback.push_back(votes < fans);
     }
     return out;
 }
