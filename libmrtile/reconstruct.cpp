@@ -4,6 +4,7 @@
 
 #include "libmrtile/errors.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -20,6 +21,55 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     result.mesh = build_surface(h, tiles, options.surface, &result.surface);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
+}
+
+TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options,
+                                           std::size_t max_meshings)
+{
+    if (triangles == 0 || max_meshings == 0)
+        throw InvalidInput("mesh_to_triangle_count: the triangle target and max_meshings must be at least 1");
+    const std::size_t leaves = std::max<std::size_t>(1, h.leaf_count());
+    TriangleCountResult best;  // largest N that fits so far
+    TriangleCountResult over;  // smallest N that does not fit so far (kept in case nothing fits)
+    std::size_t fits = 0, fails = leaves + 1; // bracket on N
+    auto try_tiles = [&](std::size_t n) {
+        TriangleCountResult r;
+        r.cut = cut_by_budget(h, n);
+        r.result = mesh_cut(h, r.cut, options);
+        const std::size_t faces = r.result.mesh.n_faces();
+        if (faces <= triangles) {
+            if (n > fits) {
+                fits = n;
+                best = std::move(r);
+            }
+        } else if (n < fails) {
+            fails = n;
+            over = std::move(r);
+        }
+        return faces;
+    };
+    // First guess: about 16 faces per tile (a fine cut's fan and gap faces after collapsing).
+    std::size_t n = std::clamp<std::size_t>(triangles / 16, 1, leaves);
+    std::size_t meshings = 0;
+    while (meshings < max_meshings) {
+        const std::size_t faces = try_tiles(n);
+        ++meshings;
+        if (fits + 1 >= fails || (fits == leaves) || (fails == 1))
+            break;
+        // Next: scale N by the target over the faces seen (faces per tile is nearly constant locally),
+        // kept strictly inside the bracket; bisect when the guess falls outside it.
+        const double scaled = static_cast<double>(n) * static_cast<double>(triangles) / std::max<double>(1.0, static_cast<double>(faces));
+        std::size_t next = static_cast<std::size_t>(scaled);
+        if (next <= fits || next >= fails)
+            next = fits + (std::min(fails, leaves + 1) - fits) / 2;
+        next = std::clamp<std::size_t>(next, 1, leaves);
+        if (next == n)
+            break;
+        n = next;
+    }
+    TriangleCountResult out = fits > 0 ? std::move(best) : std::move(over);
+    out.meshings = meshings;
+    return out;
 }
 
 double e_rms(const Hierarchy& h, const Cut& cut)

@@ -34,6 +34,23 @@ struct MeshResult
 //! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.
 MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& options = {});
 
+struct TriangleCountResult
+{
+    Cut cut;            //!< a best-N cut (cut_by_budget)
+    MeshResult result;  //!< its mesh
+    std::size_t meshings = 0; //!< candidate cuts meshed to find it
+};
+
+//! \brief The finest best-N cut (cut_by_budget) whose mesh has at most `triangles` faces, and its mesh.
+//! \details A cut's face count is known only once it is meshed (tiles differ in size and rim), so this
+//! meshes a few candidate cuts: a guess from the faces per tile seen so far, then bisection on N between
+//! the largest N known to fit and the smallest known not to, up to `max_meshings` (default 10). The
+//! face count grows with N almost always, not strictly; the result is the best fitting cut found. When
+//! even one tile has more faces, that one-tile mesh is returned; when the leaves fit, the leaves'.
+//! \throw InvalidInput if triangles == 0 or max_meshings == 0.
+TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options = {},
+                                           std::size_t max_meshings = 10);
+
 struct QualityReport
 {
     TopologyStats topology;

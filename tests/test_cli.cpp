@@ -164,6 +164,24 @@ TEST(Cli, build_info_mesh_and_determinism)
     EXPECT_FALSE(fs::exists(dir / "m.xyz"));
 }
 
+// `mesh --triangles N`: the mesh fits the target and comes close; combined with another cut kind it is
+// a usage error.
+TEST(Cli, mesh_to_a_triangle_count)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir);
+    ASSERT_EQ(mrtile("build -q " + xyz.string() + " -o " + (dir / "a.mrt").string(), dir).code, 0);
+    const Result r = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.ply").string() +
+                                " --triangles 800 --stats-json " + (dir / "m.json").string(),
+                            dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto stats = nlohmann::json::parse(slurp(dir / "m.json"));
+    EXPECT_LE(stats["faces"].get<std::size_t>(), 800u);
+    EXPECT_GE(stats["faces"].get<std::size_t>(), 700u);
+    EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "n.ply").string() + " --triangles 800 --tiles 5", dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "n.ply"));
+}
+
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
 // coarser level to a finer one (levels that would not improve are not written).
 TEST(Cli, lods_on_the_bunny_are_consistent)

@@ -73,6 +73,29 @@ TEST(Reconstruct, fitted_apex_lowers_the_mean_distance_on_a_sphere)
     EXPECT_LT(d_fitted, 0.66 * d_surface);
 }
 
+// A target triangle count: the result fits and comes close (within 10%: neighbouring best-N cuts differ
+// by a handful of faces), larger targets give finer cuts, the extremes give one tile and the leaves.
+TEST(Reconstruct, triangle_count_target_is_met_from_below)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(20000));
+    std::size_t previous_tiles = 0;
+    for (std::size_t target : {1500u, 4000u, 9000u}) {
+        SCOPED_TRACE("target " + std::to_string(target));
+        const TriangleCountResult r = mesh_to_triangle_count(h, target);
+        const std::size_t faces = r.result.mesh.n_faces();
+        EXPECT_LE(faces, target);
+        EXPECT_GE(faces, target * 9 / 10);
+        EXPECT_LE(r.meshings, 10u);
+        EXPECT_EQ(r.cut, cut_by_budget(h, r.cut.size()));
+        EXPECT_GT(r.cut.size(), previous_tiles);
+        previous_tiles = r.cut.size();
+        expect_closed(r.result.mesh, 1);
+    }
+    EXPECT_EQ(mesh_to_triangle_count(h, 10'000'000).cut.size(), h.leaf_count());
+    EXPECT_EQ(mesh_to_triangle_count(h, 1).cut.size(), 1u); // nothing fits: the one-tile mesh
+    EXPECT_THROW(mesh_to_triangle_count(h, 0), InvalidInput);
+}
+
 // E_RMS (eq. 4-6) against a direct evaluation; zero on a plane.
 TEST(Reconstruct, e_rms_matches_brute_force)
 {

@@ -118,6 +118,7 @@ struct CutArgs
     double tolerance = 0.0;
     double tau = 0.0;
     std::size_t tiles = 0;
+    std::size_t triangles = 0;
     std::vector<std::string> focus;
     std::string camera;
 
@@ -131,11 +132,16 @@ struct CutArgs
         auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
                       ->check(CLI::PositiveNumber);
         auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(CLI::PositiveNumber);
+        auto* tri = cmd->add_option("--triangles", triangles,
+                                    "cut: the finest best-N cut whose mesh has at most this many triangles")
+                        ->check(CLI::PositiveNumber);
+        tri->excludes(tol)->excludes(t)->excludes(n);
         auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)");
         auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
         tol->excludes(t)->excludes(n);
         t->excludes(n);
-        c->excludes(f)->excludes(n)->excludes(t);
+        c->excludes(f)->excludes(n)->excludes(t)->excludes(tri);
+        f->excludes(tri);
     }
 
     Cut cut(const Hierarchy& h) const
@@ -303,8 +309,16 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                               const OutputArgs& out_args, const fs::path& out)
 {
     const auto start = Clock::now();
-    const Cut cut = cut_args.cut(h);
-    MeshResult r = mesh_cut(h, cut, mesh_args.options());
+    Cut cut;
+    MeshResult r;
+    if (cut_args.triangles > 0) {
+        TriangleCountResult t = mesh_to_triangle_count(h, cut_args.triangles, mesh_args.options());
+        cut = std::move(t.cut);
+        r = std::move(t.result);
+    } else {
+        cut = cut_args.cut(h);
+        r = mesh_cut(h, cut, mesh_args.options());
+    }
     QualityReport q;
     if (!mesh_args.no_quality)
         q = measure_quality(h, cut, r.mesh);
