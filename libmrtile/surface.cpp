@@ -376,11 +376,12 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 // Step 3: the manifold surface under construction.
 
 //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
-//! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
-//! short contiguous list instead of the faces themselves.
+//! and f holds the half-edge v -> first, numbered 3 f + (v's index in f). Kept per vertex so that
+//! half-edge and link queries read one short contiguous list instead of the faces themselves.
 struct Corner
 {
-    std::uint32_t face, first, second;
+    std::uint32_t halfedge, first, second;
+    std::uint32_t face() const { return halfedge / 3; }
 };
 
 //! A vertex's corners in the order its faces were added. Most vertices have two fan faces and a few gap
@@ -436,7 +437,7 @@ public:
         {
         public:
             explicit Iterator(const Corner* at) : at_(at) {}
-            std::uint32_t operator*() const { return at_->face; }
+            std::uint32_t operator*() const { return at_->face(); }
             Iterator& operator++()
             {
                 ++at_;
@@ -464,20 +465,26 @@ public:
     FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
     const CornerList& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
-    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
-    //! the corners of a or b, whichever has fewer (only fan centres have many).
+    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
+    {
+        const std::uint32_t h = halfedge_of(a, b);
+        return h == kNone ? kNone : h / 3;
+    }
+    //! The number 3 f + k of half-edge a -> b (a = faces()[f][k]), or kNone. Scans the corners of a or b,
+    //! whichever has fewer (only fan centres have many).
+    std::uint32_t halfedge_of(std::uint32_t a, std::uint32_t b) const
     {
         const CornerList& ca = corners_[a];
         const CornerList& cb = corners_[b];
         if (ca.size() <= cb.size()) {
             for (const Corner& c : ca)
                 if (c.first == b)
-                    return c.face;
+                    return c.halfedge;
         } else {
             for (const Corner& c : cb)
-                if (c.second == a)
-                    return c.face;
+                if (c.second == a) // face (b, first, a): a follows b by two
+                    return c.halfedge - c.halfedge % 3 + (c.halfedge % 3 + 2) % 3;
         }
         return kNone;
     }
@@ -503,12 +510,13 @@ public:
     void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::int32_t tile)
     {
         const auto f = static_cast<std::uint32_t>(faces_.size());
+        assert(f < kNone / 3);
         faces_.push_back({a, b, c});
         face_tile_.push_back(tile);
         alive_.push_back(true);
-        corners_[a].push_back({f, b, c});
-        corners_[b].push_back({f, c, a});
-        corners_[c].push_back({f, a, b});
+        corners_[a].push_back({3 * f, b, c});
+        corners_[b].push_back({3 * f + 1, c, a});
+        corners_[c].push_back({3 * f + 2, a, b});
         touch(faces_.back());
     }
 
@@ -587,12 +595,12 @@ public:
             if (w == to)
                 continue;
             for (Corner& c : corners_[w])
-                if (c.face == f) {
+                if (c.face() == f) {
                     c.first = c.first == from ? to : c.first;
                     c.second = c.second == from ? to : c.second;
                 }
         }
-        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face() == f; });
         assert(it != corners_[from].end());
         const Corner moved = *it;
         corners_[from].erase(it);
@@ -617,7 +625,7 @@ public:
                     std::uint32_t found = kNone;
                     for (const Corner& c : corners_[v])
                         if (c.first == x)
-                            found = c.face;
+                            found = c.face();
                     assert(found != kNone);
                     x = link_edge(found, v).second;
                     relabel(found, v, copy);
@@ -639,7 +647,7 @@ private:
     void erase_corner(std::uint32_t v, std::uint32_t f)
     {
         auto& cs = corners_[v];
-        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face == f; }));
+        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face() == f; }));
     }
 
     // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
@@ -972,7 +980,7 @@ private:
         return true;
     }
 
-    // Per front half-edge (face f, edge k from faces()[f][k]): the last best() result, and the key of
+    // Per front half-edge (by its number, Surface::halfedge_of): the last best() result, and the key of
     // the entry last pushed for it while that entry is still queued.
     struct EdgeState
     {
@@ -988,11 +996,9 @@ private:
     // The state of front half-edge a -> b, or nullptr when no face has that half-edge.
     EdgeState* edge_state(std::uint32_t a, std::uint32_t b)
     {
-        const std::uint32_t f = surface_.face_of(a, b);
-        if (f == kNone)
+        const std::uint32_t slot = surface_.halfedge_of(a, b);
+        if (slot == kNone)
             return nullptr;
-        const Tri& t = surface_.faces()[f];
-        const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
         if (slot >= edges_.size())
             edges_.resize(3 * surface_.faces().size());
         return &edges_[slot];
