@@ -614,6 +614,8 @@ public:
         std::vector<std::uint32_t> origin;
         const auto n = static_cast<std::uint32_t>(corners_.size());
         for (std::uint32_t v = 0; v < n; ++v) {
+            if (arc_count(v) < 2)
+                continue; // one fan or none: nothing to split (and no list to build)
             const auto fans = arcs(v);
             for (std::size_t k = 1; k < fans.size(); ++k) {
                 const auto copy = static_cast<std::uint32_t>(corners_.size());
