@@ -42,25 +42,22 @@
 
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/pca.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <numeric>
 #include <queue>
 #include <string>
-#include <thread>
 #include <utility>
 
 namespace mrt {
@@ -1233,37 +1230,6 @@ Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, 
     return out;
 }
 
-// Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per hardware
-// thread), the calling thread included. The first exception thrown is rethrown after all have ended.
-template <typename Work>
-void run_blocks(std::size_t count, std::size_t threads, const Work& work)
-{
-    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto worker = [&] {
-        for (std::size_t k = next++; k < count; k = next++) {
-            try {
-                work(k);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure)
-                    failure = std::current_exception();
-            }
-        }
-    };
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < workers; ++t)
-        pool.emplace_back(worker);
-    worker();
-    for (std::thread& t : pool)
-        t.join();
-    if (failure)
-        std::rethrow_exception(failure);
-}
-
 // True when p, projected into the tile's plane, lies strictly inside its (convex) outline.
 bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 {
@@ -1304,7 +1270,7 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
     constexpr std::uint32_t kBlock = 64;
     const auto tile_count = static_cast<std::uint32_t>(layout.tiles.size());
     std::vector<std::vector<std::pair<Tri, std::uint32_t>>> block_proposals((tile_count + kBlock - 1) / kBlock);
-    run_blocks(block_proposals.size(), threads, [&](std::size_t block) {
+    run_parallel(block_proposals.size(), threads, [&](std::size_t block) {
         std::vector<std::pair<Tri, std::uint32_t>>& proposals = block_proposals[block]; // (sorted triangle, tile)
         std::vector<Vec3> points;
         std::vector<std::uint32_t> ids;
