@@ -10,13 +10,10 @@
 #include "libmrtile/lod_set.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/parallel.h"
 
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <exception>
-#include <mutex>
-#include <thread>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -282,31 +279,10 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
     std::vector<std::size_t> order(finer.size());
     for (std::size_t i = 0; i < order.size(); ++i)
         order[i] = finer.size() - 1 - i; // finest (largest) first
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto worker = [&] {
-        for (std::size_t k = next++; k < order.size(); k = next++) {
-            try {
-                LodLevel& level = finer[order[k]];
-                level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure)
-                    failure = std::current_exception();
-            }
-        }
-    };
-    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t workers = std::min(finer.size(), o.threads > 0 ? o.threads : hardware);
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < workers; ++t)
-        pool.emplace_back(worker);
-    worker();
-    for (std::thread& t : pool)
-        t.join();
-    if (failure)
-        std::rethrow_exception(failure);
+    run_parallel(order.size(), o.threads, [&](std::size_t k) {
+        LodLevel& level = finer[order[k]];
+        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+    });
     for (LodLevel& level : finer)
         add_level(std::move(level));
     if (!set.levels.empty())

@@ -50,25 +50,22 @@
 
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/pca.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <numeric>
 #include <queue>
 #include <string>
-#include <thread>
 #include <utility>
 
 namespace mrt {
@@ -385,11 +382,12 @@ std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
 // Step 3: the manifold surface under construction.
 
 //! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
-//! and f holds the half-edge v -> first. Kept per vertex so that half-edge and link queries read one
-//! short contiguous list instead of the faces themselves.
+//! and f holds the half-edge v -> first, numbered 3 f + (v's index in f). Kept per vertex so that
+//! half-edge and link queries read one short contiguous list instead of the faces themselves.
 struct Corner
 {
-    std::uint32_t face, first, second;
+    std::uint32_t halfedge, first, second;
+    std::uint32_t face() const { return halfedge / 3; }
 };
 
 //! A vertex's corners in the order its faces were added. Most vertices have two fan faces and a few gap
@@ -445,7 +443,7 @@ public:
         {
         public:
             explicit Iterator(const Corner* at) : at_(at) {}
-            std::uint32_t operator*() const { return at_->face; }
+            std::uint32_t operator*() const { return at_->face(); }
             Iterator& operator++()
             {
                 ++at_;
@@ -473,20 +471,26 @@ public:
     FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
     const CornerList& corners_at(std::uint32_t v) const { return corners_[v]; }
     bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
-    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one). Scans
-    //! the corners of a or b, whichever has fewer (only fan centres have many).
+    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one).
     std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
+    {
+        const std::uint32_t h = halfedge_of(a, b);
+        return h == kNone ? kNone : h / 3;
+    }
+    //! The number 3 f + k of half-edge a -> b (a = faces()[f][k]), or kNone. Scans the corners of a or b,
+    //! whichever has fewer (only fan centres have many).
+    std::uint32_t halfedge_of(std::uint32_t a, std::uint32_t b) const
     {
         const CornerList& ca = corners_[a];
         const CornerList& cb = corners_[b];
         if (ca.size() <= cb.size()) {
             for (const Corner& c : ca)
                 if (c.first == b)
-                    return c.face;
+                    return c.halfedge;
         } else {
             for (const Corner& c : cb)
-                if (c.second == a)
-                    return c.face;
+                if (c.second == a) // face (b, first, a): a follows b by two
+                    return c.halfedge - c.halfedge % 3 + (c.halfedge % 3 + 2) % 3;
         }
         return kNone;
     }
@@ -512,12 +516,13 @@ public:
     void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::int32_t tile)
     {
         const auto f = static_cast<std::uint32_t>(faces_.size());
+        assert(f < kNone / 3);
         faces_.push_back({a, b, c});
         face_tile_.push_back(tile);
         alive_.push_back(true);
-        corners_[a].push_back({f, b, c});
-        corners_[b].push_back({f, c, a});
-        corners_[c].push_back({f, a, b});
+        corners_[a].push_back({3 * f, b, c});
+        corners_[b].push_back({3 * f + 1, c, a});
+        corners_[c].push_back({3 * f + 2, a, b});
         touch(faces_.back());
     }
 
@@ -603,12 +608,12 @@ public:
             if (w == to)
                 continue;
             for (Corner& c : corners_[w])
-                if (c.face == f) {
+                if (c.face() == f) {
                     c.first = c.first == from ? to : c.first;
                     c.second = c.second == from ? to : c.second;
                 }
         }
-        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face == f; });
+        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face() == f; });
         assert(it != corners_[from].end());
         const Corner moved = *it;
         corners_[from].erase(it);
@@ -622,6 +627,8 @@ public:
         std::vector<std::uint32_t> origin;
         const auto n = static_cast<std::uint32_t>(corners_.size());
         for (std::uint32_t v = 0; v < n; ++v) {
+            if (arc_count(v) < 2)
+                continue; // one fan or none: nothing to split (and no list to build)
             const auto fans = arcs(v);
             for (std::size_t k = 1; k < fans.size(); ++k) {
                 const auto copy = static_cast<std::uint32_t>(corners_.size());
@@ -633,7 +640,7 @@ public:
                     std::uint32_t found = kNone;
                     for (const Corner& c : corners_[v])
                         if (c.first == x)
-                            found = c.face;
+                            found = c.face();
                     assert(found != kNone);
                     x = link_edge(found, v).second;
                     relabel(found, v, copy);
@@ -655,7 +662,7 @@ private:
     void erase_corner(std::uint32_t v, std::uint32_t f)
     {
         auto& cs = corners_[v];
-        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face == f; }));
+        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face() == f; }));
     }
 
     // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
@@ -1151,7 +1158,7 @@ private:
         return true;
     }
 
-    // Per front half-edge (face f, edge k from faces()[f][k]): the last best() result, and the key of
+    // Per front half-edge (by its number, Surface::halfedge_of): the last best() result, and the key of
     // the entry last pushed for it while that entry is still queued.
     struct EdgeState
     {
@@ -1168,11 +1175,9 @@ private:
     // The state of front half-edge a -> b, or nullptr when no face has that half-edge.
     EdgeState* edge_state(std::uint32_t a, std::uint32_t b)
     {
-        const std::uint32_t f = surface_.face_of(a, b);
-        if (f == kNone)
+        const std::uint32_t slot = surface_.halfedge_of(a, b);
+        if (slot == kNone)
             return nullptr;
-        const Tri& t = surface_.faces()[f];
-        const std::size_t slot = 3 * static_cast<std::size_t>(f) + (t[0] == a ? 0 : (t[1] == a ? 1 : 2));
         if (slot >= edges_.size())
             edges_.resize(3 * surface_.faces().size());
         return &edges_[slot];
@@ -1418,37 +1423,6 @@ Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, 
     return out;
 }
 
-// Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per hardware
-// thread), the calling thread included. The first exception thrown is rethrown after all have ended.
-template <typename Work>
-void run_blocks(std::size_t count, std::size_t threads, const Work& work)
-{
-    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto worker = [&] {
-        for (std::size_t k = next++; k < count; k = next++) {
-            try {
-                work(k);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure)
-                    failure = std::current_exception();
-            }
-        }
-    };
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < workers; ++t)
-        pool.emplace_back(worker);
-    worker();
-    for (std::thread& t : pool)
-        t.join();
-    if (failure)
-        std::rethrow_exception(failure);
-}
-
 // True when p, projected into the tile's plane, lies strictly inside its (convex) outline.
 bool inside_outline(const Hierarchy& h, const Tile& tile, const Vec3& p)
 {
@@ -1489,7 +1463,7 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
     constexpr std::uint32_t kBlock = 64;
     const auto tile_count = static_cast<std::uint32_t>(layout.tiles.size());
     std::vector<std::vector<std::pair<Tri, std::uint32_t>>> block_proposals((tile_count + kBlock - 1) / kBlock);
-    run_blocks(block_proposals.size(), threads, [&](std::size_t block) {
+    run_parallel(block_proposals.size(), threads, [&](std::size_t block) {
         std::vector<std::pair<Tri, std::uint32_t>>& proposals = block_proposals[block]; // (sorted triangle, tile)
         std::vector<Vec3> points;
         std::vector<std::uint32_t> ids;

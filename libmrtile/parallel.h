@@ -1,0 +1,49 @@
+#pragma once
+//! \file parallel.h
+//! \brief A minimal worker pool for independent jobs whose results the caller combines in a fixed
+//! order, so that the output never depends on the number of threads.
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace mrt {
+
+//! \brief Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per
+//! hardware thread), the calling thread included; jobs are handed out in index order as threads free up.
+//! \details The first exception a job throws is rethrown once all threads have ended (the other jobs
+//! still run). `work` must be safe to call concurrently for different indices.
+template <typename Work>
+void run_parallel(std::size_t count, std::size_t threads, const Work& work)
+{
+    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto worker = [&] {
+        for (std::size_t k = next++; k < count; k = next++) {
+            try {
+                work(k);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure)
+                    failure = std::current_exception();
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < workers; ++t)
+        pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool)
+        t.join();
+    if (failure)
+        std::rethrow_exception(failure);
+}
+
+} // namespace mrt
