@@ -19,6 +19,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     const std::vector<Tile> tiles = make_tiles(h, cut, options.tiles);
     result.tiles = tiles.size();
     result.mesh = build_surface(h, tiles, options.surface, &result.surface);
+    result.refined_points = refine_fans(result.mesh, h, options.refine);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

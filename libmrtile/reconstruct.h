@@ -12,6 +12,7 @@
 #include "libmrtile/cut.h"
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
+#include "libmrtile/refine_fans.h"
 #include "libmrtile/surface.h"
 #include "libmrtile/tiles.h"
 
@@ -21,6 +22,7 @@ struct MeshOptions
 {
     TileOptions tiles;       //!< tile generation (§4.2)
     SurfaceOptions surface;  //!< gap triangulation and manifold assembly (§4.3)
+    FanRefineOptions refine; //!< interior vertices where a fan deviates from its tile (refine_fans.h)
 };
 
 struct MeshResult
@@ -28,6 +30,7 @@ struct MeshResult
     Mesh mesh;
     SurfaceStats surface;
     std::size_t tiles = 0;
+    std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     double seconds = 0.0; //!< tiles + surface
 };
 

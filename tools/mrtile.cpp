@@ -197,6 +197,7 @@ struct MeshArgs
     bool keep_steps = false;
     std::string stats_json;
     bool no_quality = false;
+    double refine_fans = 0.0;
 
     void add(CLI::App* cmd)
     {
@@ -208,6 +209,9 @@ struct MeshArgs
         cmd->add_flag("--keep-steps", keep_steps, "height fields: keep step discontinuities open (paper Fig. 9b)");
         cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file");
         cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
+        cmd->add_option("--refine-fans", refine_fans,
+                        "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
+            ->check(CLI::NonNegativeNumber);
     }
 
     MeshOptions options() const
@@ -216,6 +220,7 @@ struct MeshArgs
         o.surface.alpha = alpha;
         o.surface.height_field = height_field == "on" ? HeightField::On : height_field == "off" ? HeightField::Off : HeightField::Auto;
         o.surface.bridge_steps = !keep_steps;
+        o.refine.max_deviation = refine_fans;
         return o;
     }
 };
@@ -272,6 +277,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["gap_faces"] = r.surface.gap_faces;
     j["refused_faces"] = r.surface.refused_faces;
     j["holes_filled"] = r.surface.holes_filled;
+    j["refined_points"] = r.refined_points;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {
