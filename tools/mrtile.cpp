@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <new>
@@ -27,6 +28,22 @@
 #include <unistd.h>
 
 namespace {
+
+// CLI11's PositiveNumber / NonNegativeNumber print the whole double range when they fail; these say
+// what is wanted in a few words.
+CLI::Validator number_check(bool allow_zero)
+{
+    return CLI::Validator(
+        [allow_zero](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            const bool ok = end != text.c_str() && *end == '\0' && std::isfinite(v) && (allow_zero ? v >= 0 : v > 0);
+            return ok ? std::string() : "'" + text + "' is not a number " + (allow_zero ? ">= 0" : "> 0");
+        },
+        allow_zero ? "NUMBER >= 0" : "NUMBER > 0");
+}
+const CLI::Validator kPositive = number_check(false);
+const CLI::Validator kNonNegative = number_check(true);
 
 using namespace mrt;
 namespace fs = std::filesystem;
@@ -87,14 +104,14 @@ struct BuildArgs
     {
         auto* tol = cmd->add_option("--" + prefix + "tolerance", tolerance,
                                     "hierarchy stop criterion: RMS plane distance / largest bbox side")
-                        ->check(CLI::NonNegativeNumber)
+                        ->check(kNonNegative)
                         ->capture_default_str();
         auto* t = cmd->add_option("--" + prefix + "tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
-                      ->check(CLI::PositiveNumber);
+                      ->check(kPositive);
         tol->excludes(t);
         cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")->capture_default_str();
         cmd->add_option("--min-cluster", min_cluster, "clusters up to this size are not split")
-            ->check(CLI::PositiveNumber)
+            ->check(kPositive)
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
     }
@@ -128,13 +145,13 @@ struct CutArgs
     {
         auto* tol = cmd->add_option("--tolerance", tolerance,
                                     "cut: RMS plane distance / largest bbox side (default 0.002)")
-                        ->check(CLI::NonNegativeNumber);
+                        ->check(kNonNegative);
         auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
-                      ->check(CLI::PositiveNumber);
-        auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(CLI::PositiveNumber);
+                      ->check(kPositive);
+        auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(kPositive);
         auto* tri = cmd->add_option("--triangles", triangles,
                                     "cut: the finest best-N cut whose mesh has at most this many triangles")
-                        ->check(CLI::PositiveNumber);
+                        ->check(kPositive);
         tri->excludes(tol)->excludes(t)->excludes(n);
         auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)");
         auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
@@ -202,7 +219,7 @@ struct MeshArgs
     void add(CLI::App* cmd)
     {
         cmd->add_option("--alpha", alpha, "gap triangulation alpha in model units (default: automatic)")
-            ->check(CLI::NonNegativeNumber);
+            ->check(kNonNegative);
         cmd->add_option("--height-field", height_field, "2D Delaunay on the projection: auto, on or off")
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
@@ -211,7 +228,7 @@ struct MeshArgs
         cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
-            ->check(CLI::NonNegativeNumber);
+            ->check(kNonNegative);
     }
 
     MeshOptions options() const
@@ -353,7 +370,7 @@ struct ExportArgs
                         "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); the root "
                         "transform maps it to ECEF");
         cmd->add_option("--max-tile-triangles", max_tile_triangles, "largest number of triangles in one 3D Tiles tile")
-            ->check(CLI::PositiveNumber)
+            ->check(kPositive)
             ->capture_default_str();
         cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)");
         cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")->delimiter(',');
