@@ -641,7 +641,8 @@ public:
                     for (const Corner& c : corners_[v])
                         if (c.first == x)
                             found = c.face();
-                    assert(found != kNone);
+                    if (found == kNone)
+                        break; // not a fan after all (cannot happen on a surface the front built): leave it
                     x = link_edge(found, v).second;
                     relabel(found, v, copy);
                 }
@@ -2305,6 +2306,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                     order.push_back(g);
                 }
     }
+    const QuietOpenMesh quiet; // a refused face is counted in the stats, not printed (the library never prints)
     for (std::uint32_t f : order) {
         const Tri& t = faces[f];
         const auto fh = mesh.add_face(handle[t[0]], handle[t[1]], handle[t[2]]);
