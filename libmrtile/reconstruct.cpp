@@ -55,14 +55,14 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
     while (meshings < max_meshings) {
         const std::size_t faces = try_tiles(n);
         ++meshings;
-        if (fits + 1 >= fails || (fits == leaves) || (fails == 1))
+        if (fits + 1 >= fails) // converged (this also covers the leaves fitting and one tile not fitting)
             break;
         // Next: scale N by the target over the faces seen (faces per tile is nearly constant locally),
         // kept strictly inside the bracket; bisect when the guess falls outside it.
         const double scaled = static_cast<double>(n) * static_cast<double>(triangles) / std::max<double>(1.0, static_cast<double>(faces));
         std::size_t next = static_cast<std::size_t>(scaled);
         if (next <= fits || next >= fails)
-            next = fits + (std::min(fails, leaves + 1) - fits) / 2;
+            next = fits + (fails - fits) / 2;
         next = std::clamp<std::size_t>(next, 1, leaves);
         if (next == n)
             break;

@@ -51,7 +51,6 @@ class FanRefiner
 public:
     FanRefiner(Mesh& mesh, const Hierarchy& h, const FanRefineOptions& options)
         : mesh_(mesh), h_(h), options_(options), tile_(OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile)),
-          gap_(OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap)),
           cluster_(OpenMesh::getProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster))
     {
     }
@@ -209,7 +208,6 @@ private:
     const Hierarchy& h_;
     const FanRefineOptions& options_;
     OpenMesh::PropertyManager<OpenMesh::FPropHandleT<int>> tile_;
-    OpenMesh::PropertyManager<OpenMesh::FPropHandleT<bool>> gap_;
     OpenMesh::PropertyManager<OpenMesh::VPropHandleT<int>> cluster_;
     std::vector<std::vector<std::uint32_t>> face_points_;
     std::vector<std::uint32_t> version_;

@@ -740,9 +740,27 @@ struct UnionFind
     }
 };
 
-// The vertex after v on the boundary loop that arrives at v by the free half-edge u -> v. At a pinched
-// vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around the
-// vertex normal), so a loop never crosses itself.
+// Angles of points around a centre, counter-clockwise about a normal, from a fixed zero direction:
+// orders the fans of a pinched vertex.
+class AngleAround
+{
+public:
+    AngleAround(const Vec3& centre, const Vec3& normal) : centre_(centre)
+    {
+        const Vec3 helper = std::abs(normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        e1_ = normalized(cross(helper, normal));
+        e2_ = cross(normal, e1_);
+    }
+    double operator()(const Vec3& p) const
+    {
+        const Vec3 d = p - centre_;
+        return std::atan2(dot(d, e2_), dot(d, e1_));
+    }
+
+private:
+    Vec3 centre_, e1_, e2_;
+};
+
 // The fans (link arcs) of v in counter-clockwise order around its normal.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> ordered_fans(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t v)
 {
@@ -754,22 +772,18 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> ordered_fans(const Surface&
         const Tri& t = s.faces()[f];
         n += triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
     }
-    n = normalized(n);
-    const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-    const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
-    auto angle = [&](std::uint32_t x) {
-        const Vec3 d = positions[x] - positions[v];
-        return std::atan2(dot(d, e2), dot(d, e1));
-    };
+    const AngleAround angle(positions[v], normalized(n));
     std::sort(fans.begin(), fans.end(), [&](const auto& a, const auto& b) {
-        const double aa = angle(a.first), ab = angle(b.first);
+        const double aa = angle(positions[a.first]), ab = angle(positions[b.first]);
         return aa != ab ? aa < ab : a.first < b.first;
     });
     return fans;
 }
 
-// The loop arriving by u -> v leaves v along the free edge of the fan before u's (a fan (first, last)
-// has the free half-edges first -> v and v -> last).
+// The vertex after v on the boundary loop that arrives at v by the free half-edge u -> v. At a pinched
+// vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around the
+// vertex normal), so a loop never crosses itself: it leaves v along the free edge of the fan before
+// u's (a fan (first, last) has the free half-edges first -> v and v -> last).
 std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
 {
     const auto fans = ordered_fans(s, positions, v);
@@ -1068,13 +1082,8 @@ private:
         }
         if (from == kNone || to == kNone || from == to)
             return true;
-        const Vec3 n = vertex_normal(v);
-        const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        const Vec3 e1 = normalized(cross(helper, n)), e2 = cross(n, e1);
-        auto angle = [&](std::uint32_t w) {
-            const Vec3 d = position(w) - position(v);
-            return std::atan2(dot(d, e2), dot(d, e1));
-        };
+        const AngleAround around(position(v), vertex_normal(v));
+        auto angle = [&](std::uint32_t w) { return around(position(w)); };
         const double start = angle(x);
         std::size_t next = kNone;
         double best = std::numeric_limits<double>::infinity();
@@ -1993,7 +2002,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 } // namespace
 
 // ---------------------------------------------------------------------------------------------------
-// Step 6: removing the split points that carry no shape.
+// Step 6: removing the loop points that carry no shape (ε-split points, then near-collinear rim points).
 
 // Largest turn of a fan face when a loop point is collapsed away; a gap face (thin, its normal is noise)
 // only has to stay within 75 degrees of the surface around the point.

@@ -100,7 +100,7 @@ struct SurfaceStats
     std::size_t hole_faces = 0;      //!< faces added by hole filling (part of gap_faces)
     std::size_t boundary_loops = 0;  //!< boundary loops left open
     std::size_t split_vertices = 0;  //!< pinched vertices duplicated to keep the mesh manifold
-    std::size_t collapsed_split_points = 0; //!< ε-split points removed after assembly
+    std::size_t collapsed_split_points = 0; //!< loop points (ε-split, then rim) removed after assembly
     std::size_t components = 0;
     //! Tiles whose fan ended up alone while their neighbours' surface closed over them (left out).
     std::size_t dropped_fans = 0;
