@@ -1617,28 +1617,30 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
     return Islands{std::move(parts), std::move(doomed), std::move(part_of_tile)};
 }
 
-// Tiles whose fans are in a piece that broke off (see find_islands).
-std::vector<bool> broken_off_tiles(const Surface& s, const std::vector<Tile>& tiles)
+// Tiles whose fans are in an island.
+std::vector<bool> island_tiles(const Islands& islands)
 {
-    const Islands islands = find_islands(s, tiles);
-    std::vector<bool> out(tiles.size(), false);
-    for (std::size_t t = 0; t < tiles.size(); ++t)
+    std::vector<bool> out(islands.part_of_tile.size(), false);
+    for (std::size_t t = 0; t < out.size(); ++t)
         out[t] = islands.part_of_tile[t] != kNone && islands.doomed[islands.part_of_tile[t]];
     return out;
 }
 
-// Removes the islands: once one is gone, its hole is an ordinary one. Returns the number of tiles
-// whose fans were removed.
-std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+// Removes the faces of the islands: once one is gone, its hole is an ordinary one.
+void remove_islands(Surface& s, Islands& islands)
 {
-    Islands islands = find_islands(s, tiles);
-    std::size_t dropped = 0;
-    for (std::size_t t = 0; t < tiles.size(); ++t)
-        dropped += islands.part_of_tile[t] != kNone && islands.doomed[islands.part_of_tile[t]] ? 1 : 0;
     for (std::uint32_t f = 0; f < s.faces().size(); ++f)
         if (s.alive(f) && islands.doomed[islands.parts.find(f)])
             s.remove(f);
-    return dropped;
+}
+
+// Finds and removes the islands. Returns the number of tiles whose fans were removed.
+std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+{
+    Islands islands = find_islands(s, tiles);
+    const std::vector<bool> dropped = island_tiles(islands);
+    remove_islands(s, islands);
+    return static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
 }
 
 
@@ -2178,9 +2180,10 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     {
         Front front(layout, tiles, surface, projection, positions, candidates, options.max_turn_degrees, orientation);
         front.run();
-        const std::vector<bool> stranded = broken_off_tiles(surface, tiles);
+        Islands islands = find_islands(surface, tiles);
+        const std::vector<bool> stranded = island_tiles(islands);
         if (std::find(stranded.begin(), stranded.end(), true) != stranded.end()) {
-            drop_islands(surface, tiles);
+            remove_islands(surface, islands);
             front.rescue(stranded);
         }
         front.finish();
