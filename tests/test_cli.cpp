@@ -180,6 +180,10 @@ TEST(Cli, mesh_to_a_triangle_count)
     EXPECT_GE(stats["faces"].get<std::size_t>(), 700u);
     EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "n.ply").string() + " --triangles 800 --tiles 5", dir).code, 2);
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
+    const Result zero = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "n.ply").string() + " --triangles 0", dir);
+    EXPECT_EQ(zero.code, 2);
+    EXPECT_NE(zero.err.find("--triangles: '0' is not a number > 0"), std::string::npos) << zero.err;
+    EXPECT_FALSE(fs::exists(dir / "n.ply"));
 }
 
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a

@@ -534,6 +534,20 @@ TEST(Distance, offset_from_a_flat_square_is_exact)
     EXPECT_NEAR(e.mean, (121 * offset + 1 + 5) / 123 / e.diagonal, 1e-12);
 }
 
+// Median and 99th percentile are order statistics of the distances: 101 points at heights 0, 0.001, …,
+// 0.1 over the square (shuffled in x, y) put them at exactly 0.050 and 0.099.
+TEST(Distance, median_and_p99_are_exact_order_statistics)
+{
+    const Mesh mesh = to_mesh(Soup{{{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}}, {{0, 1, 2}, {0, 2, 3}}});
+    std::vector<Vec3> points;
+    for (int k = 0; k <= 100; ++k)
+        points.push_back({0.1 + 0.018 * ((k * 37) % 101), 0.1 + 0.018 * ((k * 59) % 101), 0.001 * k});
+    const DistanceStats d = point_to_mesh_distance(points, mesh);
+    EXPECT_NEAR(d.median, 0.050 / d.diagonal, 1e-12);
+    EXPECT_NEAR(d.p99, 0.099 / d.diagonal, 1e-12);
+    EXPECT_NEAR(d.max, 0.100 / d.diagonal, 1e-12);
+}
+
 TEST(Distance, matches_brute_force_on_a_random_closed_mesh)
 {
     const Soup s = bumpy_sphere(11);
