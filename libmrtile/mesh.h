@@ -3,7 +3,8 @@
 //! \brief The output type: an OpenMesh half-edge triangle mesh with the ids of the method attached.
 //! \details Positions are double precision and relative to the cloud's origin (see point_cloud.h).
 //! Properties (read them with OpenMesh::getProperty / makePropertyManagerFromExisting):
-//!  - kVertexCluster  ("v:cluster", int): the hierarchy node whose tile the vertex belongs to.
+//!  - kVertexCluster  ("v:cluster", int): the hierarchy node whose tile the vertex belongs to (a rim
+//!    vertex merged across a gap strip is in the fans of two or more tiles and names one of them).
 //!  - kFaceTile       ("f:tile", int): the tile (hierarchy node) of a T1 fan face, -1 for T2 gap faces.
 //!  - kFaceGap        ("f:gap", bool): true for gap-filling (T2) faces.
 //! Vertex normals use OpenMesh's standard property.

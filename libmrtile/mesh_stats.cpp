@@ -448,15 +448,11 @@ TopologyStats topology_stats(const std::vector<Vec3>& positions, const std::vect
     return soup_topology(positions, triangles);
 }
 
-DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh)
-{
-    if (points.empty())
-        return {};
-    const double diagonal = checked_diagonal(points, "point_to_mesh_distance");
-    const Soup soup = mesh_to_soup(mesh);
-    if (soup.triangles.empty())
-        throw InvalidInput("point_to_mesh_distance: the mesh has no face to measure the distance to");
+namespace {
 
+// The closest point of `soup` to every point, with the soup index of its triangle.
+std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vector<Vec3>& points, const Soup& soup)
+{
     using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
     using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
     std::vector<CgalTriangle> triangles;
@@ -469,13 +465,49 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     // close, so the search sphere starts small. This replaces CGAL's kd-tree of hints (a third faster).
     tree.do_not_accelerate_distance_queries();
     Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin());
-    std::vector<double> squared(points.size());
+    std::vector<std::pair<std::uint32_t, Vec3>> out(points.size());
     for (const std::size_t i : morton_order(points)) {
-        const CgalPoint query = to_cgal(points[i]);
-        hint = tree.closest_point_and_primitive(query, hint);
-        squared[i] = CGAL::squared_distance(query, hint.first);
+        hint = tree.closest_point_and_primitive(to_cgal(points[i]), hint);
+        out[i] = {static_cast<std::uint32_t>(hint.second - triangles.cbegin()),
+                  Vec3{hint.first.x(), hint.first.y(), hint.first.z()}};
     }
+    return out;
+}
+
+} // namespace
+
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh)
+{
+    if (points.empty())
+        return {};
+    const double diagonal = checked_diagonal(points, "point_to_mesh_distance");
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.triangles.empty())
+        throw InvalidInput("point_to_mesh_distance: the mesh has no face to measure the distance to");
+    const auto closest = soup_closest_points(points, soup);
+    std::vector<double> squared(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        squared[i] = squared_norm(points[i] - closest[i].second);
     return summarize(squared, diagonal);
+}
+
+std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh)
+{
+    if (points.empty())
+        return {};
+    checked_diagonal(points, "closest_points");
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.triangles.empty())
+        throw InvalidInput("closest_points: the mesh has no face");
+    std::vector<int> face_of(soup.triangles.size()); // soup triangle -> face handle index
+    std::size_t k = 0;
+    for (const auto fh : mesh.faces())
+        face_of[k++] = fh.idx();
+    const auto closest = soup_closest_points(points, soup);
+    std::vector<ClosestPoint> out(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        out[i] = {face_of[closest[i].first], closest[i].second};
+    return out;
 }
 
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points)

@@ -80,4 +80,16 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
 //! the points' bounding box has a zero diagonal. An empty mesh gives zeros.
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points);
 
+//! The point of a mesh's surface closest to a query point, and the face it lies on.
+struct ClosestPoint
+{
+    int face = -1; //!< face handle index
+    Vec3 point;
+};
+
+//! \brief The closest point of the mesh surface to each of `points` (exact; ties go to the face CGAL's
+//! AABB tree meets first, the same for the same input). Deterministic.
+//! \throw InvalidInput if points are given but the mesh has no face, or a point is not finite.
+std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh);
+
 } // namespace mrt

@@ -20,6 +20,9 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     result.tiles = tiles.size();
     result.mesh = build_surface(h, tiles, options.surface, &result.surface);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
+    FitOptions fit = options.fit;
+    fit.vertical = fit.vertical || result.surface.height_field_used;
+    result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

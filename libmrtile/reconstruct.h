@@ -10,6 +10,7 @@
 //! \endcode
 
 #include "libmrtile/cut.h"
+#include "libmrtile/fit_vertices.h"
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/refine_fans.h"
@@ -23,6 +24,8 @@ struct MeshOptions
     TileOptions tiles;       //!< tile generation (§4.2)
     SurfaceOptions surface;  //!< gap triangulation and manifold assembly (§4.3)
     FanRefineOptions refine; //!< interior vertices where a fan deviates from its tile (refine_fans.h)
+    //! vertex positions fitted to the points, last (fit_vertices.h); vertical in height-field mode
+    FitOptions fit;
 };
 
 struct MeshResult
@@ -31,7 +34,8 @@ struct MeshResult
     SurfaceStats surface;
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
-    double seconds = 0.0; //!< tiles + surface
+    FitStats fit;                   //!< the vertex fit (fit_vertices)
+    double seconds = 0.0; //!< tiles + surface + fit
 };
 
 //! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.

@@ -38,7 +38,9 @@
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
 //     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
 //  6. The ε-split points that carry no shape are collapsed into their loop neighbours (they lie on the
-//     fans' straight edges, so the fans do not change): a third to a half fewer faces, same error.
+//     fans' straight edges, so the fans do not change): a third to a half fewer faces, same error. Then
+//     near-collinear rim points, then rim points across the one-spacing strips of gap faces between
+//     tiles, each while the surface moves by little next to the tile's own RMS plane distance.
 //
 // GCC 12 at -O2 warns inside OpenMesh's PropertyT<Vec3d>::push_back that it copies a default,
 // deliberately uninitialised normal; harmless, and attributed to a standard header, so it can only be
@@ -2050,7 +2052,12 @@ double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 // when no neighbour of the point was moved by an earlier collapse of an input point (so the error
 // does not add up).
 // Returns the number of points removed (the caller collects the garbage).
-std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const Projection& projection)
+// With `across_strips`, the edges collapsed are instead those with a gap face on both sides that join
+// two rim points: the strip of gap faces between two tiles is about one point spacing wide and costs two
+// faces per rim point while it carries almost no shape, so its rim points are merged pairwise (the
+// shortest such edge first) and neighbouring fans meet directly.
+std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const Projection& projection,
+                                 bool across_strips = false)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
@@ -2075,12 +2082,23 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
             around += triangle_cross(p[0], p[1], p[2]);
         }
         around = normalized(around);
-        for (const Mesh::HalfedgeHandle h : mesh.voh_range(v)) {
+        std::vector<Mesh::HalfedgeHandle> outgoing;
+        for (const Mesh::HalfedgeHandle h : mesh.voh_range(v))
+            outgoing.push_back(h);
+        if (across_strips)
+            std::stable_sort(outgoing.begin(), outgoing.end(), [&](Mesh::HalfedgeHandle a, Mesh::HalfedgeHandle b) {
+                return squared_distance(at, point(mesh.to_vertex_handle(a))) < squared_distance(at, point(mesh.to_vertex_handle(b)));
+            });
+        for (const Mesh::HalfedgeHandle h : outgoing) {
             const Mesh::VertexHandle w = mesh.to_vertex_handle(h);
             const Mesh::FaceHandle left = mesh.face_handle(h), right = mesh.opposite_face_handle(h);
-            // A loop edge has the fan on one side only (the edge to the apex has it on both).
-            const bool fan_edge = (left.is_valid() && tile_of_face[left] >= 0) != (right.is_valid() && tile_of_face[right] >= 0);
-            if (!fan_edge || touched[static_cast<std::size_t>(w.idx())] || !mesh.is_collapse_ok(h))
+            const bool left_fan = left.is_valid() && tile_of_face[left] >= 0, right_fan = right.is_valid() && tile_of_face[right] >= 0;
+            // A loop edge has the fan on one side only (the edge to the apex has it on both); a strip edge
+            // has gap faces on both sides and a rim point at each end.
+            const bool wanted = across_strips ? left.is_valid() && right.is_valid() && !left_fan && !right_fan &&
+                                                    slack[static_cast<std::size_t>(w.idx())] >= 0.0
+                                              : left_fan != right_fan;
+            if (!wanted || touched[static_cast<std::size_t>(w.idx())] || !mesh.is_collapse_ok(h))
                 continue;
             bool keeps_shape = true;
             double moved = std::numeric_limits<double>::infinity();
@@ -2127,8 +2145,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
         !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
         !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length) || !(options.interior_gap_degrees > 0.0) ||
-        !(options.max_gap_width >= 0.0))
-        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width must be >= 0 and alpha_factor, "
+        !(options.max_gap_width >= 0.0) || !(options.collapse_tolerance >= 0.0) || !(options.strip_tolerance >= 0.0))
+        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width, collapse_tolerance, strip_tolerance must be >= 0 and alpha_factor, "
                            "split_factor, max_turn_degrees, max_tilt_degrees, interior_gap_degrees > 0");
     std::size_t fan_tiles = 0;
     for (const Tile& t : tiles) {
@@ -2333,17 +2351,20 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     if (options.collapse_split_points) {
         // Split points may go wherever the shape allows (they carry none); input points on a loop
         // within collapse_tolerance × their tile's RMS plane distance; apexes and fanless points never.
-        std::vector<double> slack(mesh.n_vertices(), -1.0);
+        std::vector<double> slack(mesh.n_vertices(), -1.0), strip_slack(mesh.n_vertices(), -1.0);
         for (std::uint32_t v = 0; v < origin.size(); ++v) {
             if (!used[v])
                 continue;
             const SurfaceVertex& sv = layout.vertices[origin[v]];
             const auto t = static_cast<std::size_t>(sv.tile);
-            double& out = slack[static_cast<std::size_t>(handle[v].idx())];
+            const double rms = h.nodes[static_cast<std::size_t>(tiles[t].node)].rms_plane_distance;
+            const auto i = static_cast<std::size_t>(handle[v].idx());
             if (sv.split)
-                out = std::numeric_limits<double>::infinity();
+                slack[i] = std::numeric_limits<double>::infinity();
             else if (sv.loop_pos != kNone)
-                out = options.collapse_tolerance * h.nodes[static_cast<std::size_t>(tiles[t].node)].rms_plane_distance;
+                slack[i] = options.collapse_tolerance * rms;
+            if (sv.split || sv.loop_pos != kNone)
+                strip_slack[i] = options.strip_tolerance * rms;
         }
         mesh.request_vertex_status();
         mesh.request_edge_status();
@@ -2361,6 +2382,13 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         for (int pass = 0; pass < 3; ++pass) {
             st.collapsed_split_points += collapse_loop_points(mesh, slack, projection);
             for (double& x : slack)
+                x *= 0.5;
+        }
+        // Then the strips between tiles, in the same halving passes (after the loops, so that the rim
+        // points that carry no shape are gone and the strips' remaining pairs are the ones merged).
+        for (int pass = 0; pass < 3 && options.strip_tolerance > 0.0; ++pass) {
+            st.collapsed_split_points += collapse_loop_points(mesh, strip_slack, projection, true);
+            for (double& x : strip_slack)
                 x *= 0.5;
         }
         mesh.garbage_collection();

@@ -81,6 +81,12 @@ struct SurfaceOptions
     //! moves by at most this × their tile's RMS plane distance, in three passes that halve it (so at most
     //! 1.75 × this in all; 0 = split points only). A gap face may turn freely but not fold.
     double collapse_tolerance = 0.5;
+    //! With collapse_split_points, then merge the rim points across the strips of gap faces between
+    //! tiles (an edge with a gap face on both sides joining two rim points collapses, shortest first)
+    //! when the surface moves by at most this × the tile's RMS plane distance, in three halving passes
+    //! (0 = off). A strip is about one point spacing wide and costs two faces per rim point for almost no
+    //! shape: merging it spends those faces where the vertex fit (fit_vertices.h) can use them.
+    double strip_tolerance = 2.0;
     //! Threads for the tiles' local Delaunay triangulations (0 = one per hardware thread). The result
     //! does not depend on it.
     std::size_t threads = 0;

@@ -215,6 +215,7 @@ struct MeshArgs
     std::string stats_json;
     bool no_quality = false;
     double refine_fans = 0.0;
+    int fit_rounds = FitOptions{}.rounds;
 
     void add(CLI::App* cmd)
     {
@@ -229,6 +230,10 @@ struct MeshArgs
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
             ->check(kNonNegative);
+        cmd->add_option("--fit-rounds", fit_rounds,
+                        "least-squares rounds fitting the vertices to the points (0 = interpolate, as the paper)")
+            ->check(CLI::Range(0, 100))
+            ->capture_default_str();
     }
 
     MeshOptions options() const
@@ -238,6 +243,7 @@ struct MeshArgs
         o.surface.height_field = height_field == "on" ? HeightField::On : height_field == "off" ? HeightField::Off : HeightField::Auto;
         o.surface.bridge_steps = !keep_steps;
         o.refine.max_deviation = refine_fans;
+        o.fit.rounds = fit_rounds;
         return o;
     }
 };
@@ -295,6 +301,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["refused_faces"] = r.surface.refused_faces;
     j["holes_filled"] = r.surface.holes_filled;
     j["refined_points"] = r.refined_points;
+    j["fit_rounds"] = r.fit.rounds;
+    j["fit_clamped"] = r.fit.clamped;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {

@@ -1,0 +1,234 @@
+// Beyond the paper (§4.3 builds the surface from input points, so it interpolates): the output is
+// meant to approximate the sample at a given size, and an interpolating mesh wastes half its error
+// budget by lying on one side of a curved surface. Least squares over the vertex heights (one unknown
+// per vertex, along its normal) is the cheapest fit that keeps the connectivity, and so every topology
+// guarantee of the surface stage; the damping and the move limit keep it a small, safe correction.
+#include "libmrtile/fit_vertices.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/mesh_stats.h"
+
+#include <algorithm>
+#include <cassert>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace mrt {
+namespace {
+
+Vec3 to_vec(const Mesh::Point& p) { return {p[0], p[1], p[2]}; }
+
+struct Csr
+{
+    std::vector<std::size_t> start; // row v: entries start[v] .. start[v + 1]
+    std::vector<int> column;
+    std::vector<double> value;
+
+    double& at(int row, int col)
+    {
+        const auto b = column.begin() + static_cast<std::ptrdiff_t>(start[static_cast<std::size_t>(row)]);
+        const auto e = column.begin() + static_cast<std::ptrdiff_t>(start[static_cast<std::size_t>(row) + 1]);
+        const auto it = std::lower_bound(b, e, col);
+        assert(it != e && *it == col);
+        return value[static_cast<std::size_t>(it - column.begin())];
+    }
+    void multiply(const std::vector<double>& x, std::vector<double>& y) const
+    {
+        for (std::size_t r = 0; r + 1 < start.size(); ++r) {
+            double s = 0.0;
+            for (std::size_t k = start[r]; k < start[r + 1]; ++k)
+                s += value[k] * x[static_cast<std::size_t>(column[k])];
+            y[r] = s;
+        }
+    }
+};
+
+// Rows: each vertex and its one-ring neighbours (the pairs a face can couple), sorted.
+Csr vertex_graph(const Mesh& mesh)
+{
+    Csr m;
+    const std::size_t n = mesh.n_vertices();
+    m.start.assign(n + 1, 0);
+    std::vector<int> row;
+    for (std::size_t v = 0; v < n; ++v) {
+        const Mesh::VertexHandle vh(static_cast<int>(v));
+        row.assign(1, static_cast<int>(v));
+        if (!mesh.status(vh).deleted())
+            for (const auto w : mesh.vv_range(vh))
+                row.push_back(w.idx());
+        std::sort(row.begin(), row.end());
+        row.erase(std::unique(row.begin(), row.end()), row.end());
+        m.column.insert(m.column.end(), row.begin(), row.end());
+        m.start[v + 1] = m.column.size();
+    }
+    m.value.assign(m.column.size(), 0.0);
+    return m;
+}
+
+// Jacobi-preconditioned conjugate gradients, sequential (so the result is the same on every run).
+std::vector<double> solve(const Csr& m, const std::vector<double>& b)
+{
+    const std::size_t n = b.size();
+    std::vector<double> x(n, 0.0), r = b, z(n), p(n), q(n), inverse_diagonal(n, 1.0);
+    for (std::size_t v = 0; v < n; ++v)
+        for (std::size_t k = m.start[v]; k < m.start[v + 1]; ++k)
+            if (static_cast<std::size_t>(m.column[k]) == v && m.value[k] > 0.0)
+                inverse_diagonal[v] = 1.0 / m.value[k];
+    auto dot_n = [&](const std::vector<double>& a, const std::vector<double>& c) {
+        double s = 0.0;
+        for (std::size_t i = 0; i < n; ++i)
+            s += a[i] * c[i];
+        return s;
+    };
+    for (std::size_t i = 0; i < n; ++i)
+        z[i] = inverse_diagonal[i] * r[i];
+    p = z;
+    double rz = dot_n(r, z);
+    const double stop = 1e-20 * std::max(rz, std::numeric_limits<double>::min());
+    for (int iteration = 0; iteration < 1000 && rz > stop; ++iteration) {
+        m.multiply(p, q);
+        const double pq = dot_n(p, q);
+        if (!(pq > 0.0))
+            break;
+        const double step = rz / pq;
+        for (std::size_t i = 0; i < n; ++i) {
+            x[i] += step * p[i];
+            r[i] -= step * q[i];
+            z[i] = inverse_diagonal[i] * r[i];
+        }
+        const double rz_next = dot_n(r, z);
+        const double beta = rz_next / rz;
+        rz = rz_next;
+        for (std::size_t i = 0; i < n; ++i)
+            p[i] = z[i] + beta * p[i];
+    }
+    return x;
+}
+
+// Unit directions the vertices move along: area-weighted normals, or +z.
+std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical)
+{
+    std::vector<Vec3> d(mesh.n_vertices(), Vec3{0.0, 0.0, vertical ? 1.0 : 0.0});
+    if (vertical)
+        return d;
+    for (const auto f : mesh.faces()) {
+        std::array<Vec3, 3> p;
+        int k = 0;
+        for (const auto v : mesh.fv_range(f))
+            p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(v));
+        const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
+        for (const auto v : mesh.fv_range(f))
+            d[static_cast<std::size_t>(v.idx())] = d[static_cast<std::size_t>(v.idx())] + area_normal;
+    }
+    for (Vec3& x : d)
+        x = squared_norm(x) > 0.0 ? normalized(x) : Vec3{};
+    return d;
+}
+
+} // namespace
+
+FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options)
+{
+    if (options.rounds < 0 || !(options.damping > 0.0) || !(options.max_move >= 0.0) || !std::isfinite(options.damping) ||
+        !std::isfinite(options.max_move))
+        throw InvalidInput("fit_vertices: rounds must be >= 0, damping > 0 and max_move >= 0 (finite)");
+    FitStats stats;
+    if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)
+        return stats;
+    const std::size_t n = mesh.n_vertices();
+    // Every stride-th point: points are usually in a spatially coherent order (the hierarchy's), so
+    // a fixed stride keeps the sample spread over the whole surface.
+    const std::size_t wanted = options.points_per_vertex * n;
+    const std::size_t stride = options.points_per_vertex == 0 || wanted >= points.size() ? 1 : (points.size() + wanted - 1) / wanted;
+    std::vector<Vec3> sample;
+    if (stride > 1) {
+        sample.reserve(points.size() / stride + 1);
+        for (std::size_t i = 0; i < points.size(); i += stride)
+            sample.push_back(points[i]);
+    }
+    const std::vector<Vec3>& used = stride > 1 ? sample : points;
+    stats.points = used.size();
+    double moved_sum = 0.0;
+    std::size_t moved_count = 0;
+    for (int round = 0; round < options.rounds; ++round) {
+        const std::vector<ClosestPoint> closest = closest_points(used, mesh);
+        const std::vector<Vec3> direction = move_directions(mesh, options.vertical);
+        Csr m = vertex_graph(mesh);
+        std::vector<double> b(n, 0.0);
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            const Mesh::FaceHandle f(closest[i].face);
+            std::array<int, 3> v{};
+            std::array<Vec3, 3> p;
+            int k = 0;
+            for (const auto vh : mesh.fv_range(f)) {
+                v[static_cast<std::size_t>(k)] = vh.idx();
+                p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(vh));
+            }
+            const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
+            const double twice_area = norm(area_normal);
+            if (!(twice_area > 0.0))
+                continue;
+            const Vec3 normal = area_normal / twice_area;
+            // Barycentric coordinates of the closest point (on the face, so all in [0, 1]).
+            const Vec3 c = closest[i].point;
+            std::array<double, 3> l{norm(cross(p[1] - c, p[2] - c)) / twice_area, norm(cross(p[2] - c, p[0] - c)) / twice_area, 0.0};
+            l[2] = std::max(0.0, 1.0 - l[0] - l[1]);
+            std::array<double, 3> a{};
+            for (std::size_t j = 0; j < 3; ++j)
+                a[j] = l[j] * dot(normal, direction[static_cast<std::size_t>(v[j])]);
+            const double residual = dot(normal, c - used[i]);
+            for (std::size_t j = 0; j < 3; ++j) {
+                b[static_cast<std::size_t>(v[j])] -= a[j] * residual;
+                for (std::size_t q = 0; q < 3; ++q)
+                    m.at(v[j], v[q]) += a[j] * a[q];
+            }
+        }
+        // Damping: a fraction of the mean diagonal, the same for every vertex.
+        double diagonal_sum = 0.0;
+        std::size_t constrained = 0;
+        for (std::size_t v = 0; v < n; ++v) {
+            const double d = m.at(static_cast<int>(v), static_cast<int>(v));
+            if (d > 0.0) {
+                diagonal_sum += d;
+                ++constrained;
+            }
+        }
+        if (constrained == 0)
+            break;
+        const double mu = options.damping * diagonal_sum / static_cast<double>(constrained);
+        for (std::size_t v = 0; v < n; ++v)
+            m.at(static_cast<int>(v), static_cast<int>(v)) += mu;
+        const std::vector<double> t = solve(m, b);
+        // Move limit from the positions before this round's moves.
+        std::vector<double> shortest(n, std::numeric_limits<double>::infinity());
+        for (const auto e : mesh.edges()) {
+            const auto h = mesh.halfedge_handle(e, 0);
+            const int a = mesh.from_vertex_handle(h).idx(), c = mesh.to_vertex_handle(h).idx();
+            const double length = norm(to_vec(mesh.point(mesh.from_vertex_handle(h))) - to_vec(mesh.point(mesh.to_vertex_handle(h))));
+            shortest[static_cast<std::size_t>(a)] = std::min(shortest[static_cast<std::size_t>(a)], length);
+            shortest[static_cast<std::size_t>(c)] = std::min(shortest[static_cast<std::size_t>(c)], length);
+        }
+        for (const auto vh : mesh.vertices()) {
+            const std::size_t v = static_cast<std::size_t>(vh.idx());
+            if (!std::isfinite(shortest[v]))
+                continue;
+            const double limit = options.max_move * shortest[v];
+            double move = t[v];
+            if (std::abs(move) > limit) {
+                move = std::copysign(limit, move);
+                ++stats.clamped;
+            }
+            mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move;
+            moved_sum += std::abs(move);
+            ++moved_count;
+        }
+        ++stats.rounds;
+    }
+    stats.mean_move = moved_count > 0 ? moved_sum / static_cast<double>(moved_count) : 0.0;
+    mesh.update_normals();
+    return stats;
+}
+
+} // namespace mrt

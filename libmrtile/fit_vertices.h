@@ -1,0 +1,59 @@
+#pragma once
+//! \file fit_vertices.h
+//! \brief Beyond the paper: vertex positions fitted to the input points (least squares, along normals).
+//! \details The paper's tiles interpolate: hull points are input points and a fan is a chord of the
+//! surface, so on a curved patch every face lies on one side of the points it stands for. This stage
+//! keeps the connectivity and moves each vertex along its normal (or vertically, for height fields) to
+//! minimise the sum of squared distances from the input points to the planes of their closest faces
+//! (Hoppe et al. 1993's E_dist, linearized like point-to-plane ICP), with a small damping that holds
+//! still any vertex no point constrains. Points are re-assigned to their closest faces between rounds.
+//! A vertex moves at most `max_move` × its shortest edge, so fans do not fold and thin parts do not
+//! cross; topology is untouched (the stage changes positions only).
+//! \code
+//!   Mesh m = mesh_cut(h, cut).mesh;             // mesh_cut runs it by default (MeshOptions::fit)
+//!   FitOptions o;
+//!   o.rounds = 3;                               // re-assign points and solve again, three times
+//!   FitStats s = fit_vertices(m, h.cloud.positions, o);
+//! \endcode
+
+#include "libmrtile/mesh.h"
+#include "libmrtile/vec3.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace mrt {
+
+struct FitOptions
+{
+    //! Assign-and-solve rounds (0 = off). The first round does most of the work; the second follows
+    //! points that changed face.
+    int rounds = 2;
+    //! Weight pulling each vertex back to where it started, relative to the mean weight the points put
+    //! on a vertex (keeps the system well posed where few points are; larger = smaller moves).
+    double damping = 0.05;
+    //! A vertex moves at most this fraction of its shortest incident edge per round (moving along the
+    //! normal, it cannot fold its faces before it has moved about an edge length).
+    double max_move = 0.5;
+    //! Use at most about this many points per vertex (every k-th point, k the same for all): the fit
+    //! of a vertex needs a few dozen points, and a fine sample under a coarse mesh would cost time
+    //! without changing the result much. 0 = every point.
+    std::size_t points_per_vertex = 32;
+    //! Move vertices along z instead of along their normals: a height field stays a graph over xy.
+    bool vertical = false;
+};
+
+struct FitStats
+{
+    int rounds = 0;             //!< rounds run
+    std::size_t points = 0;     //!< points used (per round)
+    double mean_move = 0.0;     //!< mean |displacement| of the vertices over all rounds (model units)
+    std::size_t clamped = 0;    //!< vertex moves cut to max_move (summed over rounds)
+};
+
+//! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates
+//! the face and vertex normals. A mesh without faces, or no points, is left unchanged.
+//! \throw InvalidInput if an option is out of range or a point is not finite.
+FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options = {});
+
+} // namespace mrt

@@ -1,0 +1,156 @@
+// Tests of fit_vertices.h: on analytic shapes the fit lowers the mean distance and leaves the
+// connectivity alone; a planar sample stays planar; height fields move only vertically; moves respect
+// the limit; the result is deterministic; bad options are refused.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/fit_vertices.h"
+#include "libmrtile/reconstruct.h"
+#include "libmrtile/shapes.h"
+
+#include "tests/mesh_fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace mrt {
+namespace {
+
+std::vector<Vec3> positions(const Mesh& mesh)
+{
+    std::vector<Vec3> out;
+    for (const auto v : mesh.vertices()) {
+        const Mesh::Point& p = mesh.point(v);
+        out.push_back({p[0], p[1], p[2]});
+    }
+    return out;
+}
+
+std::vector<double> shortest_edges(const Mesh& mesh)
+{
+    std::vector<double> out(mesh.n_vertices(), std::numeric_limits<double>::infinity());
+    for (const auto e : mesh.edges()) {
+        const auto h = mesh.halfedge_handle(e, 0);
+        const double l = mesh.calc_edge_length(e);
+        for (const auto v : {mesh.from_vertex_handle(h), mesh.to_vertex_handle(h)})
+            out[static_cast<std::size_t>(v.idx())] = std::min(out[static_cast<std::size_t>(v.idx())], l);
+    }
+    return out;
+}
+
+// A coarse UV sphere inscribed in a dense sample of the unit sphere: every face is a chord under the
+// points. The fit pushes the vertices out; the mean distance falls by more than half (a chord's mean
+// sag is 2/3 of its maximum; the best offset leaves about a third of it), connectivity and the face
+// count stay, and no vertex moves farther than the limit.
+TEST(FitVertices, inscribed_sphere_moves_out_and_fits_better)
+{
+    const std::vector<Vec3> points = shapes::sphere(20000).positions;
+    Mesh mesh = testing::uv_sphere(8, 16, 1.0);
+    const std::vector<Vec3> before = positions(mesh);
+    const std::vector<double> shortest = shortest_edges(mesh);
+    const DistanceStats d0 = point_to_mesh_distance(points, mesh);
+    FitOptions o;
+    o.rounds = 1;
+    const FitStats s = fit_vertices(mesh, points, o);
+    EXPECT_EQ(s.rounds, 1);
+    const DistanceStats d1 = point_to_mesh_distance(points, mesh);
+    EXPECT_LT(d1.mean, 0.5 * d0.mean);
+    const std::vector<Vec3> after = positions(mesh);
+    ASSERT_EQ(after.size(), before.size());
+    for (std::size_t i = 0; i < after.size(); ++i) {
+        EXPECT_GT(norm(after[i]), 1.0) << "vertex " << i << " should move outward";
+        EXPECT_LE(distance(after[i], before[i]), o.max_move * shortest[i] * (1 + 1e-12));
+    }
+    const TopologyStats t = topology_stats(mesh);
+    EXPECT_EQ(t.faces, 2u * 16u * 7u);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.genus, 0);
+    // More rounds only re-assign points: not worse.
+    o.rounds = 2;
+    Mesh again = testing::uv_sphere(8, 16, 1.0);
+    fit_vertices(again, points, o);
+    EXPECT_LE(point_to_mesh_distance(points, again).mean, d1.mean * 1.001);
+}
+
+// Points exactly on a plane under a flat grid mesh: nothing to fit, every vertex stays on the plane.
+TEST(FitVertices, planar_sample_stays_planar)
+{
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 4.0);
+    std::vector<Vec3> points(5000);
+    for (Vec3& p : points)
+        p = {u(rng), u(rng), 0.5};
+    Mesh mesh = testing::grid_mesh(8, 8, 0.0, 0.0, 0.5, [](double, double) { return 0.5; });
+    fit_vertices(mesh, points);
+    for (const Vec3& p : positions(mesh))
+        EXPECT_NEAR(p.z, 0.5, 1e-12);
+}
+
+// Vertical mode on a height field: x and y of every vertex are bit-identical, z fits the wave better.
+TEST(FitVertices, vertical_mode_keeps_a_graph)
+{
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 8.0);
+    std::vector<Vec3> points(20000);
+    for (Vec3& p : points) {
+        const double x = u(rng), y = u(rng);
+        p = {x, y, testing::wave(x, y)};
+    }
+    Mesh mesh = testing::grid_mesh(6, 6, 0.0, 0.0, 8.0 / 6, testing::wave);
+    const std::vector<Vec3> before = positions(mesh);
+    const double d0 = point_to_mesh_distance(points, mesh).mean;
+    FitOptions o;
+    o.vertical = true;
+    fit_vertices(mesh, points, o);
+    const std::vector<Vec3> after = positions(mesh);
+    for (std::size_t i = 0; i < after.size(); ++i) {
+        EXPECT_EQ(after[i].x, before[i].x);
+        EXPECT_EQ(after[i].y, before[i].y);
+    }
+    EXPECT_LT(point_to_mesh_distance(points, mesh).mean, 0.8 * d0);
+}
+
+// The pipeline runs the fit by default: on a noisy torus the fitted mesh is closer to the points than
+// the interpolating one, with the same faces and topology, and two runs give identical positions.
+TEST(FitVertices, mesh_cut_fits_by_default_and_is_deterministic)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(20000));
+    const Cut cut = cut_by_tolerance(h, 0.005);
+    MeshOptions off;
+    off.fit.rounds = 0;
+    const MeshResult plain = mesh_cut(h, cut, off);
+    const MeshResult fitted = mesh_cut(h, cut);
+    const MeshResult again = mesh_cut(h, cut);
+    EXPECT_EQ(fitted.fit.rounds, FitOptions{}.rounds);
+    EXPECT_EQ(fitted.mesh.n_faces(), plain.mesh.n_faces());
+    const TopologyStats t = topology_stats(fitted.mesh);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.genus, 1);
+    EXPECT_LT(measure_quality(h, cut, fitted.mesh).point_to_mesh.mean,
+              0.9 * measure_quality(h, cut, plain.mesh).point_to_mesh.mean);
+    EXPECT_EQ(positions(fitted.mesh), positions(again.mesh));
+}
+
+TEST(FitVertices, bad_options_are_refused_and_empty_input_is_a_no_op)
+{
+    Mesh mesh = testing::uv_sphere(4, 8, 1.0);
+    const std::vector<Vec3> points{{0, 0, 1}, {1, 0, 0}};
+    FitOptions o;
+    o.rounds = -1;
+    EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput);
+    o = {};
+    o.damping = 0.0;
+    EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput);
+    o = {};
+    o.max_move = std::nan("");
+    EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput);
+    const std::vector<Vec3> before = positions(mesh);
+    EXPECT_EQ(fit_vertices(mesh, {}).rounds, 0);
+    EXPECT_EQ(positions(mesh), before);
+}
+
+} // namespace
+} // namespace mrt
