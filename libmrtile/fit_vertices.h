@@ -38,7 +38,7 @@ struct FitOptions
     //! Use at most about this many points per vertex (every k-th point, k the same for all): the fit
     //! of a vertex needs a few dozen points, and a fine sample under a coarse mesh would cost time
     //! without changing the result much. 0 = every point.
-    std::size_t points_per_vertex = 32;
+    std::size_t points_per_vertex = 16;
     //! Move vertices along z instead of along their normals: a height field stays a graph over xy.
     bool vertical = false;
 };

@@ -225,8 +225,16 @@ struct Partition
     std::vector<std::vector<double>> closest;
 };
 
+// Step between the points of a node used for its tile (TileOptions::max_points).
+std::uint32_t sample_stride(std::uint32_t count, std::size_t max_points)
+{
+    if (max_points == 0 || count <= max_points)
+        return 1;
+    return static_cast<std::uint32_t>((count + max_points - 1) / max_points);
+}
+
 Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>& cut, const std::vector<Vec3>& centres,
-                            const std::vector<std::vector<std::uint32_t>>& graph)
+                            const std::vector<std::vector<std::uint32_t>>& graph, std::size_t max_points)
 {
     const auto tiles = static_cast<std::uint32_t>(cut.size());
     // Coincident centres: the Delaunay graph keeps only the first; walks start there.
@@ -246,14 +254,18 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
     for (std::uint32_t k = 0; k < tiles; ++k)
         out.closest[k].assign(graph[k].size(), std::numeric_limits<double>::infinity());
     std::size_t total = 0;
-    for (std::int32_t node : cut)
-        total += h.nodes[static_cast<std::size_t>(node)].count();
+    for (std::int32_t node : cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(node)];
+        const std::uint32_t stride = sample_stride(n.count(), max_points);
+        total += (n.count() + stride - 1) / stride;
+    }
     std::vector<std::uint32_t> owner(total);
     std::vector<std::uint32_t> point(total);
     std::size_t at = 0;
     for (std::uint32_t k = 0; k < tiles; ++k) {
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
-        for (std::uint32_t i = n.begin; i < n.end; ++i, ++at) {
+        const std::uint32_t stride = sample_stride(n.count(), max_points);
+        for (std::uint32_t i = n.begin; i < n.end; i += stride, ++at) {
             const Vec3& p = h.cloud.positions[i];
             std::uint32_t best = representative[k];
             double best_d = squared_distance(p, centres[best]);
@@ -303,8 +315,10 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
 {
     check_node(h, node);
     const Node& n = h.nodes[static_cast<std::size_t>(node)];
-    std::vector<std::uint32_t> indices(n.count());
-    std::iota(indices.begin(), indices.end(), n.begin);
+    std::vector<std::uint32_t> indices;
+    const std::uint32_t stride = sample_stride(n.count(), options.max_points);
+    for (std::uint32_t i = n.begin; i < n.end; i += stride)
+        indices.push_back(i);
     return tile_from_points(h, node, indices.data(), indices.size(), options);
 }
 
@@ -327,7 +341,7 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
     for (std::int32_t node : cut)
         centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
     const std::vector<std::vector<std::uint32_t>> graph = delaunay_graph(centres);
-    const Partition part = voronoi_partition(h, cut, centres, graph);
+    const Partition part = voronoi_partition(h, cut, centres, graph, options.max_points);
     for (std::size_t k = 0; k < cut.size(); ++k)
         tiles.push_back(tile_from_points(h, cut[k], part.order.data() + part.start[k],
                                          part.start[k + 1] - part.start[k], options));

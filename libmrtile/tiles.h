@@ -36,6 +36,13 @@ struct TileOptions
     //! Place the fan apex at the height (along the normal) that fits the fan to the tile's points in
     //! least squares; false: the mean height of the points near the centre (on the surface).
     bool fit_apex = true;
+    //! Build each tile from at most about this many of its node's points (every k-th point of the node's
+    //! range, which the tree keeps spatially coherent), so that a cut costs time in proportion to its
+    //! tiles, not to the points under them. 0 = every point (the paper's tiles). The hull of a sample
+    //! lies inside the full hull by about the sample's spacing: gaps between tiles widen to it and the
+    //! gap triangulation (T2) fills them. Fewer rim points on coarse tiles also means fewer faces for
+    //! the same error (after the vertex fit); below ~64 the gaps get wide enough to close real holes.
+    std::size_t max_points = 128;
 };
 
 struct Tile

@@ -157,7 +157,9 @@ TEST(Tiles, trimmed_tiles_are_voronoi_cells)
     // are nearer to another node's mean than to their own.
     const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(4000), 60, 1);
     const Hierarchy& h = fc.hierarchy;
-    const std::vector<Tile> tiles = make_tiles(h, fc.cut);
+    TileOptions every_point;
+    every_point.max_points = 0;
+    const std::vector<Tile> tiles = make_tiles(h, fc.cut, every_point);
     ASSERT_EQ(tiles.size(), fc.cut.size());
     auto nearest = [&](const Vec3& p) {
         std::size_t best = 0;
@@ -225,6 +227,53 @@ TEST(Tiles, fitted_apex_lies_above_a_cap)
     ratio /= static_cast<double>(tiles.size());
     EXPECT_GT(ratio, 0.4);
     EXPECT_LT(ratio, 1.3);
+}
+
+} // namespace
+} // namespace mrt
+
+namespace mrt {
+namespace {
+
+// Sampled tiles (TileOptions::max_points): every k-th point of each cut node, k = ceil(count / max).
+// Brute force: the tiles hold exactly the sample, each hull point is a sample point whose nearest cut
+// centre is its tile's, and a tile's hull is inside the hull of the same cell with every point (the
+// sample of a cell is a subset of the cell).
+TEST(Tiles, sampled_tiles_are_voronoi_cells_of_the_sample)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::torus(20000), 40, 1);
+    const Hierarchy& h = fc.hierarchy;
+    TileOptions sampled, every_point;
+    sampled.max_points = 64;
+    every_point.max_points = 0;
+    const std::vector<Tile> tiles = make_tiles(h, fc.cut, sampled);
+    const std::vector<Tile> full = make_tiles(h, fc.cut, every_point);
+    ASSERT_EQ(tiles.size(), fc.cut.size());
+    std::vector<bool> in_sample(h.cloud.size(), false);
+    std::size_t sample = 0;
+    for (const std::int32_t id : fc.cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        const std::uint32_t stride = (n.count() + 63) / 64;
+        ASSERT_GT(stride, 1u) << "the fixture's nodes should be larger than the sample";
+        for (std::uint32_t i = n.begin; i < n.end; i += stride, ++sample)
+            in_sample[i] = true;
+    }
+    std::size_t total = 0;
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        total += tiles[k].points;
+        EXPECT_LT(tiles[k].points, full[k].points);
+        for (std::uint32_t i : tiles[k].boundary) {
+            EXPECT_TRUE(in_sample[i]) << "hull point " << i << " is not in the sample";
+            std::size_t best = 0;
+            for (std::size_t j = 1; j < tiles.size(); ++j)
+                if (squared_distance(h.cloud.positions[i], tiles[j].centre) < squared_distance(h.cloud.positions[i], tiles[best].centre))
+                    best = j;
+            EXPECT_EQ(best, k);
+        }
+        EXPECT_LE(tiles[k].area, full[k].area * (1 + 1e-12));
+        EXPECT_GT(tiles[k].area, 0.5 * full[k].area);
+    }
+    EXPECT_EQ(total, sample);
 }
 
 } // namespace
