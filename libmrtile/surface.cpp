@@ -64,6 +64,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <queue>
@@ -109,6 +110,34 @@ bool is_sliver(const Vec3& a, const Vec3& b, const Vec3& c)
 {
     const double longest = std::max({squared_distance(a, b), squared_distance(b, c), squared_distance(a, c)});
     return !(norm(triangle_cross(a, b, c)) > 1e-9 * longest);
+}
+
+// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0)
+        return distance(p, a);
+    const Vec3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3)
+        return distance(p, b);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0)
+        return distance(p, a + ab * (d1 / (d1 - d3)));
+    const Vec3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6)
+        return distance(p, c);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0)
+        return distance(p, a + ac * (d2 / (d2 - d6)));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return distance(p, b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    const double denom = 1.0 / (va + vb + vc);
+    return distance(p, a + ab * (vb * denom) + ac * (vc * denom));
 }
 
 struct SurfaceVertex
@@ -1636,13 +1665,101 @@ void remove_islands(Surface& s, Islands& islands)
             s.remove(f);
 }
 
-// Finds and removes the islands. Returns the number of tiles whose fans were removed.
-std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles)
+// Finds and removes the islands. Returns the number of tiles whose fans were removed; `removed` gets
+// the (now dead) face ids of each island, in face order.
+std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed)
 {
     Islands islands = find_islands(s, tiles);
     const std::vector<bool> dropped = island_tiles(islands);
+    std::map<std::uint32_t, std::size_t> index_of_part;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+        if (s.alive(f) && islands.doomed[islands.parts.find(f)]) {
+            const auto inserted = index_of_part.emplace(islands.parts.find(f), removed.size());
+            if (inserted.second)
+                removed.emplace_back();
+            removed[inserted.first->second].push_back(f);
+        }
     remove_islands(s, islands);
     return static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
+}
+
+// An island is dropped on the grounds that it broke off a larger surface which, once the island is gone,
+// closes over its place. Where that did not happen (the island is a separate strip of the sample seen
+// beside the main surface, as behind a bunny's leg in a single range scan, or its hole was too wide to
+// fill) the island is put back: its points are far better off with their own surface than with none.
+// An island counts as covered when most of its fan centres lie within `reach` × their tile spacing of
+// a face of the rest. Islands are put back whole (all faces addable) or not at all, and only with at
+// least kMinRestoredTiles fans. Returns the number of islands put back.
+constexpr std::size_t kMinRestoredTiles = 3;
+std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
+                                      const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
+                                      double reach = 2.0)
+{
+    std::size_t restored = 0;
+    for (const std::vector<std::uint32_t>& island : removed) {
+        // Fan centres of the island (one per tile) and the box around them, widened by the reach.
+        std::vector<std::pair<Vec3, double>> centres; // position, reach distance
+        std::vector<bool> seen_tile(loops.size(), false);
+        for (std::uint32_t f : island) {
+            const std::int32_t t = s.face_tile()[f];
+            if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
+                continue;
+            seen_tile[static_cast<std::size_t>(t)] = true;
+            const TileLoop& tl = loops[static_cast<std::size_t>(t)];
+            if (tl.centre != kNone)
+                centres.push_back({positions[tl.centre], reach * tl.spacing});
+        }
+        if (centres.size() < kMinRestoredTiles)
+            continue; // a lone fan or two would be left out as a component of its own anyway (step 5)
+        Vec3 lo = centres[0].first, hi = lo;
+        double margin = 0.0;
+        for (const auto& [c, r] : centres) {
+            lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+            hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+            margin = std::max(margin, r);
+        }
+        // Faces of the rest near the island: one with a vertex in the widened box, or larger than the box.
+        std::vector<std::uint32_t> near;
+        auto inside = [&](const Vec3& p, double m) {
+            return p.x >= lo.x - m && p.y >= lo.y - m && p.z >= lo.z - m && p.x <= hi.x + m && p.y <= hi.y + m && p.z <= hi.z + m;
+        };
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+            if (!s.alive(f))
+                continue;
+            const Tri& t = s.faces()[f];
+            const double size = std::max({distance(positions[t[0]], positions[t[1]]), distance(positions[t[1]], positions[t[2]]),
+                                          distance(positions[t[2]], positions[t[0]])});
+            if (inside(positions[t[0]], margin + size) || inside(positions[t[1]], margin + size) || inside(positions[t[2]], margin + size))
+                near.push_back(f);
+        }
+        std::size_t covered = 0;
+        for (const auto& [c, r] : centres)
+            for (std::uint32_t f : near) {
+                const Tri& t = s.faces()[f];
+                if (point_triangle_distance(c, positions[t[0]], positions[t[1]], positions[t[2]]) <= r) {
+                    ++covered;
+                    break;
+                }
+            }
+        if (2 * covered >= centres.size())
+            continue;
+        std::size_t added = 0;
+        bool ok = true;
+        for (std::uint32_t f : island) {
+            const Tri t = s.faces()[f];
+            if (!s.can_add(t[0], t[1], t[2])) {
+                ok = false;
+                break;
+            }
+            s.add(t[0], t[1], t[2], s.face_tile()[f]);
+            ++added;
+        }
+        if (!ok)
+            s.pop_n(added);
+        else
+            ++restored;
+    }
+    return restored;
 }
 
 
@@ -2013,33 +2130,6 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 constexpr double kMaxCollapseTurnDegrees = 20.0;
 const double kMinGapFaceCos = std::cos(75.0 * kPi / 180.0);
 
-// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
-double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
-{
-    const Vec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0)
-        return distance(p, a);
-    const Vec3 bp = p - b;
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3)
-        return distance(p, b);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        return distance(p, a + ab * (d1 / (d1 - d3)));
-    const Vec3 cp = p - c;
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6)
-        return distance(p, c);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        return distance(p, a + ac * (d2 / (d2 - d6)));
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-        return distance(p, b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-    const double denom = 1.0 / (va + vb + vc);
-    return distance(p, a + ab * (vb * denom) + ac * (vc * denom));
-}
 
 // The ε-splitting of step 1 puts points on long hull edges so that the gap triangles are well shaped
 // while candidates are chosen (§4.3). Once the surface is fixed, most of them carry no shape: a split
@@ -2211,11 +2301,13 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     if (options.fill_holes) {
         const std::vector<bool> interior = interior_tiles(tiles, options.interior_gap_degrees);
         filled = fill_holes(surface, layout, positions, projection, interior, options);
-        islands = drop_islands(surface, tiles);
+        std::vector<std::vector<std::uint32_t>> removed;
+        islands = drop_islands(surface, tiles, removed);
         if (islands > 0) {
             const FillResult more = fill_holes(surface, layout, positions, projection, interior, options);
             filled.holes += more.holes;
             filled.faces += more.faces;
+            restore_uncovered_islands(surface, removed, positions, layout.tiles);
         }
     }
 
