@@ -20,6 +20,7 @@
 #include "libmrtile/gabriel_graph.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -225,12 +226,75 @@ struct Partition
     std::vector<std::vector<double>> closest;
 };
 
+// The convex hull of all of a node's points in its PCA plane. Only the points outside the octagon of
+// the extremes along x, y, x + y and x - y can be on the hull (Akl and Toussaint), so one cheap pass
+// over the points leaves few to sort.
+std::vector<std::uint32_t> node_hull(const Hierarchy& h, const Node& n)
+{
+    const Vec3 u = n.frame.vectors[2], v = cross(n.frame.vectors[0], u), c = n.moments.mean;
+    auto project = [&](std::uint32_t i) {
+        const Vec3 d = h.cloud.positions[i] - c;
+        return Projected{dot(d, u), dot(d, v), i};
+    };
+    // Extremes in 8 directions, counter-clockwise: +x, +x+y, +y, -x+y, -x, -x-y, -y, +x-y.
+    const double dirs[8][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
+    std::array<Projected, 8> extreme;
+    std::array<double, 8> best;
+    best.fill(-std::numeric_limits<double>::infinity());
+    for (std::uint32_t i = n.begin; i < n.end; ++i) {
+        const Projected p = project(i);
+        for (int k = 0; k < 8; ++k) {
+            const double value = dirs[k][0] * p.x + dirs[k][1] * p.y;
+            if (value > best[static_cast<std::size_t>(k)]) {
+                best[static_cast<std::size_t>(k)] = value;
+                extreme[static_cast<std::size_t>(k)] = p;
+            }
+        }
+    }
+    // A point strictly inside the (convex, counter-clockwise) octagon is not on the hull.
+    auto inside = [&](const Projected& p) {
+        for (std::size_t k = 0; k < 8; ++k) {
+            const Projected& a = extreme[k];
+            const Projected& b = extreme[(k + 1) % 8];
+            if (a.x == b.x && a.y == b.y)
+                continue; // coinciding extremes: the octagon has fewer corners
+            if (turn(a, b, p) <= 0.0)
+                return false;
+        }
+        return true;
+    };
+    std::vector<Projected> candidates;
+    for (std::uint32_t i = n.begin; i < n.end; ++i) {
+        const Projected p = project(i);
+        if (!inside(p))
+            candidates.push_back(p);
+    }
+    return convex_hull(candidates, 0.0);
+}
+
 // Step between the points of a node used for its tile (TileOptions::max_points).
 std::uint32_t sample_stride(std::uint32_t count, std::size_t max_points)
 {
     if (max_points == 0 || count <= max_points)
         return 1;
     return static_cast<std::uint32_t>((count + max_points - 1) / max_points);
+}
+
+// The points a node's tile is built from (TileOptions::max_points), ascending: every stride-th point of
+// its range and its hull points, or all of them.
+std::vector<std::uint32_t> node_sample(const Hierarchy& h, const Node& n, std::size_t max_points)
+{
+    const std::uint32_t stride = sample_stride(n.count(), max_points);
+    std::vector<std::uint32_t> sample;
+    for (std::uint32_t i = n.begin; i < n.end; i += stride)
+        sample.push_back(i);
+    if (stride > 1) {
+        for (std::uint32_t i : node_hull(h, n))
+            if ((i - n.begin) % stride != 0)
+                sample.push_back(i);
+        std::sort(sample.begin(), sample.end());
+    }
+    return sample;
 }
 
 Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>& cut, const std::vector<Vec3>& centres,
@@ -253,19 +317,11 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
     out.closest.resize(tiles);
     for (std::uint32_t k = 0; k < tiles; ++k)
         out.closest[k].assign(graph[k].size(), std::numeric_limits<double>::infinity());
-    std::size_t total = 0;
-    for (std::int32_t node : cut) {
-        const Node& n = h.nodes[static_cast<std::size_t>(node)];
-        const std::uint32_t stride = sample_stride(n.count(), max_points);
-        total += (n.count() + stride - 1) / stride;
-    }
-    std::vector<std::uint32_t> owner(total);
-    std::vector<std::uint32_t> point(total);
-    std::size_t at = 0;
+    std::vector<std::uint32_t> owner;
+    std::vector<std::uint32_t> point;
     for (std::uint32_t k = 0; k < tiles; ++k) {
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
-        const std::uint32_t stride = sample_stride(n.count(), max_points);
-        for (std::uint32_t i = n.begin; i < n.end; i += stride, ++at) {
+        for (std::uint32_t i : node_sample(h, n, max_points)) {
             const Vec3& p = h.cloud.positions[i];
             std::uint32_t best = representative[k];
             double best_d = squared_distance(p, centres[best]);
@@ -292,10 +348,11 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
                     c = std::min(c, (d - best_d) / (2.0 * gap));
                 }
             }
-            owner[at] = best;
-            point[at] = i;
+            owner.push_back(best);
+            point.push_back(i);
         }
     }
+    const std::size_t total = owner.size();
     // Counting sort by owner, stable in point order (deterministic).
     out.start.assign(tiles + 1, 0);
     for (std::uint32_t o : owner)
@@ -315,10 +372,7 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
 {
     check_node(h, node);
     const Node& n = h.nodes[static_cast<std::size_t>(node)];
-    std::vector<std::uint32_t> indices;
-    const std::uint32_t stride = sample_stride(n.count(), options.max_points);
-    for (std::uint32_t i = n.begin; i < n.end; i += stride)
-        indices.push_back(i);
+    const std::vector<std::uint32_t> indices = node_sample(h, n, options.max_points);
     return tile_from_points(h, node, indices.data(), indices.size(), options);
 }
 

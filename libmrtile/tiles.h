@@ -37,12 +37,14 @@ struct TileOptions
     //! least squares; false: the mean height of the points near the centre (on the surface).
     bool fit_apex = true;
     //! Build each tile from at most about this many of its node's points (every k-th point of the node's
-    //! range, which the tree keeps spatially coherent), so that a cut costs time in proportion to its
-    //! tiles, not to the points under them. 0 = every point (the paper's tiles). The hull of a sample
-    //! lies inside the full hull by about the sample's spacing: gaps between tiles widen to it and the
-    //! gap triangulation (T2) fills them. Fewer rim points on coarse tiles also means fewer faces for
-    //! the same error (after the vertex fit); below ~64 the gaps get wide enough to close real holes.
-    std::size_t max_points = 128;
+    //! range, which the tree keeps spatially coherent) plus the node's own hull points (found in one
+    //! cheap pass: only points outside the octagon of the extremes are sorted), so that the costly part
+    //! of a cut (the Voronoi walk of every point) scales with its tiles, not with the points under them,
+    //! while tiles at open borders still reach the sample's border. 0 = every point (the paper's tiles).
+    //! Fewer interior points leave gaps between tiles as wide as the sample's spacing; the gap
+    //! triangulation fills them, and coarse cuts spend fewer faces for the same error (after the vertex
+    //! fit). Far smaller samples (~64) leave gaps wide enough to close real holes or add handles.
+    std::size_t max_points = 256;
 };
 
 struct Tile

@@ -472,7 +472,7 @@ TEST(Surface, collapsing_loop_points_keeps_shape_and_topology)
     const DistanceStats d_strips = point_to_mesh_distance(h.cloud.positions, strips.mesh);
     EXPECT_LT(d_split.mean, 1.03 * d_kept.mean);
     EXPECT_LT(d_split.max, 1.10 * d_kept.max);
-    EXPECT_LT(d_rims.mean, 1.25 * d_kept.mean);
+    EXPECT_LT(d_rims.mean, 1.3 * d_kept.mean);
     // Strips cost faces and carry little shape: the error grows less than the faces shrink.
     EXPECT_LT(d_strips.mean * static_cast<double>(strips.mesh.n_faces()), d_rims.mean * static_cast<double>(rims.mesh.n_faces()));
 }
