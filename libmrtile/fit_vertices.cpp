@@ -8,6 +8,8 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
+
 #include <algorithm>
 #include <cassert>
 #include <array>
@@ -108,9 +110,9 @@ std::vector<double> solve(const Csr& m, const std::vector<double>& b)
 }
 
 // Unit directions the vertices move along: area-weighted normals, or +z.
-std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical)
+std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& axis)
 {
-    std::vector<Vec3> d(mesh.n_vertices(), Vec3{0.0, 0.0, vertical ? 1.0 : 0.0});
+    std::vector<Vec3> d(mesh.n_vertices(), vertical ? axis : Vec3{});
     if (vertical)
         return d;
     for (const auto f : mesh.faces()) {
@@ -127,13 +129,81 @@ std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical)
     return d;
 }
 
+double squared_error(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids, const std::array<Vec3, 3>& t0,
+                     const std::array<Vec3, 3>& t1)
+{
+    double sum = 0.0;
+    for (std::uint32_t i : ids) {
+        const Vec3& p = points[i];
+        sum += std::min(squared_distance(p, closest_point_on_triangle(p, t0[0], t0[1], t0[2])),
+                        squared_distance(p, closest_point_on_triangle(p, t1[0], t1[1], t1[2])));
+    }
+    return sum;
+}
+
+// Flips the edges whose two faces fit their points better the other way round (Hoppe et al.'s edge
+// swap): fans are stars of long wedges around their apex, and on a curved tile the diagonal the fan
+// chose is often the worse one. A flip keeps the surface an oriented 2-manifold (OpenMesh's is_flip_ok:
+// not on the border, the other diagonal not already an edge) and must not fold: both new faces keep
+// within 60 degrees of the old pair's normal. The two faces of a flip are not touched again in the
+// pass (their points are stale). A flipped face keeps a tile id only if both faces had the same one.
+std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest, const Vec3* up)
+{
+    auto tile = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+    auto gap = OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+    std::vector<std::vector<std::uint32_t>> on_face(mesh.n_faces());
+    for (std::size_t i = 0; i < closest.size(); ++i)
+        on_face[static_cast<std::size_t>(closest[i].face)].push_back(static_cast<std::uint32_t>(i));
+    std::vector<bool> done(mesh.n_faces(), false);
+    const double min_cos = 0.5;
+    std::size_t flips = 0;
+    for (const auto e : mesh.edges()) {
+        if (mesh.is_boundary(e) || !mesh.is_flip_ok(e))
+            continue;
+        const auto h0 = mesh.halfedge_handle(e, 0), h1 = mesh.halfedge_handle(e, 1);
+        const auto f0 = mesh.face_handle(h0), f1 = mesh.face_handle(h1);
+        if (done[static_cast<std::size_t>(f0.idx())] || done[static_cast<std::size_t>(f1.idx())])
+            continue;
+        std::vector<std::uint32_t> ids = on_face[static_cast<std::size_t>(f0.idx())];
+        const auto& more = on_face[static_cast<std::size_t>(f1.idx())];
+        ids.insert(ids.end(), more.begin(), more.end());
+        if (ids.empty())
+            continue;
+        // h0 = a -> b in f0 = (a, b, c); h1 = b -> a in f1 = (b, a, d); flipped: (c, a, d) and (d, b, c).
+        const Vec3 a = to_vec(mesh.point(mesh.from_vertex_handle(h0))), b = to_vec(mesh.point(mesh.to_vertex_handle(h0)));
+        const Vec3 c = to_vec(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h0))));
+        const Vec3 d = to_vec(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h1))));
+        const std::array<Vec3, 3> old0{a, b, c}, old1{b, a, d}, new0{c, a, d}, new1{d, b, c};
+        const Vec3 n_old = normalized(cross(b - a, c - a) + cross(a - b, d - b));
+        const Vec3 n0 = normalized(cross(a - c, d - c)), n1 = normalized(cross(b - d, c - d));
+        if (!(dot(n0, n_old) > min_cos) || !(dot(n1, n_old) > min_cos))
+            continue;
+        if (up && (!(dot(n0, *up) > 0.0) || !(dot(n1, *up) > 0.0)))
+            continue; // a height field stays a graph
+        const double before = squared_error(points, ids, old0, old1);
+        const double after = squared_error(points, ids, new0, new1);
+        if (!(after < 0.98 * before))
+            continue;
+        const bool same_tile = tile[f0] == tile[f1];
+        mesh.flip(e);
+        if (!same_tile) {
+            tile[f0] = tile[f1] = -1;
+            gap[f0] = gap[f1] = true;
+        }
+        done[static_cast<std::size_t>(f0.idx())] = done[static_cast<std::size_t>(f1.idx())] = true;
+        ++flips;
+    }
+    return flips;
+}
+
 } // namespace
 
 FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options)
 {
     if (options.rounds < 0 || !(options.damping > 0.0) || !(options.max_move >= 0.0) || !std::isfinite(options.damping) ||
-        !std::isfinite(options.max_move))
-        throw InvalidInput("fit_vertices: rounds must be >= 0, damping > 0 and max_move >= 0 (finite)");
+        !std::isfinite(options.max_move) || (options.vertical && !(squared_norm(options.axis) > 0.0)))
+        throw InvalidInput("fit_vertices: rounds must be >= 0, damping > 0, max_move >= 0 (finite), and a vertical fit "
+                           "needs a non-zero axis");
     FitStats stats;
     if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)
         return stats;
@@ -154,7 +224,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     std::size_t moved_count = 0;
     for (int round = 0; round < options.rounds; ++round) {
         const std::vector<ClosestPoint> closest = closest_points(used, mesh);
-        const std::vector<Vec3> direction = move_directions(mesh, options.vertical);
+        const std::vector<Vec3> direction = move_directions(mesh, options.vertical, normalized(options.axis));
         Csr m = vertex_graph(mesh);
         std::vector<double> b(n, 0.0);
         for (std::size_t i = 0; i < used.size(); ++i) {
@@ -223,6 +293,12 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
             mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move;
             moved_sum += std::abs(move);
             ++moved_count;
+        }
+        if (options.flip_edges && OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile) &&
+            OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap))
+        {
+            const Vec3 up = normalized(options.axis);
+            stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr);
         }
         ++stats.rounds;
     }

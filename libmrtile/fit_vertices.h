@@ -26,9 +26,10 @@ namespace mrt {
 
 struct FitOptions
 {
-    //! Assign-and-solve rounds (0 = off). The first round does most of the work; the second follows
-    //! points that changed face.
-    int rounds = 2;
+    //! Assign-solve-flip rounds (0 = off). The first round does most of the work; later ones follow
+    //! points that changed face and flip again (bunny, coarse cut: 2 rounds −22% mean distance against
+    //! interpolation, 3 rounds −27%, 4 rounds −29%).
+    int rounds = 3;
     //! Weight pulling each vertex back to where it started, relative to the mean weight the points put
     //! on a vertex (keeps the system well posed where few points are; larger = smaller moves).
     double damping = 0.05;
@@ -39,8 +40,13 @@ struct FitOptions
     //! of a vertex needs a few dozen points, and a fine sample under a coarse mesh would cost time
     //! without changing the result much. 0 = every point.
     std::size_t points_per_vertex = 16;
-    //! Move vertices along z instead of along their normals: a height field stays a graph over xy.
+    //! After each round's moves, flip the edges whose two faces fit their points better the other way
+    //! round (and do not fold). Changes the connectivity, never the topology.
+    bool flip_edges = true;
+    //! Move vertices along `axis` instead of along their normals, and flip only where both new faces
+    //! face up it: a height field stays a graph over the plane normal to the axis.
     bool vertical = false;
+    Vec3 axis{0, 0, 1}; //!< the "up" of `vertical` (mesh_cut passes the surface's height-field axis)
 };
 
 struct FitStats
@@ -49,6 +55,7 @@ struct FitStats
     std::size_t points = 0;     //!< points used (per round)
     double mean_move = 0.0;     //!< mean |displacement| of the vertices over all rounds (model units)
     std::size_t clamped = 0;    //!< vertex moves cut to max_move (summed over rounds)
+    std::size_t flips = 0;      //!< edges flipped (summed over rounds)
 };
 
 //! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates

@@ -21,7 +21,10 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     result.mesh = build_surface(h, tiles, options.surface, &result.surface);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     FitOptions fit = options.fit;
-    fit.vertical = fit.vertical || result.surface.height_field_used;
+    if (result.surface.height_field_used) {
+        fit.vertical = true;
+        fit.axis = result.surface.height_field_axis;
+    }
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

@@ -112,34 +112,6 @@ bool is_sliver(const Vec3& a, const Vec3& b, const Vec3& c)
     return !(norm(triangle_cross(a, b, c)) > 1e-9 * longest);
 }
 
-// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
-double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
-{
-    const Vec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0)
-        return distance(p, a);
-    const Vec3 bp = p - b;
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3)
-        return distance(p, b);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        return distance(p, a + ab * (d1 / (d1 - d3)));
-    const Vec3 cp = p - c;
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6)
-        return distance(p, c);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        return distance(p, a + ac * (d2 / (d2 - d6)));
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-        return distance(p, b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-    const double denom = 1.0 / (va + vb + vc);
-    return distance(p, a + ab * (vb * denom) + ac * (vc * denom));
-}
-
 struct SurfaceVertex
 {
     Vec3 position;
@@ -2163,15 +2135,8 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
         if (!(slack[i] >= 0.0) || touched[i] || mesh.status(v).deleted())
             continue;
         const Vec3 at = point(v);
-        Vec3 around;
-        for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
-            std::array<Vec3, 3> p;
-            int k = 0;
-            for (const Mesh::VertexHandle x : mesh.fv_range(f))
-                p[k++] = point(x);
-            around += triangle_cross(p[0], p[1], p[2]);
-        }
-        around = normalized(around);
+        Vec3 around; // the surface normal at v, computed when a first edge qualifies
+        bool have_around = false;
         std::vector<Mesh::HalfedgeHandle> outgoing;
         for (const Mesh::HalfedgeHandle h : mesh.voh_range(v))
             outgoing.push_back(h);
@@ -2188,8 +2153,19 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
             const bool wanted = across_strips ? left.is_valid() && right.is_valid() && !left_fan && !right_fan &&
                                                     slack[static_cast<std::size_t>(w.idx())] >= 0.0
                                               : left_fan != right_fan;
-            if (!wanted || touched[static_cast<std::size_t>(w.idx())] || !mesh.is_collapse_ok(h))
+            if (!wanted || touched[static_cast<std::size_t>(w.idx())])
                 continue;
+            if (!have_around) {
+                for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
+                    std::array<Vec3, 3> p;
+                    int k = 0;
+                    for (const Mesh::VertexHandle x : mesh.fv_range(f))
+                        p[k++] = point(x);
+                    around += triangle_cross(p[0], p[1], p[2]);
+                }
+                around = normalized(around);
+                have_around = true;
+            }
             bool keeps_shape = true;
             double moved = std::numeric_limits<double>::infinity();
             for (const Mesh::FaceHandle f : mesh.vf_range(v)) {
@@ -2214,7 +2190,8 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
                 }
                 moved = std::min(moved, point_triangle_distance(at, after[0], after[1], after[2]));
             }
-            if (!keeps_shape || !(moved <= slack[i]))
+            // The link condition last: it is the costliest test and the shape tests fail more often.
+            if (!keeps_shape || !(moved <= slack[i]) || !mesh.is_collapse_ok(h))
                 continue;
             if (std::isfinite(slack[i])) // a split point moves nothing: its neighbours stay free
                 for (const Mesh::VertexHandle x : mesh.vv_range(v))
@@ -2504,6 +2481,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     st.components = roots.size();
     st.dropped_fans = islands + dropped_components;
     st.height_field_used = projection.used;
+    st.height_field_axis = projection.axis;
     st.alpha = alpha;
     {
         auto visited = OpenMesh::makeTemporaryProperty<OpenMesh::HalfedgeHandle, bool>(mesh);

@@ -111,6 +111,7 @@ struct SurfaceStats
     //! Tiles whose fan ended up alone while their neighbours' surface closed over them (left out).
     std::size_t dropped_fans = 0;
     bool height_field_used = false;
+    Vec3 height_field_axis{0, 0, 1}; //!< the "up" the height field is a graph over (when used)
     double alpha = 0.0;              //!< global alpha used (model units)
     double seconds = 0.0;
 };

@@ -89,28 +89,51 @@ TEST(FitVertices, planar_sample_stays_planar)
         EXPECT_NEAR(p.z, 0.5, 1e-12);
 }
 
-// Vertical mode on a height field: x and y of every vertex are bit-identical, z fits the wave better.
-TEST(FitVertices, vertical_mode_keeps_a_graph)
+// Vertical mode on a height field over the plane normal to axis `up` (2 = z, 0 = x): the two other
+// coordinates of every vertex are bit-identical, the height fits the wave better.
+void expect_vertical_fit(int up)
 {
+    const int a = (up + 1) % 3, b = (up + 2) % 3;
+    auto place = [&](double x, double y, double height) { // x, y in the plane, height along `up`
+        double c[3];
+        c[a] = x;
+        c[b] = y;
+        c[up] = height;
+        return Vec3{c[0], c[1], c[2]};
+    };
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(0.0, 8.0);
     std::vector<Vec3> points(20000);
     for (Vec3& p : points) {
         const double x = u(rng), y = u(rng);
-        p = {x, y, testing::wave(x, y)};
+        p = place(x, y, testing::wave(x, y));
     }
     Mesh mesh = testing::grid_mesh(6, 6, 0.0, 0.0, 8.0 / 6, testing::wave);
+    for (const auto v : mesh.vertices()) {
+        const Mesh::Point p = mesh.point(v);
+        const Vec3 q = place(p[0], p[1], p[2]);
+        mesh.set_point(v, Mesh::Point(q.x, q.y, q.z));
+    }
     const std::vector<Vec3> before = positions(mesh);
     const double d0 = point_to_mesh_distance(points, mesh).mean;
     FitOptions o;
     o.vertical = true;
+    o.axis = place(0, 0, 1);
     fit_vertices(mesh, points, o);
     const std::vector<Vec3> after = positions(mesh);
     for (std::size_t i = 0; i < after.size(); ++i) {
-        EXPECT_EQ(after[i].x, before[i].x);
-        EXPECT_EQ(after[i].y, before[i].y);
+        EXPECT_EQ(after[i][a], before[i][a]);
+        EXPECT_EQ(after[i][b], before[i][b]);
     }
     EXPECT_LT(point_to_mesh_distance(points, mesh).mean, 0.8 * d0);
+    o.axis = {};
+    EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput);
+}
+
+TEST(FitVertices, vertical_mode_keeps_a_graph_along_its_axis)
+{
+    expect_vertical_fit(2);
+    expect_vertical_fit(0);
 }
 
 // The pipeline runs the fit by default: on a noisy torus the fitted mesh is closer to the points than
@@ -132,6 +155,29 @@ TEST(FitVertices, mesh_cut_fits_by_default_and_is_deterministic)
     EXPECT_LT(measure_quality(h, cut, fitted.mesh).point_to_mesh.mean,
               0.9 * measure_quality(h, cut, plain.mesh).point_to_mesh.mean);
     EXPECT_EQ(positions(fitted.mesh), positions(again.mesh));
+}
+
+// Edge flips: on a torus cut, flipping the edges whose faces fit better the other way lowers the mean
+// distance with the same faces, and the surface stays a closed oriented genus-1 manifold.
+TEST(FitVertices, edge_flips_lower_the_error_and_keep_the_topology)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(20000));
+    const Cut cut = cut_by_tolerance(h, 0.005);
+    MeshOptions no_flips;
+    no_flips.fit.flip_edges = false;
+    const MeshResult plain = mesh_cut(h, cut, no_flips);
+    const MeshResult flipped = mesh_cut(h, cut);
+    EXPECT_EQ(plain.fit.flips, 0u);
+    EXPECT_GT(flipped.fit.flips, 0u);
+    EXPECT_EQ(flipped.mesh.n_faces(), plain.mesh.n_faces());
+    const TopologyStats t = topology_stats(flipped.mesh);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.nonmanifold_edges, 0u);
+    EXPECT_EQ(t.nonmanifold_vertices, 0u);
+    EXPECT_TRUE(t.consistently_oriented);
+    EXPECT_EQ(t.genus, 1);
+    EXPECT_LT(measure_quality(h, cut, flipped.mesh).point_to_mesh.mean,
+              0.95 * measure_quality(h, cut, plain.mesh).point_to_mesh.mean);
 }
 
 TEST(FitVertices, bad_options_are_refused_and_empty_input_is_a_no_op)

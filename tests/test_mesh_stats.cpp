@@ -410,32 +410,27 @@ TEST(TopologyStats, empty_and_invalid_input)
 
 // ---- distances ----------------------------------------------------------------------------------
 
-// Ericson, Real-Time Collision Detection §5.1.5: closest point on a triangle by Voronoi regions.
-Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
+// vec3.h's closest_point_on_triangle (Ericson's Voronoi regions) against brute force: the closest of a
+// dense barycentric grid over the triangle is never closer than it, and at most a grid cell farther.
+TEST(MeshStats, closest_point_on_triangle_matches_dense_sampling)
 {
-    const Vec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0)
-        return a;
-    const Vec3 bp = p - b;
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3)
-        return b;
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        return a + ab * (d1 / (d1 - d3));
-    const Vec3 cp = p - c;
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6)
-        return c;
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        return a + ac * (d2 / (d2 - d6));
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    const double denom = 1.0 / (va + vb + vc);
-    return a + ab * (vb * denom) + ac * (vc * denom);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const int n = 200;
+    for (int trial = 0; trial < 200; ++trial) {
+        const Vec3 a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)}, c{u(rng), u(rng), u(rng)};
+        const Vec3 p{2 * u(rng), 2 * u(rng), 2 * u(rng)};
+        const double exact = distance(p, closest_point_on_triangle(p, a, b, c));
+        double sampled = std::numeric_limits<double>::infinity();
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; i + j <= n; ++j) {
+                const double s = double(i) / n, t = double(j) / n;
+                sampled = std::min(sampled, distance(p, a + (b - a) * s + (c - a) * t));
+            }
+        const double cell = std::max({distance(a, b), distance(b, c), distance(a, c)}) / n;
+        EXPECT_LE(exact, sampled + 1e-12);
+        EXPECT_GE(exact, sampled - cell);
+    }
 }
 
 // A closed, randomly bumpy sphere: a twice-subdivided icosahedron with random radii.
