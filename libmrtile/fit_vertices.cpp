@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -204,6 +205,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         !std::isfinite(options.max_move) || (options.vertical && !(squared_norm(options.axis) > 0.0)))
         throw InvalidInput("fit_vertices: rounds must be >= 0, damping > 0, max_move >= 0 (finite), and a vertical fit "
                            "needs a non-zero axis");
+    const auto start = std::chrono::steady_clock::now();
     FitStats stats;
     if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)
         return stats;
@@ -223,7 +225,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     double moved_sum = 0.0;
     std::size_t moved_count = 0;
     for (int round = 0; round < options.rounds; ++round) {
-        const std::vector<ClosestPoint> closest = closest_points(used, mesh);
+        const std::vector<ClosestPoint> closest = closest_points(used, mesh, options.threads);
         const std::vector<Vec3> direction = move_directions(mesh, options.vertical, normalized(options.axis));
         Csr m = vertex_graph(mesh);
         std::vector<double> b(n, 0.0);
@@ -303,6 +305,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         ++stats.rounds;
     }
     stats.mean_move = moved_count > 0 ? moved_sum / static_cast<double>(moved_count) : 0.0;
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     mesh.update_normals();
     return stats;
 }

@@ -47,6 +47,9 @@ struct FitOptions
     //! face up it: a height field stays a graph over the plane normal to the axis.
     bool vertical = false;
     Vec3 axis{0, 0, 1}; //!< the "up" of `vertical` (mesh_cut passes the surface's height-field axis)
+    //! Threads for the closest-face queries (0 = one per hardware thread). The result does not depend
+    //! on it.
+    std::size_t threads = 0;
 };
 
 struct FitStats
@@ -56,6 +59,7 @@ struct FitStats
     double mean_move = 0.0;     //!< mean |displacement| of the vertices over all rounds (model units)
     std::size_t clamped = 0;    //!< vertex moves cut to max_move (summed over rounds)
     std::size_t flips = 0;      //!< edges flipped (summed over rounds)
+    double seconds = 0.0;       //!< wall time
 };
 
 //! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates

@@ -5,6 +5,7 @@
 #include "libmrtile/mesh_stats.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/point_cloud.h"
 
 #include <CGAL/AABB_traits.h>
@@ -450,8 +451,11 @@ TopologyStats topology_stats(const std::vector<Vec3>& positions, const std::vect
 
 namespace {
 
-// The closest point of `soup` to every point, with the soup index of its triangle.
-std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vector<Vec3>& points, const Soup& soup)
+// The closest point of `soup` to every point, with the soup index of its triangle. Queries run in Morton
+// order in fixed chunks, each chunk on one thread: the hint chain (and so the choice among exactly tied
+// faces) depends on the chunks only, never on the number of threads.
+std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vector<Vec3>& points, const Soup& soup,
+                                                                std::size_t threads)
 {
     using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
     using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
@@ -464,13 +468,20 @@ std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vecto
     // The closest point of the previous query is the hint of the next one: in Morton order the two are
     // close, so the search sphere starts small. This replaces CGAL's kd-tree of hints (a third faster).
     tree.do_not_accelerate_distance_queries();
-    Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin());
+    tree.build(); // before the threads: queries on a built tree only read it
+    const std::vector<std::size_t> order = morton_order(points);
+    constexpr std::size_t kChunk = 4096;
     std::vector<std::pair<std::uint32_t, Vec3>> out(points.size());
-    for (const std::size_t i : morton_order(points)) {
-        hint = tree.closest_point_and_primitive(to_cgal(points[i]), hint);
-        out[i] = {static_cast<std::uint32_t>(hint.second - triangles.cbegin()),
-                  Vec3{hint.first.x(), hint.first.y(), hint.first.z()}};
-    }
+    run_parallel((order.size() + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+        const std::size_t end = std::min(order.size(), (chunk + 1) * kChunk);
+        Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin());
+        for (std::size_t k = chunk * kChunk; k < end; ++k) {
+            const std::size_t i = order[k];
+            hint = tree.closest_point_and_primitive(to_cgal(points[i]), hint);
+            out[i] = {static_cast<std::uint32_t>(hint.second - triangles.cbegin()),
+                      Vec3{hint.first.x(), hint.first.y(), hint.first.z()}};
+        }
+    });
     return out;
 }
 
@@ -484,14 +495,14 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     const Soup soup = mesh_to_soup(mesh);
     if (soup.triangles.empty())
         throw InvalidInput("point_to_mesh_distance: the mesh has no face to measure the distance to");
-    const auto closest = soup_closest_points(points, soup);
+    const auto closest = soup_closest_points(points, soup, 0);
     std::vector<double> squared(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         squared[i] = squared_norm(points[i] - closest[i].second);
     return summarize(squared, diagonal);
 }
 
-std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh)
+std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh, std::size_t threads)
 {
     if (points.empty())
         return {};
@@ -503,7 +514,7 @@ std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const 
     std::size_t k = 0;
     for (const auto fh : mesh.faces())
         face_of[k++] = fh.idx();
-    const auto closest = soup_closest_points(points, soup);
+    const auto closest = soup_closest_points(points, soup, threads);
     std::vector<ClosestPoint> out(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         out[i] = {face_of[closest[i].first], closest[i].second};

@@ -69,7 +69,7 @@ struct DistanceStats
 };
 
 //! \brief Distance from each point to the closest point of the mesh surface (exact: closest point on the
-//! triangles, not on the vertices). Deterministic.
+//! triangles, not on the vertices). Deterministic; uses every hardware thread.
 //! \throw InvalidInput if points are given but the mesh has no face, if a point is not finite, or if the
 //! points' bounding box has a zero diagonal (the fractions would be undefined). No points gives zeros.
 DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh);
@@ -88,8 +88,9 @@ struct ClosestPoint
 };
 
 //! \brief The closest point of the mesh surface to each of `points` (exact; ties go to the face CGAL's
-//! AABB tree meets first, the same for the same input). Deterministic.
+//! AABB tree meets first, the same for the same input), on up to `threads` threads (0 = one per hardware
+//! thread). Deterministic: the result does not depend on the thread count.
 //! \throw InvalidInput if points are given but the mesh has no face, or a point is not finite.
-std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh);
+std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh, std::size_t threads = 0);
 
 } // namespace mrt

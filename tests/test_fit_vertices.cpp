@@ -155,6 +155,11 @@ TEST(FitVertices, mesh_cut_fits_by_default_and_is_deterministic)
     EXPECT_LT(measure_quality(h, cut, fitted.mesh).point_to_mesh.mean,
               0.9 * measure_quality(h, cut, plain.mesh).point_to_mesh.mean);
     EXPECT_EQ(positions(fitted.mesh), positions(again.mesh));
+    // The closest-face queries run in fixed chunks: one thread or three give the same mesh.
+    MeshOptions one, three;
+    one.fit.threads = 1;
+    three.fit.threads = 3;
+    EXPECT_EQ(positions(mesh_cut(h, cut, one).mesh), positions(mesh_cut(h, cut, three).mesh));
 }
 
 // Edge flips: on a torus cut, flipping the edges whose faces fit better the other way lowers the mean
