@@ -337,7 +337,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
             if (!std::isfinite(shortest[v]))
                 continue;
             const double limit = options.max_move * shortest[v];
-            double move = t[v];
+            double move = std::isfinite(t[v]) ? t[v] : 0.0;
             if (std::abs(move) > limit) {
                 move = std::copysign(limit, move);
                 ++stats.clamped;

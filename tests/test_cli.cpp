@@ -186,6 +186,30 @@ TEST(Cli, mesh_to_a_triangle_count)
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
 }
 
+// `--fit-rounds`: 0 interpolates as the paper does, the default fits; both report it, the fit is closer
+// to the points with the same faces, and a negative count is a usage error.
+TEST(Cli, mesh_fit_rounds)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir);
+    ASSERT_EQ(mrtile("build -q " + xyz.string() + " -o " + (dir / "a.mrt").string(), dir).code, 0);
+    auto mesh = [&](const std::string& extra, const std::string& json) {
+        const Result r = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.ply").string() +
+                                    " --tolerance 0.01 --stats-json " + (dir / json).string() + extra,
+                                dir);
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(slurp(dir / json));
+    };
+    const auto fitted = mesh("", "fit.json");
+    const auto plain = mesh(" --fit-rounds 0", "plain.json");
+    EXPECT_EQ(fitted["fit_rounds"].get<int>(), 3);
+    EXPECT_EQ(plain["fit_rounds"].get<int>(), 0);
+    EXPECT_EQ(fitted["faces"], plain["faces"]);
+    EXPECT_LT(fitted["mean_distance"].get<double>(), plain["mean_distance"].get<double>());
+    EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "n.ply").string() + " --fit-rounds -1", dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "n.ply"));
+}
+
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
 // coarser level to a finer one (levels that would not improve are not written).
 TEST(Cli, lods_on_the_bunny_are_consistent)

@@ -303,6 +303,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["refined_points"] = r.refined_points;
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
+    j["fit_flips"] = r.fit.flips;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {
