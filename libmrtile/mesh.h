@@ -5,7 +5,8 @@
 //! Properties (read them with OpenMesh::getProperty / makePropertyManagerFromExisting):
 //!  - kVertexCluster  ("v:cluster", int): the hierarchy node whose tile the vertex belongs to (a rim
 //!    vertex merged across a gap strip is in the fans of two or more tiles and names one of them).
-//!  - kFaceTile       ("f:tile", int): the tile (hierarchy node) of a T1 fan face, -1 for T2 gap faces.
+//!  - kFaceTile       ("f:tile", int): the tile (hierarchy node) of a T1 fan face, -1 for T2 gap faces
+//!    (and for the two faces of an edge flip (fit_vertices.h) across faces of different tiles).
 //!  - kFaceGap        ("f:gap", bool): true for gap-filling (T2) faces.
 //! Vertex normals use OpenMesh's standard property.
 
