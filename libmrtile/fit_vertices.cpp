@@ -3,6 +3,8 @@
 // budget by lying on one side of a curved surface. Least squares over the vertex heights (one unknown
 // per vertex, along its normal) is the cheapest fit that keeps the connectivity, and so every topology
 // guarantee of the surface stage; the damping and the move limit keep it a small, safe correction.
+// Edge flips (Hoppe et al. 1993's edge swap) then fix the diagonals the T1 fans chose badly: a flip
+// changes two faces and never the topology.
 #include "libmrtile/fit_vertices.h"
 
 #include "libmrtile/errors.h"
@@ -12,9 +14,9 @@
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <chrono>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -112,7 +114,7 @@ std::vector<double> solve(const Csr& m, const std::vector<double>& b)
     return x;
 }
 
-// Unit directions the vertices move along: area-weighted normals, or +z.
+// Unit directions the vertices move along: area-weighted normals, or `axis` for a vertical fit.
 std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& axis)
 {
     std::vector<Vec3> d(mesh.n_vertices(), vertical ? axis : Vec3{});
@@ -149,11 +151,13 @@ double squared_error(const std::vector<Vec3>& points, const std::vector<std::uin
 // chose is often the worse one. A flip keeps the surface an oriented 2-manifold (OpenMesh's is_flip_ok:
 // not on the border, the other diagonal not already an edge) and must not fold: both new faces keep
 // within 60 degrees of the old pair's normal. The two faces of a flip are not touched again in the
-// pass (their points are stale). A flipped face keeps a tile id only if both faces had the same one.
+// pass (their points are stale). On a mesh with tile ids (mesh.h), a flipped face keeps its tile id only
+// if both faces had the same one, and becomes a gap face otherwise.
 std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest, const Vec3* up)
 {
-    auto tile = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
-    auto gap = OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+    OpenMesh::FPropHandleT<int> tile;
+    OpenMesh::FPropHandleT<bool> gap;
+    const bool has_tiles = mesh.get_property_handle(tile, kFaceTile) && mesh.get_property_handle(gap, kFaceGap);
     std::vector<std::vector<std::uint32_t>> on_face(mesh.n_faces());
     for (std::size_t i = 0; i < closest.size(); ++i)
         on_face[static_cast<std::size_t>(closest[i].face)].push_back(static_cast<std::uint32_t>(i));
@@ -187,11 +191,11 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
         const double after = squared_error(points, ids, new0, new1);
         if (!(after < 0.98 * before))
             continue;
-        const bool same_tile = tile[f0] == tile[f1];
+        const bool same_tile = !has_tiles || mesh.property(tile, f0) == mesh.property(tile, f1);
         mesh.flip(e);
         if (!same_tile) {
-            tile[f0] = tile[f1] = -1;
-            gap[f0] = gap[f1] = true;
+            mesh.property(tile, f0) = mesh.property(tile, f1) = -1;
+            mesh.property(gap, f0) = mesh.property(gap, f1) = true;
         }
         done[static_cast<std::size_t>(f0.idx())] = done[static_cast<std::size_t>(f1.idx())] = true;
         ++flips;
@@ -244,6 +248,90 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
     return out;
 }
 
+// The damped least-squares system over the vertex heights t (one per vertex, along `direction`): each
+// point adds the square of its signed distance to the plane of its closest face, linear in the heights
+// of that face's corners through the barycentric coordinates of its closest point (point-to-plane, as in
+// ICP). Damping: a fraction of the mean diagonal on every vertex. False if no point constrains anything.
+bool normal_equations(const Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest,
+                      const std::vector<Vec3>& direction, double damping, Csr& m, std::vector<double>& b)
+{
+    const std::size_t n = mesh.n_vertices();
+    m = vertex_graph(mesh);
+    b.assign(n, 0.0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Mesh::FaceHandle f(closest[i].face);
+        std::array<int, 3> v{};
+        std::array<Vec3, 3> p;
+        int k = 0;
+        for (const auto vh : mesh.fv_range(f)) {
+            v[static_cast<std::size_t>(k)] = vh.idx();
+            p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(vh));
+        }
+        const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
+        const double twice_area = norm(area_normal);
+        if (!(twice_area > 0.0))
+            continue;
+        const Vec3 normal = area_normal / twice_area;
+        // Barycentric coordinates of the closest point (on the face, so all in [0, 1]).
+        const Vec3 c = closest[i].point;
+        std::array<double, 3> l{norm(cross(p[1] - c, p[2] - c)) / twice_area, norm(cross(p[2] - c, p[0] - c)) / twice_area, 0.0};
+        l[2] = std::max(0.0, 1.0 - l[0] - l[1]);
+        std::array<double, 3> a{};
+        for (std::size_t j = 0; j < 3; ++j)
+            a[j] = l[j] * dot(normal, direction[static_cast<std::size_t>(v[j])]);
+        const double residual = dot(normal, c - points[i]);
+        for (std::size_t j = 0; j < 3; ++j) {
+            b[static_cast<std::size_t>(v[j])] -= a[j] * residual;
+            for (std::size_t q = 0; q < 3; ++q)
+                m.at(v[j], v[q]) += a[j] * a[q];
+        }
+    }
+    double diagonal_sum = 0.0;
+    std::size_t constrained = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+        const double d = m.at(static_cast<int>(v), static_cast<int>(v));
+        if (d > 0.0) {
+            diagonal_sum += d;
+            ++constrained;
+        }
+    }
+    if (constrained == 0)
+        return false;
+    const double mu = damping * diagonal_sum / static_cast<double>(constrained);
+    for (std::size_t v = 0; v < n; ++v)
+        m.at(static_cast<int>(v), static_cast<int>(v)) += mu;
+    return true;
+}
+
+// Moves every vertex by its height along its direction, at most `max_move` × its shortest edge (edge
+// lengths taken before any move of this round).
+void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::vector<Vec3>& direction, double max_move,
+                   FitStats& stats, double& moved_sum, std::size_t& moved_count)
+{
+    std::vector<double> shortest(mesh.n_vertices(), std::numeric_limits<double>::infinity());
+    for (const auto e : mesh.edges()) {
+        const auto h = mesh.halfedge_handle(e, 0);
+        const int a = mesh.from_vertex_handle(h).idx(), c = mesh.to_vertex_handle(h).idx();
+        const double length = norm(to_vec(mesh.point(mesh.from_vertex_handle(h))) - to_vec(mesh.point(mesh.to_vertex_handle(h))));
+        shortest[static_cast<std::size_t>(a)] = std::min(shortest[static_cast<std::size_t>(a)], length);
+        shortest[static_cast<std::size_t>(c)] = std::min(shortest[static_cast<std::size_t>(c)], length);
+    }
+    for (const auto vh : mesh.vertices()) {
+        const std::size_t v = static_cast<std::size_t>(vh.idx());
+        if (!std::isfinite(shortest[v]))
+            continue;
+        const double limit = max_move * shortest[v];
+        double move = std::isfinite(heights[v]) ? heights[v] : 0.0;
+        if (std::abs(move) > limit) {
+            move = std::copysign(limit, move);
+            ++stats.clamped;
+        }
+        mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move;
+        moved_sum += std::abs(move);
+        ++moved_count;
+    }
+}
+
 } // namespace
 
 FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options)
@@ -277,78 +365,13 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         // moved by a fraction of an edge and flips keep their faces' handles.
         closest = round == 0 ? closest_points(used, mesh, options.threads) : nearby_closest_points(mesh, used, closest, options.threads);
         const std::vector<Vec3> direction = move_directions(mesh, options.vertical, normalized(options.axis));
-        Csr m = vertex_graph(mesh);
-        std::vector<double> b(n, 0.0);
-        for (std::size_t i = 0; i < used.size(); ++i) {
-            const Mesh::FaceHandle f(closest[i].face);
-            std::array<int, 3> v{};
-            std::array<Vec3, 3> p;
-            int k = 0;
-            for (const auto vh : mesh.fv_range(f)) {
-                v[static_cast<std::size_t>(k)] = vh.idx();
-                p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(vh));
-            }
-            const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
-            const double twice_area = norm(area_normal);
-            if (!(twice_area > 0.0))
-                continue;
-            const Vec3 normal = area_normal / twice_area;
-            // Barycentric coordinates of the closest point (on the face, so all in [0, 1]).
-            const Vec3 c = closest[i].point;
-            std::array<double, 3> l{norm(cross(p[1] - c, p[2] - c)) / twice_area, norm(cross(p[2] - c, p[0] - c)) / twice_area, 0.0};
-            l[2] = std::max(0.0, 1.0 - l[0] - l[1]);
-            std::array<double, 3> a{};
-            for (std::size_t j = 0; j < 3; ++j)
-                a[j] = l[j] * dot(normal, direction[static_cast<std::size_t>(v[j])]);
-            const double residual = dot(normal, c - used[i]);
-            for (std::size_t j = 0; j < 3; ++j) {
-                b[static_cast<std::size_t>(v[j])] -= a[j] * residual;
-                for (std::size_t q = 0; q < 3; ++q)
-                    m.at(v[j], v[q]) += a[j] * a[q];
-            }
-        }
-        // Damping: a fraction of the mean diagonal, the same for every vertex.
-        double diagonal_sum = 0.0;
-        std::size_t constrained = 0;
-        for (std::size_t v = 0; v < n; ++v) {
-            const double d = m.at(static_cast<int>(v), static_cast<int>(v));
-            if (d > 0.0) {
-                diagonal_sum += d;
-                ++constrained;
-            }
-        }
-        if (constrained == 0)
-            break;
-        const double mu = options.damping * diagonal_sum / static_cast<double>(constrained);
-        for (std::size_t v = 0; v < n; ++v)
-            m.at(static_cast<int>(v), static_cast<int>(v)) += mu;
-        const std::vector<double> t = solve(m, b);
-        // Move limit from the positions before this round's moves.
-        std::vector<double> shortest(n, std::numeric_limits<double>::infinity());
-        for (const auto e : mesh.edges()) {
-            const auto h = mesh.halfedge_handle(e, 0);
-            const int a = mesh.from_vertex_handle(h).idx(), c = mesh.to_vertex_handle(h).idx();
-            const double length = norm(to_vec(mesh.point(mesh.from_vertex_handle(h))) - to_vec(mesh.point(mesh.to_vertex_handle(h))));
-            shortest[static_cast<std::size_t>(a)] = std::min(shortest[static_cast<std::size_t>(a)], length);
-            shortest[static_cast<std::size_t>(c)] = std::min(shortest[static_cast<std::size_t>(c)], length);
-        }
-        for (const auto vh : mesh.vertices()) {
-            const std::size_t v = static_cast<std::size_t>(vh.idx());
-            if (!std::isfinite(shortest[v]))
-                continue;
-            const double limit = options.max_move * shortest[v];
-            double move = std::isfinite(t[v]) ? t[v] : 0.0;
-            if (std::abs(move) > limit) {
-                move = std::copysign(limit, move);
-                ++stats.clamped;
-            }
-            mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move;
-            moved_sum += std::abs(move);
-            ++moved_count;
-        }
-        if (options.flip_edges && OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile) &&
-            OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap))
-        {
+        Csr system;
+        std::vector<double> rhs;
+        if (!normal_equations(mesh, used, closest, direction, options.damping, system, rhs))
+            break; // no point constrains any vertex
+        const std::vector<double> heights = solve(system, rhs);
+        move_vertices(mesh, heights, direction, options.max_move, stats, moved_sum, moved_count);
+        if (options.flip_edges) {
             const Vec3 up = normalized(options.axis);
             stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr);
         }

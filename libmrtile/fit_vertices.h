@@ -1,18 +1,21 @@
 #pragma once
 //! \file fit_vertices.h
-//! \brief Beyond the paper: vertex positions fitted to the input points (least squares, along normals).
+//! \brief Beyond the paper: vertex positions fitted to the input points (least squares, along normals),
+//! then edge flips where the other diagonal fits better.
 //! \details The paper's tiles interpolate: hull points are input points and a fan is a chord of the
-//! surface, so on a curved patch every face lies on one side of the points it stands for. This stage
-//! keeps the connectivity and moves each vertex along its normal (or vertically, for height fields) to
-//! minimise the sum of squared distances from the input points to the planes of their closest faces
-//! (Hoppe et al. 1993's E_dist, linearized like point-to-plane ICP), with a small damping that holds
-//! still any vertex no point constrains. Points are re-assigned to their closest faces between rounds.
-//! A vertex moves at most `max_move` × its shortest edge, so fans do not fold and thin parts do not
-//! cross; topology is untouched (the stage changes positions only).
+//! surface, so on a curved patch every face lies on one side of the points it stands for. Each round of
+//! this stage moves every vertex along its normal (or along an axis, for height fields) to minimise the
+//! sum of squared distances from the input points to the planes of their closest faces (Hoppe et al.
+//! 1993's E_dist, linearized like point-to-plane ICP), with a small damping that holds still any vertex
+//! no point constrains, then flips the edges whose two faces fit their points better the other way round
+//! (Hoppe's edge swap; no fold beyond 60°). Points are re-assigned to their closest faces every round.
+//! A vertex moves at most `max_move` × its shortest edge per round, so fans do not fold and thin parts do
+//! not cross. The topology (vertices, boundary loops, genus, manifoldness, orientation) never changes;
+//! positions and, through the flips, the diagonals do.
 //! \code
 //!   Mesh m = mesh_cut(h, cut).mesh;             // mesh_cut runs it by default (MeshOptions::fit)
 //!   FitOptions o;
-//!   o.rounds = 3;                               // re-assign points and solve again, three times
+//!   o.rounds = 5;                               // two more assign-solve-flip rounds than the default
 //!   FitStats s = fit_vertices(m, h.cloud.positions, o);
 //! \endcode
 
