@@ -304,11 +304,16 @@ bool normal_equations(const Mesh& mesh, const std::vector<Vec3>& points, const s
 }
 
 // Moves every vertex by its height along its direction, at most `max_move` × its shortest edge (edge
-// lengths taken before any move of this round).
+// lengths taken before any move of this round). A face whose normal would turn by more than 60° (a thin
+// gap face whose corners move apart along different normals can fold over its neighbours) halves the
+// moves of its corners, up to kMaxHalvings times, then keeps them still.
 void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::vector<Vec3>& direction, double max_move,
                    FitStats& stats, double& moved_sum, std::size_t& moved_count)
 {
-    std::vector<double> shortest(mesh.n_vertices(), std::numeric_limits<double>::infinity());
+    constexpr int kMaxHalvings = 6;
+    const double min_cos = 0.5;
+    const std::size_t n = mesh.n_vertices();
+    std::vector<double> shortest(n, std::numeric_limits<double>::infinity());
     for (const auto e : mesh.edges()) {
         const auto h = mesh.halfedge_handle(e, 0);
         const int a = mesh.from_vertex_handle(h).idx(), c = mesh.to_vertex_handle(h).idx();
@@ -316,20 +321,79 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
         shortest[static_cast<std::size_t>(a)] = std::min(shortest[static_cast<std::size_t>(a)], length);
         shortest[static_cast<std::size_t>(c)] = std::min(shortest[static_cast<std::size_t>(c)], length);
     }
+    std::vector<double> move(n, 0.0);
     for (const auto vh : mesh.vertices()) {
         const std::size_t v = static_cast<std::size_t>(vh.idx());
         if (!std::isfinite(shortest[v]))
             continue;
         const double limit = max_move * shortest[v];
-        double move = std::isfinite(heights[v]) ? heights[v] : 0.0;
-        if (std::abs(move) > limit) {
-            move = std::copysign(limit, move);
+        move[v] = std::isfinite(heights[v]) ? heights[v] : 0.0;
+        if (std::abs(move[v]) > limit) {
+            move[v] = std::copysign(limit, move[v]);
             ++stats.clamped;
         }
-        mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move;
-        moved_sum += std::abs(move);
+    }
+    auto moved = [&](Mesh::VertexHandle vh) {
+        const std::size_t v = static_cast<std::size_t>(vh.idx());
+        return to_vec(mesh.point(vh)) + direction[v] * move[v];
+    };
+    for (int pass = 0; pass <= kMaxHalvings; ++pass) {
+        std::vector<bool> damp(n, false);
+        bool any = false;
+        for (const auto f : mesh.faces()) {
+            std::array<Vec3, 3> before, after;
+            std::array<std::size_t, 3> corner{};
+            std::size_t k = 0;
+            for (const auto vh : mesh.fv_range(f)) {
+                corner[k] = static_cast<std::size_t>(vh.idx());
+                before[k] = to_vec(mesh.point(vh));
+                after[k++] = moved(vh);
+            }
+            const Vec3 n0 = normalized(cross(before[1] - before[0], before[2] - before[0]));
+            const Vec3 n1 = normalized(cross(after[1] - after[0], after[2] - after[0]));
+            if (dot(n0, n1) < min_cos && squared_norm(n0) > 0.0) {
+                for (std::size_t c : corner)
+                    damp[c] = damp[c] || move[c] != 0.0;
+                any = any || move[corner[0]] != 0.0 || move[corner[1]] != 0.0 || move[corner[2]] != 0.0;
+            }
+        }
+        if (!any)
+            break;
+        for (std::size_t v = 0; v < n; ++v)
+            if (damp[v])
+                move[v] = pass < kMaxHalvings ? 0.5 * move[v] : 0.0;
+    }
+    for (const auto vh : mesh.vertices()) {
+        const std::size_t v = static_cast<std::size_t>(vh.idx());
+        mesh.point(vh) += Mesh::Point(direction[v].x, direction[v].y, direction[v].z) * move[v];
+        moved_sum += std::abs(move[v]);
         ++moved_count;
     }
+}
+
+// Puts the corners of self-intersecting faces back where the fit found them, while that changes
+// something (at most kMaxPasses tests). Intersections the surface had before the fit stay: their corners
+// are already at their start. Returns the number of vertices put back.
+std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& start_position)
+{
+    constexpr int kMaxPasses = 4;
+    std::size_t reverted = 0;
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+        bool changed = false;
+        for (const auto& [a, b] : self_intersecting_faces(mesh))
+            for (const int f : {a, b})
+                for (const auto vh : mesh.fv_range(Mesh::FaceHandle(f))) {
+                    const Mesh::Point& start = start_position[static_cast<std::size_t>(vh.idx())];
+                    if (mesh.point(vh) != start) {
+                        mesh.point(vh) = start;
+                        ++reverted;
+                        changed = true;
+                    }
+                }
+        if (!changed)
+            break;
+    }
+    return reverted;
 }
 
 } // namespace
@@ -359,6 +423,9 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     stats.points = used.size();
     double moved_sum = 0.0;
     std::size_t moved_count = 0;
+    std::vector<Mesh::Point> start_position(n);
+    for (const auto vh : mesh.vertices())
+        start_position[static_cast<std::size_t>(vh.idx())] = mesh.point(vh);
     std::vector<ClosestPoint> closest;
     for (int round = 0; round < options.rounds; ++round) {
         // The first round asks the AABB tree; later ones walk from the previous face, since vertices
@@ -377,6 +444,8 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         }
         ++stats.rounds;
     }
+    if (options.revert_intersections)
+        stats.reverted = revert_intersecting(mesh, start_position);
     stats.mean_move = moved_count > 0 ? moved_sum / static_cast<double>(moved_count) : 0.0;
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     mesh.update_normals();

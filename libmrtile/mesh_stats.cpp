@@ -9,6 +9,8 @@
 #include "libmrtile/point_cloud.h"
 
 #include <CGAL/AABB_traits.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Orthogonal_k_neighbor_search.h>
@@ -500,6 +502,37 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     for (std::size_t i = 0; i < points.size(); ++i)
         squared[i] = squared_norm(points[i] - closest[i].second);
     return summarize(squared, diagonal);
+}
+
+std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh)
+{
+    using SurfaceMesh = CGAL::Surface_mesh<CgalPoint>;
+    SurfaceMesh sm;
+    std::vector<SurfaceMesh::Vertex_index> vertex(mesh.n_vertices());
+    for (const auto v : mesh.vertices()) {
+        const auto& p = mesh.point(v);
+        vertex[static_cast<std::size_t>(v.idx())] = sm.add_vertex(CgalPoint(p[0], p[1], p[2]));
+    }
+    std::vector<int> face_of; // surface-mesh face -> mesh face handle index
+    for (const auto f : mesh.faces()) {
+        std::array<SurfaceMesh::Vertex_index, 3> t;
+        std::size_t k = 0;
+        for (const auto v : mesh.fv_range(f))
+            t[k++] = vertex[static_cast<std::size_t>(v.idx())];
+        if (sm.add_face(t[0], t[1], t[2]) == SurfaceMesh::null_face())
+            throw InvalidInput("self_intersecting_faces: the mesh is not a manifold triangle mesh");
+        face_of.push_back(f.idx());
+    }
+    std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
+    CGAL::Polygon_mesh_processing::self_intersections(sm, std::back_inserter(pairs));
+    std::vector<std::pair<int, int>> out;
+    out.reserve(pairs.size());
+    for (const auto& [a, b] : pairs) {
+        const int fa = face_of[static_cast<std::size_t>(a.idx())], fb = face_of[static_cast<std::size_t>(b.idx())];
+        out.push_back({std::min(fa, fb), std::max(fa, fb)});
+    }
+    std::sort(out.begin(), out.end()); // CGAL's order depends on its box sorting: sort for determinism
+    return out;
 }
 
 std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const Mesh& mesh, std::size_t threads)

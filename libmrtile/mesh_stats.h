@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace mrt {
@@ -79,6 +80,12 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
 //! \throw InvalidInput if the mesh has vertices but no point is given, if a point is not finite, or if
 //! the points' bounding box has a zero diagonal. An empty mesh gives zeros.
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points);
+
+//! \brief Pairs of faces (handle indices, smaller first, sorted) whose triangles intersect other than in
+//! the vertices and edges they share: geometric self-intersections of a combinatorially valid mesh (CGAL's
+//! Polygon_mesh_processing::self_intersections). \throw InvalidInput if the mesh is not a manifold
+//! triangle mesh.
+std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh);
 
 //! The point of a mesh's surface closest to a query point, and the face it lies on.
 struct ClosestPoint

@@ -100,6 +100,8 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     q.e_rms = e_rms(h, cut);
     if (mesh.n_faces() > 0 && h.bbox().diagonal() > 0)
         q.point_to_mesh = point_to_mesh_distance(h.cloud.positions, mesh);
+    if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
+        q.self_intersections = self_intersecting_faces(mesh).size();
     return q;
 }
 

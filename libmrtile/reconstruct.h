@@ -66,6 +66,8 @@ struct QualityReport
     double e_rms = 0.0;
     //! Distances from every input point to the mesh, as fractions of the bounding-box diagonal.
     DistanceStats point_to_mesh;
+    //! Pairs of faces that intersect geometrically (self_intersecting_faces); 0 for a clean surface.
+    std::size_t self_intersections = 0;
 };
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);

@@ -9,6 +9,7 @@
 #include "libmrtile/mesh_stats.h"
 
 #include "libmrtile/errors.h"
+#include "tests/mesh_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -409,6 +410,27 @@ TEST(TopologyStats, empty_and_invalid_input)
 }
 
 // ---- distances ----------------------------------------------------------------------------------
+
+// Self-intersections: a closed UV sphere has none; pushing one vertex through the opposite side makes
+// its faces cross the far ones (and only pairs that really cross are reported, sorted, smaller index first).
+TEST(MeshStats, self_intersecting_faces_of_a_sphere)
+{
+    Mesh sphere = mrt::testing::uv_sphere(8, 12, 1.0);
+    EXPECT_TRUE(self_intersecting_faces(sphere).empty());
+    const Mesh::VertexHandle north(0);
+    sphere.set_point(north, Mesh::Point(0, 0, -1.5)); // the pole pushed through the south cap
+    const auto pairs = self_intersecting_faces(sphere);
+    ASSERT_FALSE(pairs.empty());
+    EXPECT_TRUE(std::is_sorted(pairs.begin(), pairs.end()));
+    for (const auto& [a, b] : pairs) {
+        EXPECT_LT(a, b);
+        bool touches_north = false;
+        for (const int f : {a, b})
+            for (const auto v : sphere.fv_range(Mesh::FaceHandle(f)))
+                touches_north = touches_north || v == north;
+        EXPECT_TRUE(touches_north) << "faces " << a << ", " << b << " do not move";
+    }
+}
 
 // vec3.h's closest_point_on_triangle (Ericson's Voronoi regions) against brute force: the closest of a
 // dense barycentric grid over the triangle is never closer than it, and at most a grid cell farther.

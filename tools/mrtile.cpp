@@ -304,6 +304,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
     j["fit_flips"] = r.fit.flips;
+    j["fit_reverted"] = r.fit.reverted;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {
@@ -314,6 +315,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["nonmanifold_vertices"] = q->topology.nonmanifold_vertices;
         j["consistently_oriented"] = q->topology.consistently_oriented;
         j["e_rms"] = q->e_rms;
+        j["self_intersections"] = q->self_intersections;
         j["mean_distance"] = q->point_to_mesh.mean;
         j["max_distance"] = q->point_to_mesh.max;
         j["median_distance"] = q->point_to_mesh.median;
