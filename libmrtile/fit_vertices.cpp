@@ -372,26 +372,48 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
 }
 
 // Puts the corners of self-intersecting faces back where the fit found them, while that changes
-// something (at most kMaxPasses tests). Intersections the surface had before the fit stay: their corners
-// are already at their start. Returns the number of vertices put back.
+// something (at most kMaxPasses tests). The first test covers the faces near vertices that moved by more
+// than a tenth of their shortest edge (two rings of faces around them: smaller moves hardly carry a face
+// through another one that was clear of it), each later one only the faces near what the previous one put
+// back. Pairs the surface had before the fit stay: their corners are already at their start. Returns the
+// number of vertices put back.
 std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& start_position)
 {
     constexpr int kMaxPasses = 4;
+    constexpr double kSignificantMove = 0.1;
+    std::vector<bool> near(mesh.n_faces(), false);
+    auto mark_around = [&](Mesh::VertexHandle vh) { // faces at the vertex and at its neighbours: two rings
+        for (const auto w : mesh.vv_range(vh))
+            for (const auto f : mesh.vf_range(w))
+                near[static_cast<std::size_t>(f.idx())] = true;
+    };
+    for (const auto vh : mesh.vertices()) {
+        const auto v = static_cast<std::size_t>(vh.idx());
+        double shortest = std::numeric_limits<double>::infinity();
+        for (const auto h : mesh.voh_range(vh))
+            shortest = std::min(shortest, static_cast<double>(mesh.calc_edge_length(h)));
+        if ((mesh.point(vh) - start_position[v]).norm() > kSignificantMove * shortest)
+            mark_around(vh);
+    }
     std::size_t reverted = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-        bool changed = false;
-        for (const auto& [a, b] : self_intersecting_faces(mesh))
+        std::vector<int> among;
+        for (std::size_t f = 0; f < near.size(); ++f)
+            if (near[f])
+                among.push_back(static_cast<int>(f));
+        if (among.empty())
+            break;
+        std::fill(near.begin(), near.end(), false); // the next pass looks only around what this one moves
+        for (const auto& [a, b] : self_intersecting_faces(mesh, &among))
             for (const int f : {a, b})
                 for (const auto vh : mesh.fv_range(Mesh::FaceHandle(f))) {
                     const Mesh::Point& start = start_position[static_cast<std::size_t>(vh.idx())];
                     if (mesh.point(vh) != start) {
                         mesh.point(vh) = start;
+                        mark_around(vh);
                         ++reverted;
-                        changed = true;
                     }
                 }
-        if (!changed)
-            break;
     }
     return reverted;
 }

@@ -504,7 +504,7 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     return summarize(squared, diagonal);
 }
 
-std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh)
+std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const std::vector<int>* among)
 {
     using SurfaceMesh = CGAL::Surface_mesh<CgalPoint>;
     SurfaceMesh sm;
@@ -524,7 +524,18 @@ std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh)
         face_of.push_back(f.idx());
     }
     std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
-    CGAL::Polygon_mesh_processing::self_intersections(sm, std::back_inserter(pairs));
+    if (among) {
+        std::vector<int> index_of(static_cast<std::size_t>(mesh.n_faces()), -1); // mesh face -> surface-mesh face
+        for (std::size_t k = 0; k < face_of.size(); ++k)
+            index_of[static_cast<std::size_t>(face_of[k])] = static_cast<int>(k);
+        std::vector<SurfaceMesh::Face_index> range;
+        for (const int f : *among)
+            if (f >= 0 && static_cast<std::size_t>(f) < index_of.size() && index_of[static_cast<std::size_t>(f)] >= 0)
+                range.push_back(SurfaceMesh::Face_index(static_cast<SurfaceMesh::size_type>(index_of[static_cast<std::size_t>(f)])));
+        CGAL::Polygon_mesh_processing::self_intersections(range, sm, std::back_inserter(pairs));
+    } else {
+        CGAL::Polygon_mesh_processing::self_intersections(sm, std::back_inserter(pairs));
+    }
     std::vector<std::pair<int, int>> out;
     out.reserve(pairs.size());
     for (const auto& [a, b] : pairs) {

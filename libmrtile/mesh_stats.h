@@ -83,9 +83,9 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& 
 
 //! \brief Pairs of faces (handle indices, smaller first, sorted) whose triangles intersect other than in
 //! the vertices and edges they share: geometric self-intersections of a combinatorially valid mesh (CGAL's
-//! Polygon_mesh_processing::self_intersections). \throw InvalidInput if the mesh is not a manifold
-//! triangle mesh.
-std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh);
+//! Polygon_mesh_processing::self_intersections). With `among`, only pairs of faces both in that list.
+//! \throw InvalidInput if the mesh is not a manifold triangle mesh.
+std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const std::vector<int>* among = nullptr);
 
 //! The point of a mesh's surface closest to a query point, and the face it lies on.
 struct ClosestPoint
