@@ -430,6 +430,16 @@ TEST(MeshStats, self_intersecting_faces_of_a_sphere)
                 touches_north = touches_north || v == north;
         EXPECT_TRUE(touches_north) << "faces " << a << ", " << b << " do not move";
     }
+    // A subset: every face gives the same pairs; the pole's own faces alone cross nothing among themselves.
+    std::vector<int> all, at_north;
+    for (const auto f : sphere.faces()) {
+        all.push_back(f.idx());
+        for (const auto v : sphere.fv_range(f))
+            if (v == north)
+                at_north.push_back(f.idx());
+    }
+    EXPECT_EQ(self_intersecting_faces(sphere, &all), pairs);
+    EXPECT_TRUE(self_intersecting_faces(sphere, &at_north).empty());
 }
 
 // vec3.h's closest_point_on_triangle (Ericson's Voronoi regions) against brute force: the closest of a
