@@ -1734,8 +1734,6 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
     return restored;
 }
 
-
-
 // Boundary loops as vertex sequences v0 -> v1 -> ... (each step a half-edge without a face). At a
 // pinched vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around
 // the vertex normal), so a loop never crosses itself.
@@ -2274,17 +2272,17 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         front.finish();
     }
     FillResult filled;
-    std::size_t islands = 0;
+    std::size_t islands = 0, restored_islands = 0;
     if (options.fill_holes) {
         const std::vector<bool> interior = interior_tiles(tiles, options.interior_gap_degrees);
         filled = fill_holes(surface, layout, positions, projection, interior, options);
-        std::vector<std::vector<std::uint32_t>> removed;
+        std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
         islands = drop_islands(surface, tiles, removed);
         if (islands > 0) {
             const FillResult more = fill_holes(surface, layout, positions, projection, interior, options);
             filled.holes += more.holes;
             filled.faces += more.faces;
-            restore_uncovered_islands(surface, removed, positions, layout.tiles);
+            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles);
         }
     }
 
@@ -2480,6 +2478,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     st.split_vertices = copies.size();
     st.components = roots.size();
     st.dropped_fans = islands + dropped_components;
+    st.restored_islands = restored_islands;
     st.height_field_used = projection.used;
     st.height_field_axis = projection.axis;
     st.alpha = alpha;

@@ -110,6 +110,9 @@ struct SurfaceStats
     std::size_t components = 0;
     //! Tiles whose fan ended up alone while their neighbours' surface closed over them (left out).
     std::size_t dropped_fans = 0;
+    //! Islands put back because the rest of the surface did not cover their place (a separate piece of
+    //! the sample beside a larger one); their fans are also counted in dropped_fans.
+    std::size_t restored_islands = 0;
     bool height_field_used = false;
     Vec3 height_field_axis{0, 0, 1}; //!< the "up" the height field is a graph over (when used)
     double alpha = 0.0;              //!< global alpha used (model units)

@@ -420,6 +420,7 @@ TEST(Surface, a_separate_strip_of_a_range_scan_is_kept)
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun000.ply"));
     const Result r = mesh_real_cut(h, 0.001);
     expect_valid(r);
+    EXPECT_GE(r.stats.restored_islands, 1u);
     const DistanceStats d = point_to_mesh_distance(h.cloud.positions, r.mesh);
     EXPECT_LT(d.max, 0.01);
     EXPECT_LT(d.mean, 0.0004);
