@@ -14,6 +14,11 @@
 // that lies within about a point spacing of the bisector plane of A and a Delaunay neighbour B
 // witnesses that the sampled surface reaches the Voronoi face of A and B. The surface stage uses them to keep gap triangles between
 // tiles that really meet (not across a thin plate or a handle's hole).
+//
+// The walk is the costly part, so a large node takes part with a sample only (TileOptions::max_points):
+// every k-th point of its range, which the tree keeps spatially coherent, plus its own hull points, found
+// in one pass of dot products that leaves only the points outside an octagon to sort. A cut then costs
+// time per tile, and a tile at an open border still reaches it.
 #include "libmrtile/tiles.h"
 
 #include "libmrtile/errors.h"
