@@ -1143,6 +1143,23 @@ private:
         }
     }
 
+    // A handle closes only around a boundary loop of at least this many edges (see grow).
+    static constexpr std::size_t kMinHandleLoopEdges = 24;
+
+    // Number of edges of the boundary loop through the free half-edge b -> a.
+    std::size_t loop_edges(std::uint32_t a, std::uint32_t b) const
+    {
+        std::uint32_t u = b, v = a;
+        std::size_t n = 0;
+        do {
+            const std::uint32_t w = next_boundary_vertex(surface_, positions_, u, v);
+            u = v;
+            v = w;
+            ++n;
+        } while (!(u == b && v == a));
+        return n;
+    }
+
     void grow_whole_front()
     {
         for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
@@ -1280,6 +1297,16 @@ private:
             if (!allow_handles_ && makes_handle(a, b, c)) {
                 (fallback_[top.index] ? banned_ : held_)[top.index] = true;
                 e.evaluated = false; // the cached best is the candidate just set aside
+                push_best(a, b);
+                continue;
+            }
+            // At the end a handle is made only around a long loop: the loop around a tube runs over many
+            // tiles (89 to 311 edges on the torus and the 3-hole solid at tolerances 0.01–0.001, and the
+            // coarsest tori with ~40 tiles still close), a spurious one closes over a gap between a few
+            // tiles (3 to 16 edges seen), which hole filling then closes without a handle.
+            if (allow_handles_ && makes_handle(a, b, c) && loop_edges(a, b) < kMinHandleLoopEdges) {
+                banned_[top.index] = true;
+                e.evaluated = false;
                 push_best(a, b);
                 continue;
             }

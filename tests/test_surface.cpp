@@ -427,11 +427,12 @@ TEST(Surface, a_separate_strip_of_a_range_scan_is_kept)
 }
 
 // The rocker arm has one through hole. Hole fills through pinched vertices used to join two fans of
-// the surface into an extra handle; such fills are now refused (the hole is widened instead).
+// the surface into an extra handle; such fills are now refused (the hole is widened instead). At 0.01 a
+// face closing a 3-to-16-edge gap loop added a second handle; handles now need a loop of 24 edges.
 TEST(Surface, real_cuts_of_the_rocker_arm_have_genus_1)
 {
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/rocker-arm.obj"));
-    for (double tolerance : {0.005, 0.001}) {
+    for (double tolerance : {0.01, 0.005, 0.001}) {
         SCOPED_TRACE("tolerance " + std::to_string(tolerance));
         const Result r = mesh_real_cut(h, tolerance);
         expect_valid(r);
