@@ -12,11 +12,6 @@
 
 namespace mrt {
 
-namespace {
-
-Vec3 to_vec3(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
-
-} // namespace
 
 Vec3 to_output_frame(const Vec3& v, UpAxis up)
 {

@@ -24,8 +24,6 @@
 namespace mrt {
 namespace {
 
-Vec3 to_vec(const Mesh::Point& p) { return {p[0], p[1], p[2]}; }
-
 struct Csr
 {
     std::vector<std::size_t> start; // row v: entries start[v] .. start[v + 1]
@@ -114,6 +112,30 @@ std::vector<double> solve(const Csr& m, const std::vector<double>& b)
     return x;
 }
 
+std::array<Vec3, 3> face_corners(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    std::array<Vec3, 3> p;
+    std::size_t k = 0;
+    for (const auto v : mesh.fv_range(f))
+        p[k++] = to_vec3(mesh.point(v));
+    return p;
+}
+
+// Each vertex's shortest incident edge (infinity for a vertex without edges).
+std::vector<double> shortest_edges(const Mesh& mesh)
+{
+    std::vector<double> shortest(mesh.n_vertices(), std::numeric_limits<double>::infinity());
+    for (const auto e : mesh.edges()) {
+        const auto h = mesh.halfedge_handle(e, 0);
+        const auto a = static_cast<std::size_t>(mesh.from_vertex_handle(h).idx());
+        const auto c = static_cast<std::size_t>(mesh.to_vertex_handle(h).idx());
+        const double length = norm(to_vec3(mesh.point(mesh.from_vertex_handle(h))) - to_vec3(mesh.point(mesh.to_vertex_handle(h))));
+        shortest[a] = std::min(shortest[a], length);
+        shortest[c] = std::min(shortest[c], length);
+    }
+    return shortest;
+}
+
 // Unit directions the vertices move along: area-weighted normals, or `axis` for a vertical fit.
 std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& axis)
 {
@@ -121,10 +143,7 @@ std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& a
     if (vertical)
         return d;
     for (const auto f : mesh.faces()) {
-        std::array<Vec3, 3> p;
-        int k = 0;
-        for (const auto v : mesh.fv_range(f))
-            p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(v));
+        const std::array<Vec3, 3> p = face_corners(mesh, f);
         const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
         for (const auto v : mesh.fv_range(f))
             d[static_cast<std::size_t>(v.idx())] = d[static_cast<std::size_t>(v.idx())] + area_normal;
@@ -134,15 +153,17 @@ std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& a
     return d;
 }
 
-double squared_error(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids, const std::array<Vec3, 3>& t0,
-                     const std::array<Vec3, 3>& t1)
+// Sum over the points of both lists of the squared distance to the nearer of two triangles.
+double squared_error(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids0,
+                     const std::vector<std::uint32_t>& ids1, const std::array<Vec3, 3>& t0, const std::array<Vec3, 3>& t1)
 {
     double sum = 0.0;
-    for (std::uint32_t i : ids) {
-        const Vec3& p = points[i];
-        sum += std::min(squared_distance(p, closest_point_on_triangle(p, t0[0], t0[1], t0[2])),
-                        squared_distance(p, closest_point_on_triangle(p, t1[0], t1[1], t1[2])));
-    }
+    for (const std::vector<std::uint32_t>* ids : {&ids0, &ids1})
+        for (std::uint32_t i : *ids) {
+            const Vec3& p = points[i];
+            sum += std::min(squared_distance(p, closest_point_on_triangle(p, t0[0], t0[1], t0[2])),
+                            squared_distance(p, closest_point_on_triangle(p, t1[0], t1[1], t1[2])));
+        }
     return sum;
 }
 
@@ -171,15 +192,14 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
         const auto f0 = mesh.face_handle(h0), f1 = mesh.face_handle(h1);
         if (done[static_cast<std::size_t>(f0.idx())] || done[static_cast<std::size_t>(f1.idx())])
             continue;
-        std::vector<std::uint32_t> ids = on_face[static_cast<std::size_t>(f0.idx())];
-        const auto& more = on_face[static_cast<std::size_t>(f1.idx())];
-        ids.insert(ids.end(), more.begin(), more.end());
-        if (ids.empty())
+        const std::vector<std::uint32_t>& ids0 = on_face[static_cast<std::size_t>(f0.idx())];
+        const std::vector<std::uint32_t>& ids1 = on_face[static_cast<std::size_t>(f1.idx())];
+        if (ids0.empty() && ids1.empty())
             continue;
         // h0 = a -> b in f0 = (a, b, c); h1 = b -> a in f1 = (b, a, d); flipped: (c, a, d) and (d, b, c).
-        const Vec3 a = to_vec(mesh.point(mesh.from_vertex_handle(h0))), b = to_vec(mesh.point(mesh.to_vertex_handle(h0)));
-        const Vec3 c = to_vec(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h0))));
-        const Vec3 d = to_vec(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h1))));
+        const Vec3 a = to_vec3(mesh.point(mesh.from_vertex_handle(h0))), b = to_vec3(mesh.point(mesh.to_vertex_handle(h0)));
+        const Vec3 c = to_vec3(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h0))));
+        const Vec3 d = to_vec3(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h1))));
         const std::array<Vec3, 3> old0{a, b, c}, old1{b, a, d}, new0{c, a, d}, new1{d, b, c};
         const Vec3 n_old = normalized(cross(b - a, c - a) + cross(a - b, d - b));
         const Vec3 n0 = normalized(cross(a - c, d - c)), n1 = normalized(cross(b - d, c - d));
@@ -187,8 +207,8 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
             continue;
         if (up && (!(dot(n0, *up) > 0.0) || !(dot(n1, *up) > 0.0)))
             continue; // a height field stays a graph
-        const double before = squared_error(points, ids, old0, old1);
-        const double after = squared_error(points, ids, new0, new1);
+        const double before = squared_error(points, ids0, ids1, old0, old1);
+        const double after = squared_error(points, ids0, ids1, new0, new1);
         if (!(after < 0.98 * before))
             continue;
         const bool same_tile = !has_tiles || mesh.property(tile, f0) == mesh.property(tile, f1);
@@ -218,10 +238,7 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
         for (std::size_t i = chunk * kChunk; i < end; ++i) {
             const Vec3& p = points[i];
             auto closest_on = [&](Mesh::FaceHandle f) {
-                std::array<Vec3, 3> t;
-                std::size_t k = 0;
-                for (const auto v : mesh.fv_range(f))
-                    t[k++] = to_vec(mesh.point(v));
+                const std::array<Vec3, 3> t = face_corners(mesh, f);
                 return closest_point_on_triangle(p, t[0], t[1], t[2]);
             };
             Mesh::FaceHandle best(previous[i].face);
@@ -265,7 +282,7 @@ bool normal_equations(const Mesh& mesh, const std::vector<Vec3>& points, const s
         int k = 0;
         for (const auto vh : mesh.fv_range(f)) {
             v[static_cast<std::size_t>(k)] = vh.idx();
-            p[static_cast<std::size_t>(k++)] = to_vec(mesh.point(vh));
+            p[static_cast<std::size_t>(k++)] = to_vec3(mesh.point(vh));
         }
         const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
         const double twice_area = norm(area_normal);
@@ -313,14 +330,7 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
     constexpr int kMaxHalvings = 6;
     const double min_cos = 0.5;
     const std::size_t n = mesh.n_vertices();
-    std::vector<double> shortest(n, std::numeric_limits<double>::infinity());
-    for (const auto e : mesh.edges()) {
-        const auto h = mesh.halfedge_handle(e, 0);
-        const int a = mesh.from_vertex_handle(h).idx(), c = mesh.to_vertex_handle(h).idx();
-        const double length = norm(to_vec(mesh.point(mesh.from_vertex_handle(h))) - to_vec(mesh.point(mesh.to_vertex_handle(h))));
-        shortest[static_cast<std::size_t>(a)] = std::min(shortest[static_cast<std::size_t>(a)], length);
-        shortest[static_cast<std::size_t>(c)] = std::min(shortest[static_cast<std::size_t>(c)], length);
-    }
+    const std::vector<double> shortest = shortest_edges(mesh);
     std::vector<double> move(n, 0.0);
     for (const auto vh : mesh.vertices()) {
         const std::size_t v = static_cast<std::size_t>(vh.idx());
@@ -335,7 +345,7 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
     }
     auto moved = [&](Mesh::VertexHandle vh) {
         const std::size_t v = static_cast<std::size_t>(vh.idx());
-        return to_vec(mesh.point(vh)) + direction[v] * move[v];
+        return to_vec3(mesh.point(vh)) + direction[v] * move[v];
     };
     for (int pass = 0; pass <= kMaxHalvings; ++pass) {
         std::vector<bool> damp(n, false);
@@ -346,7 +356,7 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
             std::size_t k = 0;
             for (const auto vh : mesh.fv_range(f)) {
                 corner[k] = static_cast<std::size_t>(vh.idx());
-                before[k] = to_vec(mesh.point(vh));
+                before[k] = to_vec3(mesh.point(vh));
                 after[k++] = moved(vh);
             }
             const Vec3 n0 = normalized(cross(before[1] - before[0], before[2] - before[0]));
@@ -387,12 +397,10 @@ std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& star
             for (const auto f : mesh.vf_range(w))
                 near[static_cast<std::size_t>(f.idx())] = true;
     };
+    const std::vector<double> shortest = shortest_edges(mesh);
     for (const auto vh : mesh.vertices()) {
         const auto v = static_cast<std::size_t>(vh.idx());
-        double shortest = std::numeric_limits<double>::infinity();
-        for (const auto h : mesh.voh_range(vh))
-            shortest = std::min(shortest, static_cast<double>(mesh.calc_edge_length(h)));
-        if ((mesh.point(vh) - start_position[v]).norm() > kSignificantMove * shortest)
+        if ((mesh.point(vh) - start_position[v]).norm() > kSignificantMove * shortest[v])
             mark_around(vh);
     }
     std::size_t reverted = 0;

@@ -195,9 +195,9 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
 BoundingBox mesh_box(const Mesh& m, BoundingBox box)
 {
     for (const auto v : m.vertices()) {
-        const auto p = m.point(v);
-        box.min = min(box.min, Vec3{p[0], p[1], p[2]});
-        box.max = max(box.max, Vec3{p[0], p[1], p[2]});
+        const Vec3 p = to_vec3(m.point(v));
+        box.min = min(box.min, p);
+        box.max = max(box.max, p);
     }
     return box;
 }

@@ -10,6 +10,8 @@
 //!  - kFaceGap        ("f:gap", bool): true for gap-filling (T2) faces.
 //! Vertex normals use OpenMesh's standard property.
 
+#include "libmrtile/vec3.h"
+
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
@@ -28,6 +30,9 @@ struct MeshTraits : public OpenMesh::DefaultTraits
 };
 
 using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
+
+//! A mesh point or normal as the library's Vec3.
+inline Vec3 to_vec3(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
 
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";

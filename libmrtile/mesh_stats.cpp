@@ -43,8 +43,7 @@ Soup mesh_to_soup(const Mesh& mesh)
     soup.positions.reserve(mesh.n_vertices());
     for (const auto vh : mesh.vertices()) {
         index[vh.idx()] = static_cast<std::uint32_t>(soup.positions.size());
-        const auto& p = mesh.point(vh);
-        soup.positions.push_back({p[0], p[1], p[2]});
+        soup.positions.push_back(to_vec3(mesh.point(vh)));
     }
     soup.triangles.reserve(mesh.n_faces());
     for (const auto fh : mesh.faces()) {

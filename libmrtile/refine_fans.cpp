@@ -90,8 +90,7 @@ private:
         std::array<std::array<double, 2>, 3> out{};
         int k = 0;
         for (const Mesh::VertexHandle v : mesh_.fv_range(f)) {
-            const Mesh::Point& p = mesh_.point(v);
-            const Vec3 q{p[0], p[1], p[2]};
+            const Vec3 q = to_vec3(mesh_.point(v));
             out[k] = fr.uv(q);
             if (heights)
                 (*heights)[k] = fr.height(q);

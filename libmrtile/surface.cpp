@@ -2148,10 +2148,7 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
-    auto point = [&](Mesh::VertexHandle v) {
-        const Mesh::Point& p = mesh.point(v);
-        return Vec3{p[0], p[1], p[2]};
-    };
+    auto point = [&](Mesh::VertexHandle v) { return to_vec3(mesh.point(v)); };
     std::size_t removed = 0;
     const std::size_t n = mesh.n_vertices();
     std::vector<bool> touched(n, false);
