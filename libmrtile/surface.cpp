@@ -1119,46 +1119,40 @@ private:
     // by -1, so the genus grows by 1). Joining another piece, or a vertex of the same loop (which splits
     // it in two), keeps the genus. Consensus faces may make the handles a torus needs; fallback faces,
     // taken where the tiles' planes disagree, must not.
-    bool makes_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c)
+    // When it does, `loop_edges` (if given) gets the length of the loop of a -> b.
+    bool makes_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::size_t* loop_edges = nullptr)
     {
         if (!surface_.on_surface(c) || parts_.find(c) != parts_.find(a))
             return false;
         // Walk the loop of the free half-edge b -> a both ways at once: c is usually a few steps away
-        // (the face closes a notch), and only a handle costs the whole loop.
+        // (the face closes a notch), and only a handle costs the whole loop. The two walks meet once
+        // their steps add up to the loop's length.
         std::uint32_t u = b, v = a; // forward: free half-edge u -> v
         std::uint32_t x = b, y = a; // backward: free half-edge x -> y
+        std::size_t steps = 0;
         for (;;) {
             if (v == c || x == c)
                 return false;
             const std::uint32_t w = next_boundary_vertex(surface_, positions_, u, v);
             u = v;
             v = w;
+            ++steps;
             if (u == x && v == y)
-                return true; // forward met backward: the whole loop seen
+                break; // forward met backward: the whole loop seen
             const std::uint32_t z = previous_boundary_vertex(surface_, positions_, x, y);
             y = x;
             x = z;
+            ++steps;
             if (u == x && v == y)
-                return true;
+                break;
         }
+        if (loop_edges)
+            *loop_edges = steps;
+        return true;
     }
 
     // A handle closes only around a boundary loop of at least this many edges (see grow).
     static constexpr std::size_t kMinHandleLoopEdges = 24;
-
-    // Number of edges of the boundary loop through the free half-edge b -> a.
-    std::size_t loop_edges(std::uint32_t a, std::uint32_t b) const
-    {
-        std::uint32_t u = b, v = a;
-        std::size_t n = 0;
-        do {
-            const std::uint32_t w = next_boundary_vertex(surface_, positions_, u, v);
-            u = v;
-            v = w;
-            ++n;
-        } while (!(u == b && v == a));
-        return n;
-    }
 
     void grow_whole_front()
     {
@@ -1304,7 +1298,8 @@ private:
             // tiles (89 to 311 edges on the torus and the 3-hole solid at tolerances 0.01–0.001, and the
             // coarsest tori with ~40 tiles still close), a spurious one closes over a gap between a few
             // tiles (3 to 16 edges seen), which hole filling then closes without a handle.
-            if (allow_handles_ && makes_handle(a, b, c) && loop_edges(a, b) < kMinHandleLoopEdges) {
+            std::size_t loop_edges = 0;
+            if (allow_handles_ && makes_handle(a, b, c, &loop_edges) && loop_edges < kMinHandleLoopEdges) {
                 banned_[top.index] = true;
                 e.evaluated = false;
                 push_best(a, b);
