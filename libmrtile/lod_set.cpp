@@ -238,6 +238,25 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
     return t;
 }
 
+// Automatic levels halve the tolerance until the cut reaches the leaves; near the leaves a halving may
+// add only a few tiles (a noisy 1M-point torus: 84,935 tiles, then its 84,940 leaves), and such a level
+// costs a full mesh of the finest size for a viewer gain of nothing. Working back from the finest level
+// (the leaves, always kept), a level is kept only when the next kept one has kMinLevelGrowth × its tiles.
+constexpr double kMinLevelGrowth = 1.5;
+
+void drop_small_steps(std::vector<LodLevel>& levels)
+{
+    if (levels.size() < 2)
+        return;
+    std::vector<LodLevel> kept;
+    kept.push_back(std::move(levels.back()));
+    for (std::size_t i = levels.size() - 1; i-- > 0;)
+        if (static_cast<double>(kept.back().cut.size()) >= kMinLevelGrowth * static_cast<double>(levels[i].cut.size()))
+            kept.push_back(std::move(levels[i]));
+    std::reverse(kept.begin(), kept.end());
+    levels = std::move(kept);
+}
+
 } // namespace
 
 LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
@@ -276,6 +295,8 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         if (level.cut.size() > previous) // no finer than the previous level (e.g. below the build tolerance): skip
             finer.push_back(std::move(level));
     }
+    if (o.tolerances.empty() && o.levels == 0)
+        drop_small_steps(finer);
     std::vector<std::size_t> order(finer.size());
     for (std::size_t i = 0; i < order.size(); ++i)
         order[i] = finer.size() - 1 - i; // finest (largest) first

@@ -32,7 +32,8 @@ struct LodSetOptions
     //! tileset's root must fit one tile. A plain LOD chain (`mrtile lods`) starts coarser.
     std::size_t first_level_triangles = 0;
     //! Number of levels; 0 = halve the tolerance until the cut reaches the hierarchy's leaves (at most
-    //! max_levels).
+    //! max_levels), leaving out a level whose next finer one has less than 1.5× its tiles (a step
+    //! that adds a few tiles costs a whole mesh and shows nothing new).
     std::size_t levels = 0;
     std::size_t max_levels = 16;
     //! Explicit scale-free tolerances, coarse to fine (overrides levels).
