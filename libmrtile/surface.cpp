@@ -32,8 +32,11 @@
 //     its tiles, and it is not much wider than a point spacing (every point lies in a tile, so a hole
 //     holds none: a wide one is a hole in the sample). Other loops are the sample's borders and holes
 //     and stay open. A fill through a pinched vertex that would add a handle (counted locally with
-//     Euler's formula) is refused and the hole widened. Vertices still pinched (two fans touching)
-//     are duplicated per fan.
+//     Euler's formula) is refused and the hole widened. Widening can cut fans loose: islands are
+//     dropped, their tiles seeded again and the front grown into the widened holes (no handles), then
+//     holes are filled once more. Islands left are dropped, or put back when the rest of the surface
+//     does not cover their place (and they are not a closed bubble). Vertices still pinched (two fans
+//     touching) are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
 //     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
@@ -899,6 +902,32 @@ public:
         run();
     }
 
+    //! After hole filling: the tiles whose fans it dropped as islands are seeded again and the front
+    //! grows from the whole surface into the holes that widening opened around them (widening removes
+    //! the gap faces at a hole's vertices, which can cut fans loose; dropped, they leave a hole too
+    //! large to fill). No face may add a handle here: a re-seeded fan joins the surface first as a
+    //! separate piece, and every later face splits a loop. Hole filling runs again afterwards.
+    void regrow(const std::vector<bool>& dropped)
+    {
+        allow_handles_ = false;
+        for (std::size_t t = 0; t < placed_.size(); ++t)
+            if (dropped[t])
+                placed_[t] = false;
+        // Hole filling rolled faces back (their ids are reused), so cached geometry may be stale.
+        edges_.clear();
+        face_normals_.clear();
+        vertex_normals_.clear();
+        parts_ = UnionFind(layout_.vertices.size());
+        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
+            if (surface_.alive(f)) {
+                const Tri& t = surface_.faces()[f];
+                parts_.unite(t[0], t[1]);
+                parts_.unite(t[0], t[2]);
+            }
+        grow_whole_front();
+        run();
+    }
+
     //! Last: the faces held back because they add a handle.
     void finish()
     {
@@ -1705,6 +1734,22 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
         }
         if (centres.size() < kMinRestoredTiles)
             continue; // a lone fan or two would be left out as a component of its own anyway (step 5)
+        // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
+        // the surface): put back, it would float beside the surface as a component of its own.
+        std::vector<std::uint64_t> edges;
+        for (std::uint32_t f : island)
+            for (int k = 0; k < 3; ++k)
+                edges.push_back(edge_key(s.faces()[f][k], s.faces()[f][(k + 1) % 3]));
+        std::sort(edges.begin(), edges.end());
+        const bool closed = std::all_of(island.begin(), island.end(), [&](std::uint32_t f) {
+            const Tri& t = s.faces()[f];
+            for (int k = 0; k < 3; ++k)
+                if (!std::binary_search(edges.begin(), edges.end(), edge_key(t[(k + 1) % 3], t[k])))
+                    return false;
+            return true;
+        });
+        if (closed)
+            continue;
         Vec3 lo = centres[0].first, hi = lo;
         double margin = 0.0;
         for (const auto& [c, r] : centres) {
@@ -2279,28 +2324,42 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     // again with the fallback candidates that touch a stranded tile.
     const std::vector<int> orientation = pruner.know_neighbours() ? orient_tiles(tiles) : std::vector<int>{};
     Surface surface(layout.vertices.size());
+    Front front(layout, tiles, surface, projection, positions, candidates, options.max_turn_degrees, orientation);
+    front.run();
     {
-        Front front(layout, tiles, surface, projection, positions, candidates, options.max_turn_degrees, orientation);
-        front.run();
         Islands islands = find_islands(surface, tiles);
         const std::vector<bool> stranded = island_tiles(islands);
         if (std::find(stranded.begin(), stranded.end(), true) != stranded.end()) {
             remove_islands(surface, islands);
             front.rescue(stranded);
         }
-        front.finish();
     }
+    front.finish();
     FillResult filled;
     std::size_t islands = 0, restored_islands = 0;
     if (options.fill_holes) {
         const std::vector<bool> interior = interior_tiles(tiles, options.interior_gap_degrees);
-        filled = fill_holes(surface, layout, positions, projection, interior, options);
-        std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
-        islands = drop_islands(surface, tiles, removed);
-        if (islands > 0) {
+        auto fill = [&] {
             const FillResult more = fill_holes(surface, layout, positions, projection, interior, options);
             filled.holes += more.holes;
             filled.faces += more.faces;
+        };
+        fill();
+        std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
+        islands = drop_islands(surface, tiles, removed);
+        if (islands > 0) {
+            std::vector<bool> dropped(tiles.size(), false);
+            for (const auto& island : removed)
+                for (std::uint32_t f : island)
+                    if (surface.face_tile()[f] >= 0)
+                        dropped[static_cast<std::size_t>(surface.face_tile()[f])] = true;
+            front.regrow(dropped);
+            fill();
+            removed.clear();
+            islands = drop_islands(surface, tiles, removed);
+        }
+        if (islands > 0) {
+            fill();
             restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles);
         }
     }
