@@ -891,13 +891,7 @@ public:
             if (stranded[t])
                 placed_[t] = false;
         edges_.clear(); // cached candidates predate the new rules (and the removed islands)
-        parts_ = UnionFind(layout_.vertices.size());
-        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
-            if (surface_.alive(f)) {
-                const Tri& t = surface_.faces()[f];
-                parts_.unite(t[0], t[1]);
-                parts_.unite(t[0], t[2]);
-            }
+        recount_parts();
         grow_whole_front();
         run();
     }
@@ -917,13 +911,7 @@ public:
         edges_.clear();
         face_normals_.clear();
         vertex_normals_.clear();
-        parts_ = UnionFind(layout_.vertices.size());
-        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
-            if (surface_.alive(f)) {
-                const Tri& t = surface_.faces()[f];
-                parts_.unite(t[0], t[1]);
-                parts_.unite(t[0], t[2]);
-            }
+        recount_parts();
         grow_whole_front();
         run();
     }
@@ -1182,6 +1170,18 @@ private:
 
     // A handle closes only around a boundary loop of at least this many edges (see grow).
     static constexpr std::size_t kMinHandleLoopEdges = 24;
+
+    // The connected pieces of the surface as it is now (after faces were removed).
+    void recount_parts()
+    {
+        parts_ = UnionFind(layout_.vertices.size());
+        for (std::uint32_t f = 0; f < surface_.faces().size(); ++f)
+            if (surface_.alive(f)) {
+                const Tri& t = surface_.faces()[f];
+                parts_.unite(t[0], t[1]);
+                parts_.unite(t[0], t[2]);
+            }
+    }
 
     void grow_whole_front()
     {
