@@ -210,6 +210,28 @@ TEST(Cli, mesh_fit_rounds)
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
 }
 
+// --remove-outliers: the sphere with ten stray points far outside it keeps its 3,000 points in the
+// model, and the build line says how many went.
+TEST(Cli, build_removes_outliers_on_request)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir);
+    {
+        std::ofstream out(xyz, std::ios::app);
+        for (int i = 0; i < 10; ++i)
+            out << 3.0 + i << " " << -2.5 * i << " 4.0\n";
+    }
+    const Result kept = mrtile("build " + xyz.string() + " -o " + (dir / "a.mrt").string(), dir);
+    ASSERT_EQ(kept.code, 0) << kept.err;
+    EXPECT_NE(kept.out.find("3010 points,"), std::string::npos) << kept.out;
+    const Result removed = mrtile("build --remove-outliers " + xyz.string() + " -o " + (dir / "b.mrt").string(), dir);
+    ASSERT_EQ(removed.code, 0) << removed.err;
+    EXPECT_NE(removed.out.find("3010 points (10 outliers removed)"), std::string::npos) << removed.out;
+    const Result info = mrtile("info --json " + (dir / "b.mrt").string(), dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    EXPECT_EQ(nlohmann::json::parse(info.out)["points"].get<int>(), 3000);
+}
+
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
 // coarser level to a finer one (levels that would not improve are not written).
 TEST(Cli, lods_on_the_bunny_are_consistent)

@@ -10,6 +10,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
+#include "libmrtile/outliers.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
 
@@ -98,6 +99,7 @@ struct BuildArgs
     std::size_t pca_limit = BuildOptions{}.pca_limit;
     std::size_t min_cluster = BuildOptions{}.min_cluster;
     bool no_reclassify = false;
+    bool remove_outliers = false;
 
     // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
     void add(CLI::App* cmd, const std::string& prefix)
@@ -114,6 +116,8 @@ struct BuildArgs
             ->check(kPositive)
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
+        cmd->add_flag("--remove-outliers", remove_outliers,
+                      "drop isolated points first (mean distance to 8 neighbours > 3x theirs or > 6x the cloud's median)");
     }
 
     BuildOptions options(const Globals& g) const
@@ -511,11 +515,14 @@ Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const
     const auto start = Clock::now();
     PointCloud cloud = read_points(points);
     const std::size_t n = cloud.size();
+    const std::size_t removed = args.remove_outliers ? remove_outliers(cloud) : 0;
     Hierarchy h = build_hierarchy(std::move(cloud), args.options(g));
     if (g.progress())
         std::fprintf(stderr, "\r%40s\r", "");
-    std::printf("read and built %s: %zu points, %zu nodes, %zu leaves, depth %u (%.2f s)\n", points.string().c_str(), n,
-                h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
+    std::printf("read and built %s: %zu points", points.string().c_str(), n);
+    if (args.remove_outliers)
+        std::printf(" (%zu outliers removed)", removed);
+    std::printf(", %zu nodes, %zu leaves, depth %u (%.2f s)\n", h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
     return h;
 }
 
