@@ -17,6 +17,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 namespace mrt {
 namespace {
@@ -300,9 +301,18 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
     std::vector<std::size_t> order(finer.size());
     for (std::size_t i = 0; i < order.size(); ++i)
         order[i] = finer.size() - 1 - i; // finest (largest) first
+    const std::size_t total = set.levels.size() + finer.size();
+    std::size_t done = set.levels.size();
+    std::mutex progress_lock;
+    if (o.progress && done > 0)
+        o.progress(done, total);
     run_parallel(order.size(), o.threads, [&](std::size_t k) {
         LodLevel& level = finer[order[k]];
         level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        if (o.progress) {
+            const std::lock_guard<std::mutex> hold(progress_lock);
+            o.progress(++done, total);
+        }
     });
     for (LodLevel& level : finer)
         add_level(std::move(level));

@@ -32,9 +32,15 @@ TEST(LodSet, levels_are_consistent)
     LodSetOptions o;
     o.tileset = false;
     o.max_tile_triangles = 4096;
+    std::vector<std::pair<std::size_t, std::size_t>> progress;
+    o.progress = [&](std::size_t done, std::size_t total) { progress.push_back({done, total}); };
     const LodSet set = make_lod_set(torus(), o);
     ASSERT_GE(set.levels.size(), 3u);
     EXPECT_TRUE(set.tiles.empty());
+    // One progress call per level, counting up to the number of levels.
+    ASSERT_EQ(progress.size(), set.levels.size());
+    for (std::size_t i = 0; i < progress.size(); ++i)
+        EXPECT_EQ(progress[i], std::make_pair(i + 1, set.levels.size()));
     double previous_mean = std::numeric_limits<double>::infinity();
     for (std::size_t l = 0; l < set.levels.size(); ++l) {
         const LodLevel& level = set.levels[l];

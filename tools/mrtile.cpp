@@ -402,10 +402,25 @@ struct ExportArgs
     }
 };
 
-void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& dir)
+// "meshing levels 2/4" on stderr while a LOD set is made (a terminal only; the last call clears it).
+void show_level_progress(LodSetOptions& o, const Globals& g)
+{
+    if (!g.progress())
+        return;
+    o.progress = [](std::size_t done, std::size_t total) {
+        if (done < total)
+            std::fprintf(stderr, "\rmeshing levels %zu/%zu (the finest takes longest)", done, total);
+        else
+            std::fprintf(stderr, "\r%60s\r", "");
+    };
+}
+
+void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
-    const LodSet set = make_lod_set(h, e.options(m));
+    LodSetOptions options = e.options(m);
+    show_level_progress(options, g);
+    const LodSet set = make_lod_set(h, options);
     TilesetOptions t;
     t.gltf = o.gltf();
     if (!e.enu.empty()) {
@@ -426,29 +441,31 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
-void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& out)
+void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out)
 {
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     options.tileset = false;
+    show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
         fine_to_coarse.push_back(&set.levels[l].mesh);
-    GltfLodOptions g;
-    g.gltf = o.gltf();
-    write_glb_lods(fine_to_coarse, h.cloud.origin, out, g);
+    GltfLodOptions lod_options;
+    lod_options.gltf = o.gltf();
+    write_glb_lods(fine_to_coarse, h.cloud.origin, out, lod_options);
     std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
                 seconds_since(start));
 }
 
-void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const fs::path& dir)
+void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     options.tileset = false;
     // A LOD chain for renderers starts at a few thousand triangles, not at what fits one 3D Tiles tile.
     options.first_level_triangles = std::min<std::size_t>(options.max_tile_triangles, 4096);
+    show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
     // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
     // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
@@ -499,12 +516,12 @@ struct ProduceArgs
         exp.add(cmd);
     }
 
-    void write(const Hierarchy& h, const fs::path& out) const
+    void write(const Hierarchy& h, const Globals& g, const fs::path& out) const
     {
         if (exp.format == "3dtiles")
-            write_tileset(h, exp, mesh, output, out);
+            write_tileset(h, exp, mesh, output, g, out);
         else if (exp.format == "lod-glb")
-            write_lod_glb(h, exp, mesh, output, out);
+            write_lod_glb(h, exp, mesh, output, g, out);
         else
             mesh_and_write(h, cut, mesh, output, out);
     }
@@ -678,17 +695,17 @@ int run(int argc, char** argv)
         const Hierarchy h = build_from_points(rec_in, rec_build, g);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        naming_input(rec_in, [&] { rec_args.write(h, rec_out); });
+        naming_input(rec_in, [&] { rec_args.write(h, g, rec_out); });
         return 0;
     }
     if (*lods) {
         const Hierarchy h = load_model(lods_in);
-        naming_input(lods_in, [&] { write_lods(h, lods_args.exp, lods_args.mesh, lods_args.output, lods_out); });
+        naming_input(lods_in, [&] { write_lods(h, lods_args.exp, lods_args.mesh, lods_args.output, g, lods_out); });
         return 0;
     }
     if (*exp) {
         const Hierarchy h = load_model(exp_in);
-        naming_input(exp_in, [&] { exp_args.write(h, exp_out); });
+        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out); });
         return 0;
     }
     if (*demo) {
@@ -713,7 +730,7 @@ int run(int argc, char** argv)
         o.draco = true;
         mesh_and_write(h, cut, m, o, demo_out / "mesh.glb");
         ExportArgs e;
-        write_tileset(h, e, m, o, demo_out / "tiles");
+        write_tileset(h, e, m, o, g, demo_out / "tiles");
         std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
                     (demo_out / "tiles" / "tileset.json").string().c_str(), (demo_out / "mesh.glb").string().c_str());
         return 0;
