@@ -2287,8 +2287,13 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                                    std::to_string(p) + " beyond the cloud");
         fan_tiles += t.has_fan() ? 1 : 0;
     }
-    if (fan_tiles == 0)
+    if (fan_tiles == 0) {
+        // Whether any cut could do better: not when the whole cloud is a line or a point.
+        const Eigen3x3& whole = h.nodes.front().frame;
+        if (!(whole.values[1] > 1e-12 * whole.values[2]))
+            throw InvalidInput("the points are collinear or coincident: they span no surface to mesh");
         throw InvalidInput("build_surface: no tile has three non-collinear points; choose a coarser cut");
+    }
 
     const Layout layout = make_layout(h, tiles, options);
     const Projection projection = choose_projection(h, tiles, options);
