@@ -13,15 +13,29 @@
 
 namespace mrt {
 
-//! \brief Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = one per
-//! hardware thread), the calling thread included; jobs are handed out in index order as threads free up.
+//! The number of threads a `threads = 0` option means: one per hardware thread unless a program set a
+//! bound with set_default_threads (the CLI's --threads), so that one setting reaches every stage,
+//! including those a caller cannot pass options to (the quality measurements). Results never depend on it.
+inline std::atomic<std::size_t>& default_threads_setting()
+{
+    static std::atomic<std::size_t> setting{0};
+    return setting;
+}
+
+//! Sets what `threads = 0` means from now on (0 = one per hardware thread again).
+inline void set_default_threads(std::size_t threads) { default_threads_setting() = threads; }
+
+//! \brief Calls work(0) ... work(count - 1), each exactly once, on up to `threads` threads (0 = the
+//! default: set_default_threads, else one per hardware thread), the calling thread included; jobs are
+//! handed out in index order as threads free up.
 //! \details The first exception a job throws is rethrown once all threads have ended (the other jobs
 //! still run). `work` must be safe to call concurrently for different indices.
 template <typename Work>
 void run_parallel(std::size_t count, std::size_t threads, const Work& work)
 {
-    const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t workers = std::min(count, threads > 0 ? threads : hardware);
+    const std::size_t fallback = default_threads_setting() > 0 ? default_threads_setting().load()
+                                                               : std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t workers = std::min(count, threads > 0 ? threads : fallback);
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;

@@ -162,6 +162,29 @@ TEST(Cli, build_info_mesh_and_determinism)
                   .code,
               2);
     EXPECT_FALSE(fs::exists(dir / "m.xyz"));
+
+    // The same files whatever the thread count (every stage; the tileset's levels are meshed in parallel).
+    for (const char* threads : {"1", "3"}) {
+        const fs::path out = dir / (std::string("t") + threads);
+        r = mrtile(std::string("--threads ") + threads + " reconstruct " + xyz.string() + " -o " + out.string() +
+                       " --format 3dtiles --draco --max-tile-triangles 2000 --remove-outliers",
+                   dir);
+        ASSERT_EQ(r.code, 0) << r.err;
+        r = mrtile(std::string("mesh --threads ") + threads + " " + (dir / "a.mrt").string() + " -o " +
+                       (out.string() + ".ply") + " --tolerance 0.002",
+                   dir);
+        ASSERT_EQ(r.code, 0) << r.err;
+    }
+    EXPECT_EQ(slurp(dir / "t1.ply"), slurp(dir / "t3.ply"));
+    std::size_t files = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "t1")) {
+        if (!entry.is_regular_file())
+            continue;
+        ++files;
+        EXPECT_EQ(slurp(entry.path()), slurp(dir / "t3" / fs::relative(entry.path(), dir / "t1"))) << entry.path();
+    }
+    EXPECT_GE(files, 3u);
+    EXPECT_EQ(mrtile("--threads x info " + (dir / "a.mrt").string(), dir).code, 2);
 }
 
 // `mesh --triangles N`: the mesh fits the target and comes close; combined with another cut kind it is

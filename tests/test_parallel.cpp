@@ -1,11 +1,15 @@
 // Tests of parallel.h: every job runs exactly once whatever the thread count, and a job's exception
-// reaches the caller after the others have run.
+// reaches the caller after the others have run, and the default thread count can be bounded.
 #include "libmrtile/parallel.h"
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <mutex>
+#include <set>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 namespace mrt {
@@ -39,6 +43,26 @@ TEST(Parallel, an_exception_reaches_the_caller_after_all_jobs)
                               }),
                  std::runtime_error);
     EXPECT_EQ(done.load(), 20);
+}
+
+// set_default_threads bounds the calls that leave the thread count to the default (0), not the others.
+TEST(Parallel, the_default_thread_count_can_be_bounded)
+{
+    auto threads_used = [](std::size_t threads) {
+        std::mutex lock;
+        std::set<std::thread::id> ids;
+        run_parallel(64, threads, [&](std::size_t) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            const std::lock_guard<std::mutex> hold(lock);
+            ids.insert(std::this_thread::get_id());
+        });
+        return ids.size();
+    };
+    set_default_threads(1);
+    EXPECT_EQ(threads_used(0), 1u);
+    EXPECT_GT(threads_used(3), 1u); // an explicit count is kept
+    set_default_threads(0);
+    EXPECT_EQ(default_threads_setting().load(), 0u);
 }
 
 } // namespace

@@ -11,6 +11,7 @@
 #include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/outliers.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
 
@@ -606,6 +607,9 @@ int run(int argc, char** argv)
     app.fallthrough(); // global flags (-q) may follow the command
     Globals g;
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
+    std::size_t threads = 0;
+    app.add_option("--threads", threads, "worker threads (0 = one per hardware thread); output does not depend on it")
+        ->capture_default_str();
 
     // build
     auto* build = app.add_subcommand("build", "build the cluster hierarchy of a point cloud into a .mrt model");
@@ -674,6 +678,7 @@ int run(int argc, char** argv)
         const int code = app.exit(e);
         return code == 0 ? 0 : 2;
     }
+    set_default_threads(threads);
 
     if (*build) {
         Hierarchy h;
