@@ -32,11 +32,11 @@
 //     its tiles, and it is not much wider than a point spacing (every point lies in a tile, so a hole
 //     holds none: a wide one is a hole in the sample). Other loops are the sample's borders and holes
 //     and stay open. A fill through a pinched vertex that would add a handle (counted locally with
-//     Euler's formula) is refused and the hole widened. Widening can cut fans loose: islands are
-//     dropped, their tiles seeded again and the front grown into the widened holes (no handles), then
-//     holes are filled once more. Islands left are dropped, or put back when the rest of the surface
-//     does not cover their place (and they are not a closed bubble). Vertices still pinched (two fans
-//     touching) are duplicated per fan.
+//     Euler's formula) is refused and the hole widened. Islands are dropped, holes filled once more,
+//     and islands put back where the rest of the surface does not cover their place (unless they are
+//     a closed bubble). Widening can cut fans loose: the same is also tried after seeding the dropped
+//     tiles again and growing the front into the widened holes (no handles); the way that leaves fewer
+//     tiles out is kept. Vertices still pinched (two fans touching) are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
 //     attaches to an existing boundary; components are flipped to positive volume (height fields: to
 //     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
@@ -402,6 +402,23 @@ struct Corner
 class CornerList
 {
 public:
+    CornerList() = default;
+    CornerList(CornerList&&) noexcept = default;
+    CornerList& operator=(CornerList&&) noexcept = default;
+    // A copy holds the corners in place when they fit (hole filling tries two ways from one surface).
+    CornerList(const CornerList& other) { *this = other; }
+    CornerList& operator=(const CornerList& other)
+    {
+        if (this == &other)
+            return *this;
+        size_ = 0;
+        heap_.reset();
+        heap_capacity_ = 0;
+        for (const Corner& c : other)
+            push_back(c);
+        return *this;
+    }
+
     const Corner* begin() const { return heap_ ? heap_.get() : in_place_.data(); }
     const Corner* end() const { return begin() + size_; }
     Corner* begin() { return heap_ ? heap_.get() : in_place_.data(); }
@@ -1716,9 +1733,10 @@ std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector
 constexpr std::size_t kMinRestoredTiles = 3;
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
-                                      double reach = 2.0)
+                                      std::size_t& restored_fans, double reach = 2.0)
 {
     std::size_t restored = 0;
+    restored_fans = 0;
     for (const std::vector<std::uint32_t>& island : removed) {
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
         std::vector<std::pair<Vec3, double>> centres; // position, reach distance
@@ -1795,8 +1813,10 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
         }
         if (!ok)
             s.pop_n(added);
-        else
+        else {
             ++restored;
+            restored_fans += centres.size();
+        }
     }
     return restored;
 }
@@ -2353,19 +2373,45 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
         islands = drop_islands(surface, tiles, removed);
         if (islands > 0) {
-            std::vector<bool> dropped(tiles.size(), false);
-            for (const auto& island : removed)
-                for (std::uint32_t f : island)
-                    if (surface.face_tile()[f] >= 0)
-                        dropped[static_cast<std::size_t>(surface.face_tile()[f])] = true;
-            front.regrow(dropped);
+            // Two ways on from here; the one that leaves fewer tiles out wins, ties going to the first.
+            // (a) Fill again and put back the islands the rest does not cover.
+            const Surface after_drop = surface;
+            const FillResult filled_after_drop = filled;
             fill();
-            removed.clear();
-            islands = drop_islands(surface, tiles, removed);
-        }
-        if (islands > 0) {
-            fill();
-            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles);
+            std::size_t restored_fans = 0;
+            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_fans);
+            const std::size_t left_out = islands - restored_fans;
+            // (b) Widening can cut fans loose (the rocker arm at 0.005 lost 15 of its top face that way):
+            // seed the dropped tiles again, grow the front into the widened holes, fill, drop, put back.
+            // It can also break a large island into smaller ones that are not put back, hence the choice.
+            if (left_out > 0) {
+                Surface way_a = std::move(surface);
+                const FillResult filled_a = filled;
+                const std::size_t islands_a = islands, restored_a = restored_islands;
+                surface = after_drop;
+                filled = filled_after_drop;
+                std::vector<bool> dropped(tiles.size(), false);
+                for (const auto& island : removed)
+                    for (std::uint32_t f : island)
+                        if (surface.face_tile()[f] >= 0)
+                            dropped[static_cast<std::size_t>(surface.face_tile()[f])] = true;
+                front.regrow(dropped);
+                fill();
+                std::vector<std::vector<std::uint32_t>> removed_again;
+                islands = drop_islands(surface, tiles, removed_again);
+                restored_islands = 0;
+                restored_fans = 0;
+                if (islands > 0) {
+                    fill();
+                    restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_fans);
+                }
+                if (!(islands - restored_fans < left_out)) {
+                    surface = std::move(way_a);
+                    filled = filled_a;
+                    islands = islands_a;
+                    restored_islands = restored_a;
+                }
+            }
         }
     }
 
