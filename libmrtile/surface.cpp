@@ -1729,7 +1729,8 @@ std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector
 // fill) the island is put back: its points are far better off with their own surface than with none.
 // An island counts as covered when most of its fan centres lie within `reach` × their tile spacing of
 // a face of the rest. Islands are put back whole (all faces addable) or not at all, and only with at
-// least kMinRestoredTiles fans. Returns the number of islands put back.
+// least kMinRestoredTiles fans, and never a closed one. Returns the number of islands put back;
+// `restored_fans` gets the number of their fans.
 constexpr std::size_t kMinRestoredTiles = 3;
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
