@@ -35,7 +35,7 @@ struct OutlierOptions
 //! \brief Indices of the outliers among `positions`, ascending. Deterministic.
 //! \details A cloud of at most `neighbours` points has none. Exact duplicates are nobody's outliers: a
 //! test whose median distance is 0 is skipped.
-//! \throw InvalidInput if neighbours is 0 or a ratio is negative or NaN.
+//! \throw InvalidInput if neighbours is 0, a ratio is negative or NaN, or a position is not finite.
 std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, const OutlierOptions& options = {});
 
 //! \brief Removes the outliers (positions and their colours) in place; returns how many went.

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace mrt {
@@ -159,6 +160,8 @@ TEST(Outliers, small_clouds_duplicates_and_bad_options)
     EXPECT_THROW(find_outliers(piles, OutlierOptions{0, 3.0, 6.0, 0}), InvalidInput);
     EXPECT_THROW(find_outliers(piles, OutlierOptions{8, -1.0, 6.0, 0}), InvalidInput);
     EXPECT_THROW(find_outliers(piles, OutlierOptions{8, 3.0, std::nan(""), 0}), InvalidInput);
+    piles.push_back({0, std::numeric_limits<double>::infinity(), 0});
+    EXPECT_THROW(find_outliers(piles), InvalidInput);
 }
 
 // The real use: the bunny with 1% of its point count added uniformly in its box. Kept, the stray
