@@ -163,6 +163,18 @@ TEST(Surface, three_holes_is_closed_genus_3)
     expect_closed(r, 3);
 }
 
+// Real cuts of a sparse (4,000-point) 3-hole solid: a tile on a sharp edge, its plane tilted between the
+// two faces, saw every neighbour on one side (174 degrees) and was taken for a border tile, so the gap
+// beside it stayed open (one 24-edge loop from 0.005 down). Its neighbours are all interior: so is it.
+TEST(Surface, real_cuts_of_a_sparse_three_holes_solid_are_closed)
+{
+    const Hierarchy h = build_hierarchy(shapes::three_holes(4000));
+    for (double tolerance : {0.005, 0.001}) {
+        SCOPED_TRACE("tolerance " + std::to_string(tolerance));
+        expect_closed(mesh_real_cut(h, tolerance), 3);
+    }
+}
+
 TEST(Surface, height_field_is_one_disk_facing_up)
 {
     const testing::FlatCut fc = testing::kmeans_cut(shapes::smooth_height_field(8000), 200);
