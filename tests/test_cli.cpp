@@ -233,6 +233,26 @@ TEST(Cli, mesh_fit_rounds)
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
 }
 
+// The README's first command runs `mrtile demo`: every file it names exists, the mesh is the closed genus-3
+// solid it promises, and the Draco GLB holds the very mesh of mesh.ply (meshed once, written twice).
+TEST(Cli, demo_writes_what_it_says)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const Result r = mrtile("demo -o " + (dir / "demo").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* file : {"model.mrt", "mesh.ply", "mesh.glb", "tiles/tileset.json"}) {
+        EXPECT_TRUE(fs::exists(dir / "demo" / file)) << file;
+        EXPECT_NE(r.out.find("wrote " + (dir / "demo" / file).string()), std::string::npos) << file;
+    }
+    const auto stats = nlohmann::json::parse(slurp(dir / "demo" / "mesh.json"));
+    EXPECT_EQ(stats["genus"], 3);
+    EXPECT_EQ(stats["boundary_loops"], 0);
+    EXPECT_EQ(stats["nonmanifold_edges"], 0);
+    const std::string glb = slurp(dir / "demo" / "mesh.glb");
+    EXPECT_NE(glb.find("KHR_draco_mesh_compression"), std::string::npos);
+    EXPECT_NE(r.out.find("mesh.glb: the same mesh"), std::string::npos) << r.out;
+}
+
 // --remove-outliers: the sphere with ten stray points far outside it keeps its 3,000 points in the
 // model, and the build line says how many went.
 TEST(Cli, build_removes_outliers_on_request)

@@ -343,9 +343,16 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     std::printf(" (%.2f s)\n", j["seconds"].get<double>());
 }
 
+// A further file for the same mesh (the demo writes its mesh as .ply and as Draco .glb).
+struct AlsoWrite
+{
+    fs::path path;
+    OutputArgs args;
+};
+
 // Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`.
 nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const MeshArgs& mesh_args,
-                              const OutputArgs& out_args, const fs::path& out)
+                              const OutputArgs& out_args, const fs::path& out, const std::vector<AlsoWrite>& also = {})
 {
     const auto start = Clock::now();
     Cut cut;
@@ -366,6 +373,11 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     if (!mesh_args.stats_json.empty())
         write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
     print_mesh_report(j, out);
+    for (const AlsoWrite& a : also) {
+        const auto again = Clock::now();
+        write_any_mesh(r.mesh, h.cloud.origin, a.path, a.args);
+        std::printf("wrote %s: the same mesh (%.2f s)\n", a.path.string().c_str(), seconds_since(again));
+    }
     return j;
 }
 
@@ -728,12 +740,10 @@ int run(int argc, char** argv)
         CutArgs cut;
         MeshArgs m;
         m.stats_json = (demo_out / "mesh.json").string();
-        OutputArgs o;
-        mesh_and_write(h, cut, m, o, demo_out / "mesh.ply");
-        m.no_quality = true;
-        m.stats_json.clear();
+        OutputArgs o, draco;
+        draco.draco = true;
+        mesh_and_write(h, cut, m, o, demo_out / "mesh.ply", {AlsoWrite{demo_out / "mesh.glb", draco}});
         o.draco = true;
-        mesh_and_write(h, cut, m, o, demo_out / "mesh.glb");
         ExportArgs e;
         write_tileset(h, e, m, o, g, demo_out / "tiles");
         std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
