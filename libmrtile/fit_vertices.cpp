@@ -129,7 +129,7 @@ std::vector<double> shortest_edges(const Mesh& mesh)
         const auto h = mesh.halfedge_handle(e, 0);
         const auto a = static_cast<std::size_t>(mesh.from_vertex_handle(h).idx());
         const auto c = static_cast<std::size_t>(mesh.to_vertex_handle(h).idx());
-        const double length = norm(to_vec3(mesh.point(mesh.from_vertex_handle(h))) - to_vec3(mesh.point(mesh.to_vertex_handle(h))));
+        const double length = mesh.calc_edge_length(e);
         shortest[a] = std::min(shortest[a], length);
         shortest[c] = std::min(shortest[c], length);
     }

@@ -70,7 +70,7 @@ struct DistanceStats
 };
 
 //! \brief Distance from each point to the closest point of the mesh surface (exact: closest point on the
-//! triangles, not on the vertices). Deterministic; uses every hardware thread.
+//! triangles, not on the vertices). Deterministic; on the default number of threads (parallel.h).
 //! \throw InvalidInput if points are given but the mesh has no face, if a point is not finite, or if the
 //! points' bounding box has a zero diagonal (the fractions would be undefined). No points gives zeros.
 DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh);

@@ -3,7 +3,8 @@
 // The test is the classic statistical one (mean distance to the k nearest neighbours) made relative
 // twice, so that it needs no scale: against the point's own neighbours (density may vary across a scan)
 // and against the whole cloud (stray points among stray points). See outliers.h.
-// The one file of the library that includes CGAL's kd-tree.
+// Neighbours come from CGAL's kd-tree (mesh_stats.cpp uses it too, for nearest distances only: here each
+// point's neighbour indices are needed, so the tree stores them).
 #include "libmrtile/outliers.h"
 
 #include "libmrtile/errors.h"

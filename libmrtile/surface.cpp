@@ -1705,22 +1705,25 @@ void remove_islands(Surface& s, Islands& islands)
             s.remove(f);
 }
 
-// Finds and removes the islands. Returns the number of tiles whose fans were removed; `removed` gets
-// the (now dead) face ids of each island, in face order.
-std::size_t drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed)
+// Finds and removes the islands. Returns the tiles whose fans were removed; `removed` gets the (now
+// dead) face ids of each island, in face order.
+std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed)
 {
     Islands islands = find_islands(s, tiles);
-    const std::vector<bool> dropped = island_tiles(islands);
     std::map<std::uint32_t, std::size_t> index_of_part;
-    for (std::uint32_t f = 0; f < s.faces().size(); ++f)
-        if (s.alive(f) && islands.doomed[islands.parts.find(f)]) {
-            const auto inserted = index_of_part.emplace(islands.parts.find(f), removed.size());
-            if (inserted.second)
-                removed.emplace_back();
-            removed[inserted.first->second].push_back(f);
-        }
-    remove_islands(s, islands);
-    return static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+        if (!s.alive(f))
+            continue;
+        const std::uint32_t part = islands.parts.find(f);
+        if (!islands.doomed[part])
+            continue;
+        const auto inserted = index_of_part.emplace(part, removed.size());
+        if (inserted.second)
+            removed.emplace_back();
+        removed[inserted.first->second].push_back(f);
+        s.remove(f);
+    }
+    return island_tiles(islands);
 }
 
 // An island is dropped on the grounds that it broke off a larger surface which, once the island is gone,
@@ -2383,7 +2386,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         };
         fill();
         std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
-        islands = drop_islands(surface, tiles, removed);
+        const std::vector<bool> dropped = drop_islands(surface, tiles, removed);
+        islands = static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
         if (islands > 0) {
             // Two ways on from here; the one that leaves fewer tiles out wins, ties going to the first.
             // (a) Fill again and put back the islands the rest does not cover.
@@ -2402,15 +2406,11 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                 const std::size_t islands_a = islands, restored_a = restored_islands;
                 surface = after_drop;
                 filled = filled_after_drop;
-                std::vector<bool> dropped(tiles.size(), false);
-                for (const auto& island : removed)
-                    for (std::uint32_t f : island)
-                        if (surface.face_tile()[f] >= 0)
-                            dropped[static_cast<std::size_t>(surface.face_tile()[f])] = true;
                 front.regrow(dropped);
                 fill();
                 std::vector<std::vector<std::uint32_t>> removed_again;
-                islands = drop_islands(surface, tiles, removed_again);
+                const std::vector<bool> dropped_again = drop_islands(surface, tiles, removed_again);
+                islands = static_cast<std::size_t>(std::count(dropped_again.begin(), dropped_again.end(), true));
                 restored_islands = 0;
                 restored_fans = 0;
                 if (islands > 0) {

@@ -117,8 +117,11 @@ struct BuildArgs
             ->check(kPositive)
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
+        const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
-                      "drop isolated points first (mean distance to 8 neighbours > 3x theirs or > 6x the cloud's median)");
+                      "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
+                          CLI::detail::to_string(outliers.local_ratio) + "x theirs or > " +
+                          CLI::detail::to_string(outliers.global_ratio) + "x the cloud's median)");
     }
 
     BuildOptions options(const Globals& g) const
