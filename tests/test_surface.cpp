@@ -163,6 +163,23 @@ TEST(Surface, three_holes_is_closed_genus_3)
     expect_closed(r, 3);
 }
 
+// The regrowing above is one of two ways, kept only when it leaves fewer tiles out: on the paper-layout
+// Rabbit (τ 0.001, the paper's split order) it broke a 5-fan island, which the other way puts back whole,
+// into pieces too small to put back (max distance 0.047 instead of 0.025 of the diagonal).
+TEST(Surface, regrowing_is_kept_only_where_it_leaves_fewer_tiles_out)
+{
+    BuildOptions build;
+    build.tau = 0.001;
+    build.paper_split_order = true;
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"), build);
+    Result r;
+    r.mesh = build_surface(h, make_tiles(h, cut_by_tau(h, 0.001)), {}, &r.stats);
+    r.topo = topology_stats(r.mesh);
+    expect_valid(r);
+    EXPECT_GE(r.stats.restored_islands, 1u);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, r.mesh).max, 0.035);
+}
+
 // Real cuts of a sparse (4,000-point) 3-hole solid: a tile on a sharp edge, its plane tilted between the
 // two faces, saw every neighbour on one side (174 degrees) and was taken for a border tile, so the gap
 // beside it stayed open (one 24-edge loop from 0.005 down). Its neighbours are all interior: so is it.
