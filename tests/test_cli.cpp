@@ -185,6 +185,7 @@ TEST(Cli, build_info_mesh_and_determinism)
     }
     EXPECT_GE(files, 3u);
     EXPECT_EQ(mrtile("--threads x info " + (dir / "a.mrt").string(), dir).code, 2);
+    EXPECT_EQ(mrtile("--threads -1 info " + (dir / "a.mrt").string(), dir).code, 2); // not 2^64 - 1 threads
 }
 
 // `mesh --triangles N`: the mesh fits the target and comes close; combined with another cut kind it is

@@ -624,6 +624,7 @@ int run(int argc, char** argv)
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
     std::size_t threads = 0;
     app.add_option("--threads", threads, "worker threads (0 = one per hardware thread); output does not depend on it")
+        ->check(CLI::Range(std::size_t{0}, std::size_t{4096}))
         ->capture_default_str();
 
     // build
