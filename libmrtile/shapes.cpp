@@ -145,6 +145,27 @@ PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed)
     return c;
 }
 
+PointCloud box_surface(const Vec3& size, double density, double dense_face_factor, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+        for (int side = 0; side < 2; ++side) {
+            const double factor = axis == 0 && side == 0 ? dense_face_factor : 1.0;
+            const auto count = static_cast<std::size_t>(std::llround(density * factor * size[a] * size[b]));
+            for (std::size_t i = 0; i < count; ++i) {
+                Vec3 p;
+                p[axis] = side * size[axis];
+                p[a] = uniform(rng) * size[a];
+                p[b] = uniform(rng) * size[b];
+                c.positions.push_back(p);
+            }
+        }
+    }
+    return c;
+}
+
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed)
 {
     std::mt19937 rng(seed);

@@ -22,6 +22,10 @@ PointCloud smooth_height_field(std::size_t count, std::uint32_t seed = 4);
 PointCloud step_function(std::size_t count, std::uint32_t seed = 5);
 //! Two parallel planes z = 0 and z = gap over [0,1]^2, count points each (random).
 PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed = 6);
+//! Uniform samples on the surface of the box [0,size.x]×[0,size.y]×[0,size.z], `density` points per unit
+//! area, except the face x = 0, which gets `dense_face_factor` times as many (a face a range scanner saw
+//! head-on beside faces it saw at a grazing angle: the density jumps at sharp edges).
+PointCloud box_surface(const Vec3& size, double density, double dense_face_factor = 1.0, std::uint32_t seed = 8);
 //! Adds Gaussian noise of the given standard deviation along each axis.
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed = 7);
 //! Translates every position by `offset` (to test far-from-origin precision), keeping origin at zero.
