@@ -1982,7 +1982,12 @@ struct FillResult
 // its centre in its plane, the centres of its neighbours and theirs leave no empty angular sector wider
 // than max_gap_degrees, or its neighbours form a closed ring around it (each meets two others of them;
 // at a sharp edge the tile's own plane can hide a direction, the ring cannot). Tiles on the sample's
-// border have the empty outside on one side and an open ring.
+// border have the empty outside on one side and an open ring. The sector is also measured in the
+// plane of each neighbour, and the narrowest counts: a cluster a few points wide that reaches across a
+// sharp edge is flat in a plane at right angles to the surface, and in its own plane it sees its
+// neighbours on a line (a box whose one face is sampled 10 times more densely has such clusters along
+// that face's edges, and 16-50-edge holes stayed open beside them). A border tile's neighbours lie in
+// the surface too, and their planes show the same empty outside.
 std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees)
 {
     std::vector<bool> out(tiles.size(), false);
@@ -1996,18 +2001,27 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
             ring.push_back(n);
             ring.insert(ring.end(), tiles[n].neighbours.begin(), tiles[n].neighbours.end());
         }
-        for (std::uint32_t n : ring) {
-            if (n == t)
-                continue;
-            const Vec3 d = tiles[n].centre - tiles[t].centre;
-            angles.push_back(std::atan2(dot(d, tiles[t].axis_v), dot(d, tiles[t].axis_u)));
-        }
-        if (angles.size() < 3)
+        const auto empty_sector = [&](const Tile& plane) {
+            angles.clear();
+            for (std::uint32_t n : ring) {
+                if (n == t)
+                    continue;
+                const Vec3 d = tiles[n].centre - tiles[t].centre;
+                angles.push_back(std::atan2(dot(d, plane.axis_v), dot(d, plane.axis_u)));
+            }
+            if (angles.size() < 3)
+                return 2.0 * kPi;
+            std::sort(angles.begin(), angles.end());
+            double widest_gap = angles.front() + 2.0 * kPi - angles.back();
+            for (std::size_t i = 1; i < angles.size(); ++i)
+                widest_gap = std::max(widest_gap, angles[i] - angles[i - 1]);
+            return widest_gap;
+        };
+        double gap = empty_sector(tiles[t]);
+        for (std::uint32_t n : tiles[t].neighbours)
+            gap = std::min(gap, empty_sector(tiles[n]));
+        if (gap >= 2.0 * kPi)
             continue;
-        std::sort(angles.begin(), angles.end());
-        double gap = angles.front() + 2.0 * kPi - angles.back();
-        for (std::size_t i = 1; i < angles.size(); ++i)
-            gap = std::max(gap, angles[i] - angles[i - 1]);
         // Or the neighbours form a closed ring around it (each meets two others of them): on a sharp
         // edge the tile's own plane can hide a neighbour's direction, but not the ring.
         bool ring_closed = true;
