@@ -130,6 +130,7 @@ struct TileLoop
     double perimeter = 0.0;
     double edge_length = 0.0;         // mean loop edge length (0 for fanless tiles)
     double spacing = 0.0;             // the tile's point spacing (Tile::spacing)
+    double share = 0.0;               // the fraction of the cloud's points in the tile's node
     bool placed = false;
 };
 
@@ -153,6 +154,8 @@ Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     for (std::size_t t = 0; t < tiles.size(); ++t) {
         const Tile& tile = tiles[t];
         TileLoop& tl = out.tiles[t];
+        tl.share = static_cast<double>(h.nodes[static_cast<std::size_t>(tile.node)].count()) /
+                   static_cast<double>(h.cloud.positions.size());
         const auto ti = static_cast<std::int32_t>(t);
         if (!tile.has_fan()) {
             for (std::uint32_t p : tile.boundary)
@@ -1732,19 +1735,25 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::
 // beside the main surface, as behind a bunny's leg in a single range scan, or its hole was too wide to
 // fill) the island is put back: its points are far better off with their own surface than with none.
 // An island counts as covered when most of its fan centres lie within `reach` × their tile spacing of
-// a face of the rest. Islands are put back whole (all faces addable) or not at all, and only with at
-// least kMinRestoredTiles fans, and never a closed one. Returns the number of islands put back;
-// `restored_fans` gets the number of their fans.
+// a face of the rest. Islands are put back whole (all faces addable) or not at all, and never a closed
+// one; an island of fewer than kMinRestoredTiles fans only when it holds at least kMinRestoredShare of
+// the points (in a dense sample a lone fan or two is noise or a sliver at a sharp edge; in a sparse one,
+// 100 points of a bunny's head, three lone fans held 23% of the points, up to 36% of the diagonal
+// away). Returns the number of islands put back; `restored_fans` gets the number of their fans, and
+// `restored_tiles` is set for each.
 constexpr std::size_t kMinRestoredTiles = 3;
+constexpr double kMinRestoredShare = 0.01;
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
-                                      std::size_t& restored_fans, double reach = 2.0)
+                                      std::size_t& restored_fans, std::vector<bool>& restored_tiles, double reach = 2.0)
 {
     std::size_t restored = 0;
     restored_fans = 0;
     for (const std::vector<std::uint32_t>& island : removed) {
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
         std::vector<std::pair<Vec3, double>> centres; // position, reach distance
+        std::vector<std::int32_t> island_tiles;
+        double share = 0.0;
         std::vector<bool> seen_tile(loops.size(), false);
         for (std::uint32_t f : island) {
             const std::int32_t t = s.face_tile()[f];
@@ -1752,11 +1761,14 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
                 continue;
             seen_tile[static_cast<std::size_t>(t)] = true;
             const TileLoop& tl = loops[static_cast<std::size_t>(t)];
-            if (tl.centre != kNone)
+            if (tl.centre != kNone) {
                 centres.push_back({positions[tl.centre], reach * tl.spacing});
+                island_tiles.push_back(t);
+                share += tl.share;
+            }
         }
-        if (centres.size() < kMinRestoredTiles)
-            continue; // a lone fan or two would be left out as a component of its own anyway (step 5)
+        if (centres.empty() || (centres.size() < kMinRestoredTiles && share < kMinRestoredShare))
+            continue;
         // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
         // the surface): put back, it would float beside the surface as a component of its own.
         std::vector<std::uint64_t> edges;
@@ -1821,6 +1833,8 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
         else {
             ++restored;
             restored_fans += centres.size();
+            for (std::int32_t t : island_tiles)
+                restored_tiles[static_cast<std::size_t>(t)] = true;
         }
     }
     return restored;
@@ -2406,6 +2420,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     // itself as a bubble and was left out: max distance 1.27% -> 0.37% of the diagonal).
     FillResult filled;
     std::size_t islands = 0, restored_islands = 0;
+    std::vector<bool> restored_tiles(tiles.size(), false); // fans of islands put back (kept in step 5)
     const std::vector<bool> interior = options.fill_holes ? interior_tiles(tiles, options.interior_gap_degrees) : std::vector<bool>{};
     auto fill = [&](bool before_handles) {
         const FillResult more = fill_holes(surface, layout, positions, projection, interior, options, before_handles);
@@ -2427,7 +2442,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             const FillResult filled_after_drop = filled;
             fill(false);
             std::size_t restored_fans = 0;
-            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_fans);
+            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_fans, restored_tiles);
             const std::size_t left_out = islands - restored_fans;
             // (b) Widening can cut fans loose (the rocker arm at 0.005 lost 15 of its top face that way):
             // seed the dropped tiles again, grow the front into the widened holes, fill, drop, put back.
@@ -2436,6 +2451,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                 Surface way_a = std::move(surface);
                 const FillResult filled_a = filled;
                 const std::size_t islands_a = islands, restored_a = restored_islands;
+                std::vector<bool> restored_tiles_a(tiles.size(), false);
+                restored_tiles_a.swap(restored_tiles);
                 surface = after_drop;
                 filled = filled_after_drop;
                 front.regrow(dropped);
@@ -2447,13 +2464,15 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                 restored_fans = 0;
                 if (islands > 0) {
                     fill(false);
-                    restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_fans);
+                    restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_fans,
+                                                                 restored_tiles);
                 }
                 if (!(islands - restored_fans < left_out)) {
                     surface = std::move(way_a);
                     filled = filled_a;
                     islands = islands_a;
                     restored_islands = restored_a;
+                    restored_tiles.swap(restored_tiles_a);
                 }
             }
         }
@@ -2514,7 +2533,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     }
     // A component that is one tile's fan alone, while that tile has surface neighbours and the surface
     // goes on elsewhere, was passed over by its neighbours' gap triangles (at a sharp edge, say): the
-    // surface already covers it, and it would be a loose disk on top.
+    // surface already covers it, and it would be a loose disk on top. Unless it is an island put back
+    // because the rest does not cover it.
     std::vector<std::int32_t> lone_tile(faces.size(), -2); // per root: the one tile, -1 if more or a gap face
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
@@ -2525,7 +2545,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     std::size_t dropped_components = 0;
     if (roots.size() > 1)
         for (std::uint32_t r : roots)
-            if (lone_tile[r] >= 0 && !tiles[static_cast<std::size_t>(lone_tile[r])].neighbours.empty()) {
+            if (lone_tile[r] >= 0 && !restored_tiles[static_cast<std::size_t>(lone_tile[r])] &&
+                !tiles[static_cast<std::size_t>(lone_tile[r])].neighbours.empty()) {
                 dropped[r] = true;
                 ++dropped_components;
             }
