@@ -57,7 +57,8 @@ struct SurfaceOptions
     //! Largest turn between a new gap triangle and an existing neighbour across an edge (folds beyond it
     //! are rejected).
     double max_turn_degrees = 120.0;
-    //! Fill holes left between tiles.
+    //! Fill holes left between tiles (the small ones also before the front may close handles, so that
+    //! a handle face cannot join two neighbouring gaps).
     bool fill_holes = true;
     //! A hole is filled when its perimeter is at most hole_factor × the largest perimeter of the tiles
     //! on its loop (and it touches at least two tiles and has at most max_hole_edges edges); larger loops
@@ -65,9 +66,9 @@ struct SurfaceOptions
     double hole_factor = 1.0;
     //! Largest number of edges of a hole that is filled.
     std::size_t max_hole_edges = 300;
-    //! A tile is interior (not on the sample's border) when, seen from its centre in its plane, its
-    //! surface neighbours (Tile::neighbours) and theirs leave no empty angular sector wider than this,
-    //! or its neighbours form a closed ring around it. A hole whose loop touches only interior tiles is
+    //! A tile is interior (not on the sample's border) when, seen from its centre in its own plane or
+    //! in a neighbour's, its surface neighbours (Tile::neighbours) and theirs leave no empty angular
+    //! sector wider than this, or its neighbours form a closed ring around it. A hole whose loop touches only interior tiles is
     //! filled whatever its size (up to max_hole_edges).
     double interior_gap_degrees = 170.0;
     //! A hole whose mean width (2 area / perimeter of its fill) exceeds this many point spacings of its
