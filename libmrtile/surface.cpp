@@ -2033,8 +2033,10 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
             return widest_gap;
         };
         double gap = empty_sector(tiles[t]);
-        for (std::uint32_t n : tiles[t].neighbours)
-            gap = std::min(gap, empty_sector(tiles[n]));
+        // The neighbours' planes only matter where the tile's own plane sees a wide empty sector.
+        if (gap > max_gap_degrees * kPi / 180.0)
+            for (std::uint32_t n : tiles[t].neighbours)
+                gap = std::min(gap, empty_sector(tiles[n]));
         if (gap >= 2.0 * kPi)
             continue;
         // Or the neighbours form a closed ring around it (each meets two others of them): on a sharp
