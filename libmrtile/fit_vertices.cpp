@@ -174,7 +174,16 @@ double squared_error(const std::vector<Vec3>& points, const std::vector<std::uin
 // within 60 degrees of the old pair's normal. The two faces of a flip are not touched again in the
 // pass (their points are stale). On a mesh with tile ids (mesh.h), a flipped face keeps its tile id only
 // if both faces had the same one, and becomes a gap face otherwise.
-std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest, const Vec3* up)
+// Whether triangle (p, q, r) has an area that is more than rounding noise for its size.
+bool has_area(const Vec3& p, const Vec3& q, const Vec3& r)
+{
+    const double scale = std::max({squared_distance(p, q), squared_distance(q, r), squared_distance(r, p)});
+    const Vec3 n = cross(q - p, r - p);
+    return dot(n, n) > 1e-20 * scale * scale;
+}
+
+std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest, const Vec3* up,
+                       const std::vector<Mesh::Point>& start_position)
 {
     OpenMesh::FPropHandleT<int> tile;
     OpenMesh::FPropHandleT<bool> gap;
@@ -201,6 +210,14 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
         const Vec3 c = to_vec3(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h0))));
         const Vec3 d = to_vec3(mesh.point(mesh.to_vertex_handle(mesh.next_halfedge_handle(h1))));
         const std::array<Vec3, 3> old0{a, b, c}, old1{b, a, d}, new0{c, a, d}, new1{d, b, c};
+        // Never flip to a face without area, here or where the vertices started: the self-intersection
+        // check may put them back (three points of one straight hull edge are collinear there).
+        const auto start = [&](Mesh::VertexHandle vh) { return to_vec3(start_position[static_cast<std::size_t>(vh.idx())]); };
+        const Vec3 sa = start(mesh.from_vertex_handle(h0)), sb = start(mesh.to_vertex_handle(h0));
+        const Vec3 sc = start(mesh.to_vertex_handle(mesh.next_halfedge_handle(h0)));
+        const Vec3 sd = start(mesh.to_vertex_handle(mesh.next_halfedge_handle(h1)));
+        if (!has_area(c, a, d) || !has_area(d, b, c) || !has_area(sc, sa, sd) || !has_area(sd, sb, sc))
+            continue;
         const Vec3 n_old = normalized(cross(b - a, c - a) + cross(a - b, d - b));
         const Vec3 n0 = normalized(cross(a - c, d - c)), n1 = normalized(cross(b - d, c - d));
         if (!(dot(n0, n_old) > min_cos) || !(dot(n1, n_old) > min_cos))
@@ -470,7 +487,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         move_vertices(mesh, heights, direction, options.max_move, stats, moved_sum, moved_count);
         if (options.flip_edges) {
             const Vec3 up = normalized(options.axis);
-            stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr);
+            stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr, start_position);
         }
         ++stats.rounds;
     }

@@ -916,6 +916,7 @@ public:
                 placed_[t] = false;
         edges_.clear(); // cached candidates predate the new rules (and the removed islands)
         recount_parts();
+        reset_pieces();
         grow_whole_front();
         run();
     }
@@ -936,6 +937,7 @@ public:
         face_normals_.clear();
         vertex_normals_.clear();
         recount_parts();
+        reset_pieces();
         grow_whole_front();
         run();
     }
@@ -943,6 +945,7 @@ public:
     //! Last: the faces held back because they add a handle.
     void finish()
     {
+        reset_pieces();
         allow_handles_ = true;
         edges_.clear(); // cached candidates predate the new rule
         grow_whole_front();
@@ -1155,6 +1158,104 @@ private:
         return dot(surface_normal(g), nt) >= min_cos_;
     }
 
+    // Pieces of the surface as split_pinches will leave it: faces joined across shared edges (a pinched
+    // vertex joins nothing). A growable union-find over face ids, synced lazily with the faces added.
+    std::uint32_t piece_of(std::uint32_t f)
+    {
+        while (pieces_[f] != f) {
+            pieces_[f] = pieces_[pieces_[f]];
+            f = pieces_[f];
+        }
+        return f;
+    }
+    void sync_pieces()
+    {
+        const auto& faces = surface_.faces();
+        if (pieces_.size() > faces.size())
+            reset_pieces(); // faces were rolled back: start again
+        for (auto f = static_cast<std::uint32_t>(pieces_.size()); f < faces.size(); ++f)
+            pieces_.push_back(f);
+        for (; pieces_synced_ < faces.size(); ++pieces_synced_) {
+            const std::uint32_t f = pieces_synced_;
+            if (!surface_.alive(f))
+                continue;
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t g = surface_.face_of(faces[f][(k + 1) % 3], faces[f][k]);
+                if (g != kNone && surface_.alive(g)) {
+                    const std::uint32_t x = piece_of(f), y = piece_of(g);
+                    pieces_[std::max(x, y)] = std::min(x, y);
+                }
+            }
+        }
+    }
+    void reset_pieces()
+    {
+        pieces_.clear();
+        pieces_synced_ = 0;
+    }
+
+    // Whether face (b, a, c) joins two boundary cycles of one piece as the surface will be once pinched
+    // vertices are split (makes_handle walks loops through a pinched vertex from whichever fan it
+    // arrives by, and sees one piece where the fans may lie in two). The face is glued along the free
+    // half-edge b -> a and along a -> c and c -> b where those are free; a handle needs two glued
+    // half-edges on different cycles of one piece.
+    bool split_view_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c)
+    {
+        if (!surface_.on_surface(c))
+            return false;
+        const std::uint32_t fac = surface_.face_of(c, a), fcb = surface_.face_of(b, c);
+        if (fac == kNone && fcb == kNone)
+            return false;
+        // Glued half-edges of another piece join two pieces: no handle.
+        sync_pieces();
+        const std::uint32_t mine = piece_of(surface_.face_of(a, b));
+        const bool ac = fac != kNone && piece_of(fac) == mine, cb = fcb != kNone && piece_of(fcb) == mine;
+        if (!ac && !cb)
+            return false;
+        // Walk the split-view cycle of b -> a both ways at once (the glued half-edges are usually a step
+        // or two away): arriving at v by u -> v, leave by the other end of the same fan's arc.
+        bool seen_ac = false, seen_cb = false;
+        const auto see = [&](std::uint32_t from, std::uint32_t to) {
+            seen_ac = seen_ac || (from == a && to == c);
+            seen_cb = seen_cb || (from == c && to == b);
+            return (!ac || seen_ac) && (!cb || seen_cb);
+        };
+        std::uint32_t u = b, v = a; // forward: free half-edge u -> v
+        std::uint32_t x = b, y = a; // backward: free half-edge x -> y
+        for (std::size_t steps = 0; steps <= 3 * surface_.faces().size(); ++steps) {
+            std::uint32_t w = kNone;
+            for (const auto& fan : surface_.arcs(v))
+                if (fan.first == u) {
+                    w = fan.second;
+                    break;
+                }
+            if (w == kNone)
+                return false; // not a plain cycle here: leave it to makes_handle
+            u = v;
+            v = w;
+            if (see(u, v))
+                return false; // every glued half-edge of this piece on this cycle: it splits or shortens
+            if (u == x && v == y)
+                return true; // the whole cycle seen: a glued half-edge on another cycle of the same piece
+            std::uint32_t z = kNone;
+            for (const auto& fan : surface_.arcs(x))
+                if (fan.second == y) {
+                    z = fan.first;
+                    break;
+                }
+            if (z == kNone)
+                return false;
+            y = x;
+            x = z;
+            if (see(x, y))
+                return false;
+            if (u == x && v == y)
+                return true;
+        }
+        assert(false); // a boundary cycle has at most 3 F half-edges
+        return false;
+    }
+
     // Whether face (b, a, c) on the front half-edge a -> b would join two different boundary loops of
     // one connected piece: that adds a handle (Euler: the face changes V - E + F by -1 and the loop count
     // by -1, so the genus grows by 1). Joining another piece, or a vertex of the same loop (which splits
@@ -1338,7 +1439,8 @@ private:
             // A face that would add a handle waits until every tile is in (finish): a torus needs its
             // handle once the surface has closed around it; a spurious one across a local gap is
             // usually made impossible by the faces that fill the gap first. Fallback faces never add one.
-            if (!allow_handles_ && makes_handle(a, b, c)) {
+            // Handles are looked for in the surface as it is and as split_pinches will leave it.
+            if (!allow_handles_ && (makes_handle(a, b, c) || split_view_handle(a, b, c))) {
                 (fallback_[top.index] ? banned_ : held_)[top.index] = true;
                 e.evaluated = false; // the cached best is the candidate just set aside
                 push_best(a, b);
@@ -1394,6 +1496,8 @@ private:
     std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
     bool allow_handles_ = false;
     std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
+    std::vector<std::uint32_t> pieces_; // see piece_of
+    std::uint32_t pieces_synced_ = 0;
     UnionFind parts_;          // connected pieces of the surface, over vertices
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
     mutable std::vector<Vec3> face_normals_; // see surface_normal

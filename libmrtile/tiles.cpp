@@ -196,17 +196,40 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             t.apex = t.centre + t.normal * height;
     }
     if (t.has_fan()) {
-        double twice = 0.0;
+        double twice = 0.0, cx = 0.0, cy = 0.0;
         auto uv = [&](std::uint32_t i) {
             const Vec3 d = h.cloud.positions[i] - t.centre;
             return std::pair<double, double>{dot(d, t.axis_u), dot(d, t.axis_v)};
         };
-        for (std::size_t i = 0; i < t.boundary.size(); ++i) {
+        const std::size_t n = t.boundary.size();
+        for (std::size_t i = 0; i < n; ++i) {
             const auto a = uv(t.boundary[i]);
-            const auto b = uv(t.boundary[(i + 1) % t.boundary.size()]);
-            twice += a.first * b.second - a.second * b.first;
+            const auto b = uv(t.boundary[(i + 1) % n]);
+            const double cross = a.first * b.second - a.second * b.first;
+            twice += cross;
+            cx += (a.first + b.first) * cross;
+            cy += (a.second + b.second) * cross;
         }
         t.area = 0.5 * twice;
+        // The apex must lie inside the hull, or fan faces fold or have no area. The node's mean is its
+        // Voronoi site, inside its cell, but the cell's few points need not surround it (a cell of two or
+        // three stray points): then the apex moves to the hull's centroid, at the same height.
+        const Vec3 apex = t.apex - t.centre;
+        const double ax = dot(apex, t.axis_u), ay = dot(apex, t.axis_v);
+        double extent2 = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto a = uv(t.boundary[i]);
+            extent2 = std::max(extent2, a.first * a.first + a.second * a.second);
+        }
+        bool inside = twice > 0.0;
+        for (std::size_t i = 0; i < n && inside; ++i) {
+            const auto a = uv(t.boundary[i]);
+            const auto b = uv(t.boundary[(i + 1) % n]);
+            inside = (b.first - a.first) * (ay - a.second) - (b.second - a.second) * (ax - a.first) > 1e-9 * extent2;
+        }
+        if (!inside && twice > 0.0)
+            t.apex = t.centre + t.axis_u * (cx / (3.0 * twice)) + t.axis_v * (cy / (3.0 * twice)) +
+                     t.normal * dot(apex, t.normal);
     }
     return t;
 }
