@@ -1206,9 +1206,12 @@ private:
         const std::uint32_t fac = surface_.face_of(c, a), fcb = surface_.face_of(b, c);
         if (fac == kNone && fcb == kNone)
             return false;
+        const std::uint32_t fab = surface_.face_of(a, b);
+        if (fab == kNone)
+            return false; // not a front edge (cannot happen: the front runs along faces' half-edges)
         // Glued half-edges of another piece join two pieces: no handle.
         sync_pieces();
-        const std::uint32_t mine = piece_of(surface_.face_of(a, b));
+        const std::uint32_t mine = piece_of(fab);
         const bool ac = fac != kNone && piece_of(fac) == mine, cb = fcb != kNone && piece_of(fcb) == mine;
         if (!ac && !cb)
             return false;
