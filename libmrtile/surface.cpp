@@ -831,6 +831,26 @@ std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>
     return fans[0].first;
 }
 
+// The same two steps on the surface as split_pinches will leave it, where each fan of a pinched vertex is
+// a vertex of its own: a cycle arriving at v by the free half-edge u -> v leaves by the other end of
+// the same fan's arc (first -> v, v -> last). kNone if no fan of v starts at u.
+std::uint32_t next_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
+{
+    for (const auto& fan : s.arcs(v))
+        if (fan.first == u)
+            return fan.second;
+    return kNone;
+}
+
+// The inverse step: the vertex before u on the cycle that leaves u by the free half-edge u -> v.
+std::uint32_t previous_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
+{
+    for (const auto& fan : s.arcs(u))
+        if (fan.second == v)
+            return fan.first;
+    return kNone;
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Step 3: advancing front over the candidate triangles.
 
@@ -1226,12 +1246,7 @@ private:
         std::uint32_t u = b, v = a; // forward: free half-edge u -> v
         std::uint32_t x = b, y = a; // backward: free half-edge x -> y
         for (std::size_t steps = 0; steps <= 3 * surface_.faces().size(); ++steps) {
-            std::uint32_t w = kNone;
-            for (const auto& fan : surface_.arcs(v))
-                if (fan.first == u) {
-                    w = fan.second;
-                    break;
-                }
+            const std::uint32_t w = next_in_fan(surface_, u, v);
             if (w == kNone)
                 return false; // not a plain cycle here: leave it to makes_handle
             u = v;
@@ -1240,12 +1255,7 @@ private:
                 return false; // every glued half-edge of this piece on this cycle: it splits or shortens
             if (u == x && v == y)
                 return true; // the whole cycle seen: a glued half-edge on another cycle of the same piece
-            std::uint32_t z = kNone;
-            for (const auto& fan : surface_.arcs(x))
-                if (fan.second == y) {
-                    z = fan.first;
-                    break;
-                }
+            const std::uint32_t z = previous_in_fan(surface_, x, y);
             if (z == kNone)
                 return false;
             y = x;
@@ -1846,16 +1856,14 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::
 // one; an island of fewer than kMinRestoredTiles fans only when it holds at least kMinRestoredShare of
 // the points (in a dense sample a lone fan or two is noise or a sliver at a sharp edge; in a sparse one,
 // 100 points of a bunny's head, three lone fans held 23% of the points, up to 36% of the diagonal
-// away). Returns the number of islands put back; `restored_fans` gets the number of their fans, and
-// `restored_tiles` is set for each.
+// away). Returns the number of islands put back; `restored_tiles` is set for each of their fans.
 constexpr std::size_t kMinRestoredTiles = 3;
 constexpr double kMinRestoredShare = 0.01;
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
-                                      std::size_t& restored_fans, std::vector<bool>& restored_tiles, double reach = 2.0)
+                                      std::vector<bool>& restored_tiles, double reach = 2.0)
 {
     std::size_t restored = 0;
-    restored_fans = 0;
     for (const std::vector<std::uint32_t>& island : removed) {
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
         std::vector<std::pair<Vec3, double>> centres; // position, reach distance
@@ -1939,7 +1947,6 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
             s.pop_n(added);
         else {
             ++restored;
-            restored_fans += centres.size();
             for (std::int32_t t : island_tiles)
                 restored_tiles[static_cast<std::size_t>(t)] = true;
         }
@@ -2189,11 +2196,9 @@ LocalTopology local_topology(const Surface& s, const std::vector<std::uint32_t>&
     LocalTopology out;
     std::vector<std::uint64_t> seen; // free half-edges already walked
     const auto next = [&](std::uint32_t u, std::uint32_t v) {
-        for (const auto& fan : s.arcs(v))
-            if (fan.first == u)
-                return fan.second;
-        assert(false);
-        return kNone;
+        const std::uint32_t w = next_in_fan(s, u, v);
+        assert(w != kNone);
+        return w;
     };
     for (std::uint32_t v : vertices) {
         const auto fans = s.arcs(v);
@@ -2550,9 +2555,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             const Surface after_drop = surface;
             const FillResult filled_after_drop = filled;
             fill(false);
-            std::size_t restored_fans = 0;
-            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_fans, restored_tiles);
-            const std::size_t left_out = islands - restored_fans;
+            const auto restored_fans = [&] { return static_cast<std::size_t>(std::count(restored_tiles.begin(), restored_tiles.end(), true)); };
+            restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_tiles);
+            const std::size_t left_out = islands - restored_fans();
             // (b) Widening can cut fans loose (the rocker arm at 0.005 lost 15 of its top face that way):
             // seed the dropped tiles again, grow the front into the widened holes, fill, drop, put back.
             // It can also break a large island into smaller ones that are not put back, hence the choice.
@@ -2570,13 +2575,11 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                 const std::vector<bool> dropped_again = drop_islands(surface, tiles, removed_again);
                 islands = static_cast<std::size_t>(std::count(dropped_again.begin(), dropped_again.end(), true));
                 restored_islands = 0;
-                restored_fans = 0;
                 if (islands > 0) {
                     fill(false);
-                    restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_fans,
-                                                                 restored_tiles);
+                    restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_tiles);
                 }
-                if (!(islands - restored_fans < left_out)) {
+                if (!(islands - restored_fans() < left_out)) {
                     surface = std::move(way_a);
                     filled = filled_a;
                     islands = islands_a;

@@ -196,15 +196,18 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             t.apex = t.centre + t.normal * height;
     }
     if (t.has_fan()) {
-        double twice = 0.0, cx = 0.0, cy = 0.0;
-        auto uv = [&](std::uint32_t i) {
-            const Vec3 d = h.cloud.positions[i] - t.centre;
-            return std::pair<double, double>{dot(d, t.axis_u), dot(d, t.axis_v)};
-        };
         const std::size_t n = t.boundary.size();
+        std::vector<std::pair<double, double>> uv(n); // hull points in the plane
+        double extent2 = 0.0;
         for (std::size_t i = 0; i < n; ++i) {
-            const auto a = uv(t.boundary[i]);
-            const auto b = uv(t.boundary[(i + 1) % n]);
+            const Vec3 d = h.cloud.positions[t.boundary[i]] - t.centre;
+            uv[i] = {dot(d, t.axis_u), dot(d, t.axis_v)};
+            extent2 = std::max(extent2, uv[i].first * uv[i].first + uv[i].second * uv[i].second);
+        }
+        double twice = 0.0, cx = 0.0, cy = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto& a = uv[i];
+            const auto& b = uv[(i + 1) % n];
             const double cross = a.first * b.second - a.second * b.first;
             twice += cross;
             cx += (a.first + b.first) * cross;
@@ -216,15 +219,10 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
         // three stray points): then the apex moves to the hull's centroid, at the same height.
         const Vec3 apex = t.apex - t.centre;
         const double ax = dot(apex, t.axis_u), ay = dot(apex, t.axis_v);
-        double extent2 = 0.0;
-        for (std::size_t i = 0; i < n; ++i) {
-            const auto a = uv(t.boundary[i]);
-            extent2 = std::max(extent2, a.first * a.first + a.second * a.second);
-        }
         bool inside = twice > 0.0;
         for (std::size_t i = 0; i < n && inside; ++i) {
-            const auto a = uv(t.boundary[i]);
-            const auto b = uv(t.boundary[(i + 1) % n]);
+            const auto& a = uv[i];
+            const auto& b = uv[(i + 1) % n];
             inside = (b.first - a.first) * (ay - a.second) - (b.second - a.second) * (ax - a.first) > 1e-9 * extent2;
         }
         if (!inside && twice > 0.0)
