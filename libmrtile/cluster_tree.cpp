@@ -641,6 +641,12 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     if (options.min_cluster == 0)
         throw InvalidInput("build_hierarchy: min_cluster must be at least 1");
 
+    // Duplicates go before anything counts points (see BuildOptions::merge_duplicates); `kept` maps
+    // the remaining points back to the input for input_index.
+    const std::size_t input_size = cloud.size();
+    std::vector<std::uint32_t> kept;
+    if (options.merge_duplicates)
+        kept = remove_duplicates(cloud);
     const double largest_side = bounding_box(cloud.positions).largest_side();
     const double threshold = options.tau > 0 ? options.tau : options.tolerance * largest_side;
     std::vector<std::int32_t> parent_of;
@@ -658,6 +664,10 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     malloc_trim(0);
 #endif
     Hierarchy h = assemble_hierarchy(std::move(cloud), parent_of, leaf_of_point);
+    h.info.duplicates_merged = input_size - h.cloud.size();
+    if (h.info.duplicates_merged > 0)
+        for (std::uint32_t& i : h.input_index)
+            i = kept[i];
     h.info.criterion = options.tau > 0 ? Criterion::Tau : Criterion::Tolerance;
     h.info.criterion_value = options.tau > 0 ? options.tau : options.tolerance;
     h.info.pca_limit = static_cast<std::uint32_t>(std::min<std::size_t>(options.pca_limit, std::numeric_limits<std::uint32_t>::max()));

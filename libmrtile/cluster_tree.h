@@ -52,6 +52,12 @@ struct BuildOptions
     //! Local reclassification over Gabriel neighbours after each split (paper §4.1). Off gives a pure
     //! top-down bisection tree (faster, blockier clusters).
     bool reclassify = true;
+    //! Merge points at exactly the same position into one (the first occurrence and its colour stay;
+    //! Hierarchy::input_index then skips the others). A duplicate adds no shape but counts towards
+    //! min_cluster, so clouds with repeated points (mesh vertices exported per face, quantized
+    //! coordinates, concatenated files) would end in leaves of one or two positions that span no
+    //! tile, and the surface would break into holes (a sphere with every point ten times: 61 loops).
+    bool merge_duplicates = true;
     //! Called now and then with the fraction of points already in flat clusters (0..1).
     std::function<void(double)> progress;
 };
@@ -61,7 +67,8 @@ struct BuildOptions
 //! \throw InvalidInput if the cloud is empty, has non-finite coordinates, more than 2^32-1 points, or
 //! an option is out of range (negative tolerance or τ, min_cluster 0).
 //! \details Degenerate clouds (one point, duplicates, collinear or coplanar points) give a valid
-//! hierarchy (typically a single leaf: they are flat). Deterministic: the same cloud and options give
+//! hierarchy (typically a single leaf: they are flat). With merge_duplicates, the hierarchy holds the
+//! distinct positions only (BuildInfo::duplicates_merged says how many points went). Deterministic: the same cloud and options give
 //! the same hierarchy bit for bit.
 Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options = {});
 

@@ -64,13 +64,17 @@ struct BuildInfo
     std::uint32_t min_cluster = 0;
     bool reclassify = true;
     double build_seconds = 0.0;
+    //! Points merged into an earlier point at the same position (BuildOptions::merge_duplicates).
+    //! Known at build time only: a loaded model says 0.
+    std::size_t duplicates_merged = 0;
 };
 
 struct Hierarchy
 {
     //! The points in tree order (origin, relative positions, optional colours).
     PointCloud cloud;
-    //! input_index[i] = index in the input of the point stored at tree position i.
+    //! input_index[i] = index in the input of the point stored at tree position i. A permutation of
+    //! the input's indices, less those of merged duplicates (distinct, increasing nowhere in particular).
     std::vector<std::uint32_t> input_index;
     std::vector<Node> nodes;
     BuildInfo info;

@@ -7,6 +7,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -140,11 +141,24 @@ void check_structure(const Hierarchy& h, const Reader& r)
             rt.end != node.end || l.depth != node.depth + 1 || rt.depth != node.depth + 1)
             r.fail("node " + std::to_string(k) + " does not match its children");
     }
+    // Distinct input indices: a permutation of 0..n-1, or (merged duplicates) of a subset of a larger
+    // range. The common case is checked with a bitmap, the other by sorting a copy.
     std::vector<bool> seen(n, false);
+    bool beyond = false;
     for (std::uint32_t index : h.input_index) {
-        if (index >= n || seen[index])
-            r.fail("input index is not a permutation");
+        if (index >= n) {
+            beyond = true;
+            break;
+        }
+        if (seen[index])
+            r.fail("input indices repeat");
         seen[index] = true;
+    }
+    if (beyond) {
+        std::vector<std::uint32_t> sorted = h.input_index;
+        std::sort(sorted.begin(), sorted.end());
+        if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+            r.fail("input indices repeat");
     }
     for (const Vec3& p : h.cloud.positions)
         if (!is_finite(p))

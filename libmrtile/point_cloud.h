@@ -53,4 +53,13 @@ void recenter(PointCloud& cloud);
 //! its index), if colours do not match positions, or if the cloud is empty.
 void validate(const PointCloud& cloud, const std::string& what);
 
+//! \brief Indices of the first occurrence of each distinct position, in increasing order (so in the
+//! input's order). Positions are equal when their coordinates compare equal (-0 == +0).
+//! \details Linear time (a hash table of indices). Used by build_hierarchy to merge exact duplicates.
+std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions);
+
+//! Keeps only the first occurrence of each distinct position (and its colour); returns the input
+//! indices of the points kept (first_occurrences).
+std::vector<std::uint32_t> remove_duplicates(PointCloud& cloud);
+
 } // namespace mrt

@@ -305,5 +305,63 @@ TEST(ClusterTree, deterministic)
     }
 }
 
+// first_occurrences against a brute-force scan, with many repeats and a -0 beside a +0.
+TEST(ClusterTree, first_occurrences_match_brute_force)
+{
+    std::vector<Vec3> points;
+    std::uint32_t state = 12345;
+    auto next = [&] { return (state = state * 1664525u + 1013904223u) >> 28; }; // 0..15
+    for (int i = 0; i < 3000; ++i)
+        points.push_back({static_cast<double>(next() % 4), static_cast<double>(next() % 5), static_cast<double>(next() % 6) * 0.5});
+    points.push_back({-0.0, 0.0, 0.0});
+    points.push_back({0.0, -0.0, 0.0});
+    std::vector<std::uint32_t> expected;
+    for (std::uint32_t i = 0; i < points.size(); ++i) {
+        bool earlier = false;
+        for (std::uint32_t j = 0; j < i && !earlier; ++j)
+            earlier = points[j] == points[i];
+        if (!earlier)
+            expected.push_back(i);
+    }
+    EXPECT_EQ(first_occurrences(points), expected);
+    EXPECT_LT(expected.size(), 121u); // 4 × 5 × 6 positions at most
+}
+
+// Points at the same position are merged before the build: the tree holds each position once (the
+// first occurrence, with its colour), input_index points back to it, and the rest of the contract holds.
+TEST(ClusterTree, duplicates_are_merged)
+{
+    PointCloud input = shapes::torus(2000);
+    for (std::size_t i = 0; i < input.size(); ++i)
+        input.colors.push_back({static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(i >> 8), 7, 255});
+    const std::size_t distinct = input.size();
+    // Every third point twice more, interleaved: a repeat's colour differs from its first occurrence's.
+    for (int copy = 0; copy < 2; ++copy)
+        for (std::size_t i = copy; i < distinct; i += 3) {
+            input.positions.push_back(input.positions[i]);
+            input.colors.push_back({1, 2, 3, 4});
+        }
+    const std::size_t repeats = input.size() - distinct;
+    const Hierarchy h = build_hierarchy(input);
+    expect_valid_tree(h);
+    EXPECT_EQ(h.info.duplicates_merged, repeats);
+    ASSERT_EQ(h.cloud.size(), distinct);
+    ASSERT_EQ(h.input_index.size(), distinct);
+    std::vector<std::uint32_t> sorted = h.input_index;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::uint32_t i = 0; i < distinct; ++i)
+        ASSERT_EQ(sorted[i], i); // the first occurrences are the original points
+    for (std::size_t i = 0; i < distinct; ++i) {
+        EXPECT_EQ(h.cloud.positions[i], input.positions[h.input_index[i]]);
+        EXPECT_EQ(h.cloud.colors[i], input.colors[h.input_index[i]]);
+    }
+
+    BuildOptions keep;
+    keep.merge_duplicates = false;
+    const Hierarchy all = build_hierarchy(input, keep);
+    EXPECT_EQ(all.cloud.size(), input.size());
+    EXPECT_EQ(all.info.duplicates_merged, 0u);
+}
+
 } // namespace
 } // namespace mrt

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -51,6 +52,23 @@ TEST(ModelFile, round_trip_is_byte_identical)
         EXPECT_EQ(back.info.criterion, h.info.criterion);
         EXPECT_EQ(back.info.criterion_value, h.info.criterion_value);
     }
+}
+
+// A model built with merged duplicates (input indices beyond the stored point count) loads back.
+TEST(ModelFile, merged_duplicates_round_trip)
+{
+    PointCloud c = shapes::torus(1500);
+    const std::size_t distinct = c.size();
+    for (std::size_t i = 0; i < distinct; i += 2)
+        c.positions.push_back(c.positions[i]);
+    std::reverse(c.positions.begin(), c.positions.end()); // first occurrences now at the end
+    const Hierarchy h = build_hierarchy(c);
+    ASSERT_EQ(h.cloud.size(), distinct);
+    ASSERT_GT(*std::max_element(h.input_index.begin(), h.input_index.end()), distinct);
+    const std::string bytes = serialize_model(h);
+    const Hierarchy back = deserialize_model(bytes, "memory");
+    EXPECT_EQ(back.input_index, h.input_index);
+    EXPECT_EQ(serialize_model(back), bytes);
 }
 
 // Files on disk: save → load → save is byte-identical; two builds give identical files; the build

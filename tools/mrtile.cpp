@@ -101,6 +101,7 @@ struct BuildArgs
     std::size_t min_cluster = BuildOptions{}.min_cluster;
     bool no_reclassify = false;
     bool remove_outliers = false;
+    bool keep_duplicates = false;
 
     // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
     void add(CLI::App* cmd, const std::string& prefix)
@@ -117,6 +118,7 @@ struct BuildArgs
             ->check(kPositive)
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
+        cmd->add_flag("--keep-duplicates", keep_duplicates, "do not merge points at exactly the same position");
         const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
@@ -132,6 +134,7 @@ struct BuildArgs
         o.pca_limit = pca_limit;
         o.min_cluster = min_cluster;
         o.reclassify = !no_reclassify;
+        o.merge_duplicates = !keep_duplicates;
         if (g.progress())
             o.progress = [](double f) { std::fprintf(stderr, "\rbuilding hierarchy %5.1f%%", 100.0 * f); };
         return o;
@@ -548,11 +551,18 @@ Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const
     const auto start = Clock::now();
     PointCloud cloud = read_points(points);
     const std::size_t n = cloud.size();
+    // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
+    std::size_t duplicates = 0;
+    if (args.remove_outliers && !args.keep_duplicates)
+        duplicates = n - remove_duplicates(cloud).size();
     const std::size_t removed = args.remove_outliers ? remove_outliers(cloud) : 0;
     Hierarchy h = build_hierarchy(std::move(cloud), args.options(g));
+    duplicates += h.info.duplicates_merged;
     if (g.progress())
         std::fprintf(stderr, "\r%40s\r", "");
     std::printf("read and built %s: %zu points", points.string().c_str(), n);
+    if (duplicates > 0)
+        std::printf(" (%zu duplicates merged)", duplicates);
     if (args.remove_outliers)
         std::printf(" (%zu outliers removed)", removed);
     std::printf(", %zu nodes, %zu leaves, depth %u (%.2f s)\n", h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
