@@ -647,7 +647,7 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     std::vector<std::uint32_t> kept;
     if (options.merge_duplicates)
         kept = remove_duplicates(cloud);
-    const double largest_side = bounding_box(cloud.positions).largest_side();
+    const double largest_side = tolerance_scale(cloud.positions);
     const double threshold = options.tau > 0 ? options.tau : options.tolerance * largest_side;
     std::vector<std::int32_t> parent_of;
     std::vector<std::uint32_t> leaf_of_point;

@@ -33,7 +33,7 @@ struct BuildOptions
 {
     //! Scale-free flatness (default stop criterion): a cluster is flat enough when the RMS distance
     //! of its points to their best-fit plane is at most `tolerance` × the largest side of the cloud's
-    //! bounding box. Used when `tau` is 0. The default is fine enough that the hierarchy serves every
+    //! bounding box, far stray points aside (tolerance_scale, point_cloud.h). Used when `tau` is 0. The default is fine enough that the hierarchy serves every
     //! level of detail a renderer wants; cuts choose coarser levels later.
     double tolerance = 1e-4;
     //! The paper's τ_PCA,lim: flat enough when the smallest eigenvalue of M = ΔᵀΔ (eq. 2-3, not

@@ -59,7 +59,7 @@ Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance)
 {
     check_tolerance(tolerance, "tolerance");
-    const double limit = tolerance * h.bbox().largest_side();
+    const double limit = tolerance * h.scale;
     return cut_by_predicate(h, [limit](const Hierarchy& hh, std::int32_t id) {
         return hh.nodes[static_cast<std::size_t>(id)].rms_plane_distance > limit;
     });
@@ -122,7 +122,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
         if (r.shape == FocusRegion::Shape::Sphere && (!(r.radius >= 0) || !std::isfinite(r.radius)))
             throw InvalidInput("cut: a focus sphere needs a finite radius >= 0");
     }
-    const double side = h.bbox().largest_side();
+    const double side = h.scale;
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
         double tolerance = base_tolerance;
@@ -163,7 +163,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
     check_tolerance(base_tolerance, "base tolerance");
     for (const FocusRegion& r : regions)
         check_tolerance(r.tolerance, "region tolerance");
-    const double side = h.bbox().largest_side();
+    const double side = h.scale;
     Cut out;
     std::vector<std::int32_t> stack;
     for (std::int32_t id : cut) {
@@ -195,7 +195,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance)
 {
     check_tolerance(tolerance, "tolerance");
-    const double limit = tolerance * h.bbox().largest_side();
+    const double limit = tolerance * h.scale;
     // For each cut node, its highest ancestor (or itself) inside the region and flat enough; a chain
     // qualifies only as long as every node on it does (a parent is never flatter-tested past a failure).
     std::vector<std::int32_t> replacement(cut.size());

@@ -11,7 +11,8 @@
 //!  - plane error λ_min(M): the sum of squared distances of the node's points to the tile plane (the
 //!    paper's τ quantity). It never increases down the tree: the children's best planes fit at least
 //!    as well as the parent's plane does, so refining always lowers the total Σ λ_min of a cut.
-//!  - RMS plane distance sqrt(λ_min / count), relative to the bounding box's largest side (tolerance).
+//!  - RMS plane distance sqrt(λ_min / count), relative to Hierarchy::scale (tolerance): the bounding
+//!    box's largest side, far stray points aside (see tolerance_scale in point_cloud.h).
 //!  - geometric error (max distance of a point to its tile plane), for screen-space error.
 
 #include "libmrtile/hierarchy.h"
@@ -30,7 +31,7 @@ using RefinePredicate = std::function<bool(const Hierarchy& h, std::int32_t node
 //! The general form: refine every internal node for which `refine` says yes.
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine);
 
-//! Scale-free: every tile's RMS plane distance is at most tolerance × the bbox's largest side (or
+//! Scale-free: every tile's RMS plane distance is at most tolerance × Hierarchy::scale (or
 //! the tile is a leaf). \throw InvalidInput if tolerance is negative or not finite.
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance);
 
@@ -69,7 +70,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
 Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const std::vector<FocusRegion>& regions);
 
 //! Incremental coarsening: groups of cut nodes are replaced by their highest common ancestor whose box
-//! lies inside `region` and whose RMS plane distance is at most tolerance × the bbox's largest side.
+//! lies inside `region` and whose RMS plane distance is at most tolerance × Hierarchy::scale.
 //! Nodes not inside the region never change.
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance);
 

@@ -34,6 +34,7 @@ void update_derived(Hierarchy& h)
         n.frame = eigen_decomposition(n.moments);
         n.rms_plane_distance = n.moments.count ? std::sqrt(n.frame.values[0] / static_cast<double>(n.moments.count)) : 0.0;
     }
+    h.scale = tolerance_scale(h.cloud.positions);
 }
 
 } // namespace mrt

@@ -23,7 +23,7 @@ namespace mrt {
 enum class Criterion : std::uint32_t
 {
     //! Scale-free (our default): RMS distance of a cluster's points to its best-fit plane at most
-    //! value × the largest side of the cloud's bounding box.
+    //! value × Hierarchy::scale (the largest side of the cloud's bounding box, far stray points aside).
     Tolerance = 0,
     //! The paper's τ_PCA,lim: smallest eigenvalue of M = ΔᵀΔ at most value (model units squared).
     Tau = 1,
@@ -78,16 +78,19 @@ struct Hierarchy
     std::vector<std::uint32_t> input_index;
     std::vector<Node> nodes;
     BuildInfo info;
+    //! The length scale-free tolerances are relative to: tolerance_scale(cloud.positions) (the largest
+    //! side of the bounding box, far stray points aside; point_cloud.h). Derived (update_derived).
+    double scale = 0.0;
 
     std::size_t leaf_count() const;
     std::uint32_t max_depth() const;
     BoundingBox bbox() const { return bounding_box(cloud.positions); }
     //! The stop criterion's value for this node, in the criterion's own units: RMS plane distance
-    //! divided by the bbox's largest side (Tolerance) or λ_min (Tau).
+    //! divided by `largest_side` (pass Hierarchy::scale; Tolerance) or λ_min (Tau).
     double flatness(const Node& node, double largest_side) const;
 };
 
-//! Recomputes the derived fields (frame, rms_plane_distance) of every node from its moments.
+//! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, and scale.
 void update_derived(Hierarchy& h);
 
 } // namespace mrt

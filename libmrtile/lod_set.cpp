@@ -47,7 +47,7 @@ double level_max_plane_distance(const Hierarchy& h, const Cut& cut)
 // The scale-free tolerance a cut satisfies: its largest tile RMS plane distance / largest side.
 double cut_tolerance(const Hierarchy& h, const Cut& cut)
 {
-    const double side = h.bbox().largest_side();
+    const double side = h.scale;
     double m = 0.0;
     for (std::int32_t id : cut)
         m = std::max(m, h.nodes[static_cast<std::size_t>(id)].rms_plane_distance);

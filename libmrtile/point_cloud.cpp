@@ -5,6 +5,7 @@
 #include "libmrtile/errors.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -79,6 +80,61 @@ std::uint64_t mix(std::uint64_t h, double value)
 }
 
 } // namespace
+
+double tolerance_scale(const std::vector<Vec3>& positions)
+{
+    constexpr double kPercentile = 0.01;
+    constexpr std::size_t kSampleSize = 65536;
+    const BoundingBox full = bounding_box(positions);
+    const std::size_t n = positions.size();
+    if (n < 200) // the percentiles of a small cloud are its extremes
+        return full.largest_side();
+    // Sample every k-th point by hash of its position, so that the sample does not depend on the order
+    // (the build sees the input's order, a loaded model the tree's).
+    const std::uint64_t k = std::max<std::uint64_t>(1, n / kSampleSize);
+    std::array<std::vector<double>, 3> sample;
+    for (const Vec3& p : positions)
+        if (k == 1 || mix(mix(mix(0, p.x), p.y), p.z) % k == 0) {
+            sample[0].push_back(p.x);
+            sample[1].push_back(p.y);
+            sample[2].push_back(p.z);
+        }
+    const std::size_t m = sample[0].size();
+    if (m < 200)
+        return full.largest_side();
+    BoundingBox core;
+    const std::size_t lo = static_cast<std::size_t>(kPercentile * static_cast<double>(m - 1));
+    const std::size_t hi = m - 1 - lo;
+    for (int axis = 0; axis < 3; ++axis) {
+        std::vector<double>& v = sample[static_cast<std::size_t>(axis)];
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(lo), v.end());
+        const double low = v[lo];
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(hi), v.end());
+        const double high = v[hi];
+        (axis == 0 ? core.min.x : axis == 1 ? core.min.y : core.min.z) = low;
+        (axis == 0 ? core.max.x : axis == 1 ? core.max.y : core.max.z) = high;
+    }
+    const double reach = core.largest_side();
+    if (!(reach > 0))
+        return full.largest_side();
+    const Vec3 margin{reach, reach, reach};
+    const Vec3 lo_limit = core.min - margin, hi_limit = core.max + margin;
+    auto inside = [&](const Vec3& p) {
+        return p.x >= lo_limit.x && p.y >= lo_limit.y && p.z >= lo_limit.z && p.x <= hi_limit.x && p.y <= hi_limit.y &&
+               p.z <= hi_limit.z;
+    };
+    if (inside(full.min) && inside(full.max))
+        return full.largest_side(); // no far point: the common case
+    BoundingBox kept;
+    bool any = false;
+    for (const Vec3& p : positions)
+        if (inside(p)) {
+            kept.min = any ? min(kept.min, p) : p;
+            kept.max = any ? max(kept.max, p) : p;
+            any = true;
+        }
+    return kept.largest_side();
+}
 
 std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions)
 {

@@ -140,7 +140,7 @@ TEST(ClusterTree, leaves_meet_tolerance_or_min_size)
     o.tolerance = 2e-3;
     o.min_cluster = 12;
     const Hierarchy h = build_hierarchy(cloud, o);
-    const double side = h.bbox().largest_side();
+    const double side = h.scale;
     std::size_t leaves = 0;
     for (const Node& n : h.nodes)
         if (n.is_leaf()) {
@@ -361,6 +361,34 @@ TEST(ClusterTree, duplicates_are_merged)
     const Hierarchy all = build_hierarchy(input, keep);
     EXPECT_EQ(all.cloud.size(), input.size());
     EXPECT_EQ(all.info.duplicates_merged, 0u);
+}
+
+// The tolerance's scale leaves out a few far stray points, and only those: the full box for clean
+// shapes, for a cloud whose far part holds more than 1% of the points, and for small clouds.
+TEST(ClusterTree, tolerance_scale_leaves_out_far_strays)
+{
+    const PointCloud sphere = shapes::sphere(20000);
+    const double side = bounding_box(sphere.positions).largest_side();
+    EXPECT_EQ(tolerance_scale(sphere.positions), side);
+    PointCloud strays = sphere;
+    strays.positions.push_back({100, 0, 0});
+    strays.positions.push_back({-3, 40, 7});
+    strays.positions.push_back({0, 0, -250});
+    EXPECT_EQ(tolerance_scale(strays.positions), side);
+    // Order does not matter (the sample is chosen by position).
+    std::reverse(strays.positions.begin(), strays.positions.end());
+    EXPECT_EQ(tolerance_scale(strays.positions), side);
+    const Hierarchy h = build_hierarchy(strays);
+    EXPECT_EQ(h.scale, side);
+
+    PointCloud two = sphere; // a second object with 3% of the points: it counts
+    for (std::size_t i = 0; i < 600; ++i)
+        two.positions.push_back(sphere.positions[i] + Vec3{100, 0, 0});
+    EXPECT_EQ(tolerance_scale(two.positions), bounding_box(two.positions).largest_side());
+    PointCloud small = shapes::sphere(100);
+    small.positions.push_back({100, 0, 0});
+    EXPECT_EQ(tolerance_scale(small.positions), bounding_box(small.positions).largest_side());
+    EXPECT_EQ(tolerance_scale({}), 0.0);
 }
 
 } // namespace

@@ -37,7 +37,7 @@ TEST(Cut, tolerance_cuts_partition_and_error_is_monotone)
         EXPECT_GE(cut.size(), previous_size);
         previous = error;
         previous_size = cut.size();
-        const double limit = tol * h.bbox().largest_side();
+        const double limit = tol * h.scale;
         for (std::int32_t id : cut)
             EXPECT_TRUE(h.nodes[static_cast<std::size_t>(id)].is_leaf() ||
                         h.nodes[static_cast<std::size_t>(id)].rms_plane_distance <= limit);
@@ -142,7 +142,7 @@ TEST(Cut, incremental_refine_equals_fresh_extraction_and_coarsen_is_local)
         }
     for (std::int32_t id : coarsened) {
         if (!before.count(id)) {
-            EXPECT_LE(h.nodes[static_cast<std::size_t>(id)].rms_plane_distance, base * h.bbox().largest_side());
+            EXPECT_LE(h.nodes[static_cast<std::size_t>(id)].rms_plane_distance, base * h.scale);
         }
     }
 }

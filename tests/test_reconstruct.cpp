@@ -61,6 +61,24 @@ TEST(Reconstruct, repeated_points_mesh_as_their_distinct_positions)
     }
 }
 
+// One stray point 50 radii away does not coarsen the default tolerances: the sphere is meshed as
+// without it (it had one tile per cut: every tolerance is relative to the cloud's size), closed.
+TEST(Reconstruct, a_far_stray_point_leaves_the_tolerance_alone)
+{
+    PointCloud cloud = shapes::sphere(20000);
+    const Hierarchy clean = build_hierarchy(cloud);
+    cloud.positions.push_back({50, 0, 0});
+    const Hierarchy h = build_hierarchy(cloud);
+    for (double tolerance : {0.005, 0.002}) {
+        const Cut cut = cut_by_tolerance(h, tolerance);
+        const double tiles = static_cast<double>(cut_by_tolerance(clean, tolerance).size());
+        EXPECT_NEAR(static_cast<double>(cut.size()), tiles, 0.1 * tiles) << tolerance;
+        const MeshResult r = mesh_cut(h, cut);
+        EXPECT_EQ(r.surface.refused_faces, 0u);
+        expect_closed(r.mesh, 0); // the stray's own tile is left out
+    }
+}
+
 // A camera cut of a torus (fine near the camera, coarse far away) is a closed genus-1 surface.
 TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 {
