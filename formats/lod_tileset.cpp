@@ -21,20 +21,32 @@ std::vector<TilesetTile> tileset_tiles(const LodSet& set)
     return out;
 }
 
+QuantizationGrid tileset_grid(const LodSet& set)
+{
+    BoundingBox box = set.tiles.empty() ? BoundingBox{} : set.tiles[0].box;
+    bool any = false;
+    for (const LodTile& t : set.tiles)
+        for (const auto v : t.mesh.vertices()) {
+            const Vec3 p = to_vec3(t.mesh.point(v));
+            box.min = any ? min(box.min, p) : p;
+            box.max = any ? max(box.max, p) : p;
+            any = true;
+        }
+    // Padded: positions reach the encoder as floats relative to the grid, and a vertex on the box's
+    // face may round to just outside it.
+    const double side = std::max(box.largest_side(), 1e-12);
+    QuantizationGrid grid;
+    grid.min = box.min - Vec3{1, 1, 1} * (1e-6 * side);
+    grid.range = side * (1.0 + 2e-6);
+    return grid;
+}
+
 void write_lod_tileset(const LodSet& set, const Vec3& origin, const std::filesystem::path& dir, TilesetOptions options)
 {
     if (set.tiles.empty())
         throw InvalidInput(dir.string() + ": the LOD set has no tiles (was it made with tileset = false?)");
-    if (options.gltf.draco && !options.gltf.draco_options.grid) {
-        const BoundingBox& root = set.tiles[0].box;
-        // Padded by a millionth of the side: positions reach the encoder as floats relative to the
-        // grid, and a vertex on the box's face may round to just outside it.
-        const double side = std::max(root.largest_side(), 1e-12);
-        QuantizationGrid grid;
-        grid.min = root.min - Vec3{1, 1, 1} * (1e-6 * side);
-        grid.range = side * (1.0 + 2e-6);
-        options.gltf.draco_options.grid = grid;
-    }
+    if (options.gltf.draco && !options.gltf.draco_options.grid)
+        options.gltf.draco_options.grid = tileset_grid(set);
     write_3d_tiles(tileset_tiles(set), origin, dir, options);
 }
 

@@ -14,6 +14,13 @@ namespace mrt {
 //! The tile tree in the writer's terms (pointers into `set`'s meshes; `set` must outlive the result).
 std::vector<TilesetTile> tileset_tiles(const LodSet& set);
 
+//! The one Draco grid of a tileset: the cube over every tile's vertices (skirts included), padded by a
+//! millionth of its side. Not the root's box: that holds every point, and a stray point the mesh
+//! leaves out far away would stretch the grid and coarsen every position as much. The root's box
+//! when no tile has vertices.
+QuantizationGrid tileset_grid(const LodSet& set);
+
+//! With Draco and no grid in `options`, tiles are quantized on tileset_grid(set).
 //! \throw IoError naming the path that cannot be written; InvalidInput for an empty set.
 void write_lod_tileset(const LodSet& set, const Vec3& origin, const std::filesystem::path& dir,
                        TilesetOptions options = {});

@@ -1,5 +1,6 @@
 // Tests of lod_set.h (levels and the 3D Tiles tile tree) and, end to end, of what `mrtile` writes for
 // the acceptance command: a Draco tileset of the Stanford bunny that real clients accept.
+#include "formats/lod_tileset.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/lod_set.h"
@@ -70,6 +71,31 @@ TEST(LodSet, levels_are_consistent)
     EXPECT_EQ(make_lod_set(torus(), explicit_levels).levels.size(), 3u);
     explicit_levels.tolerances = {0.001, 0.01};
     EXPECT_THROW(make_lod_set(torus(), explicit_levels), InvalidInput);
+}
+
+// The Draco grid of a tileset spans its vertices, not its root's box: a stray point 50 radii away (in
+// the root box, left out of every mesh) no longer makes the grid 25 times coarser.
+TEST(LodSet, draco_grid_spans_the_meshes_not_a_stray_point)
+{
+    PointCloud c = shapes::sphere(5000);
+    c.positions.push_back({50, 0, 0});
+    const Hierarchy h = build_hierarchy(c);
+    LodSetOptions o;
+    o.max_tile_triangles = 2048;
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_FALSE(set.tiles.empty());
+    EXPECT_GT(set.tiles[0].box.largest_side(), 50.0);
+    const QuantizationGrid grid = tileset_grid(set);
+    EXPECT_LT(grid.range, 3.0); // the sphere and its skirts (before: over 50)
+    EXPECT_GT(grid.range, 1.9);
+    for (const LodTile& t : set.tiles)
+        for (const auto v : t.mesh.vertices()) {
+            const Vec3 p = to_vec3(t.mesh.point(v));
+            for (double d : {p.x - grid.min.x, p.y - grid.min.y, p.z - grid.min.z}) {
+                EXPECT_GE(d, 0.0);
+                EXPECT_LE(d, grid.range);
+            }
+        }
 }
 
 // Whatever the thread count, the levels are the same meshes.
