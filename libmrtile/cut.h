@@ -14,6 +14,10 @@
 //!  - RMS plane distance sqrt(λ_min / count), relative to Hierarchy::scale (tolerance): the bounding
 //!    box's largest side, far stray points aside (see tolerance_scale in point_cloud.h).
 //!  - geometric error (max distance of a point to its tile plane), for screen-space error.
+//!
+//! Cuts by tolerance, by region and by camera never refine a node whose RMS plane distance is at
+//! or under Hierarchy::noise_floor (0 for clean samples): below it a noisy sample's clusters are
+//! blobs, not pieces of surface. Cuts by budget, τ and predicate do exactly what they are asked.
 
 #include "libmrtile/hierarchy.h"
 
@@ -31,8 +35,8 @@ using RefinePredicate = std::function<bool(const Hierarchy& h, std::int32_t node
 //! The general form: refine every internal node for which `refine` says yes.
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine);
 
-//! Scale-free: every tile's RMS plane distance is at most tolerance × Hierarchy::scale (or
-//! the tile is a leaf). \throw InvalidInput if tolerance is negative or not finite.
+//! Scale-free: every tile's RMS plane distance is at most max(tolerance × Hierarchy::scale,
+//! Hierarchy::noise_floor) (or the tile is a leaf). \throw InvalidInput if tolerance is negative or not finite.
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance);
 
 //! The paper's τ: every tile's λ_min(ΔᵀΔ) is at most tau (or the tile is a leaf).
@@ -87,7 +91,8 @@ struct Camera
 //! with error = the node's max plane distance and distance to the node's bounding box (0 inside).
 double screen_space_error(const Node& node, const Camera& camera);
 
-//! Refines every node whose screen-space error exceeds the camera's max_pixel_error.
+//! Refines every node whose screen-space error exceeds the camera's max_pixel_error (down to the
+//! noise floor).
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
 
 //! Σ λ_min over the cut: the total squared distance of the points to their tile planes.

@@ -210,9 +210,11 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
     const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
     const auto budget = static_cast<double>(triangles * 3 / 4);
     std::size_t tiles = std::max<std::size_t>(1, triangles / 32);
+    // Never finer than the finest tolerance cut (the noise floor of a noisy sample, hierarchy.h).
+    const Cut finest = cut_by_tolerance(h, 0.0);
     LodLevel level;
     for (int attempt = 0; attempt < 6; ++attempt) {
-        level.cut = cut_by_budget(h, tiles);
+        level.cut = tiles >= finest.size() ? finest : cut_by_budget(h, tiles);
         level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
         const auto faces = static_cast<double>(level.mesh.n_faces());
         if (faces <= budget || tiles == 1)
@@ -228,14 +230,17 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
     std::vector<double> t;
     const std::size_t wanted = (o.levels > 0 ? o.levels : o.max_levels) - 1;
     double tol = first;
+    // The finest cut a tolerance gives: the leaves, or the cut at the noise floor of a noisy sample
+    // (Hierarchy::noise_floor), below which levels would only mesh noise.
+    const std::size_t finest = cut_by_tolerance(h, 0.0).size();
     while (t.size() < wanted) {
-        if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= h.leaf_count())
+        if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= finest)
             break;
         tol /= 2;
         t.push_back(tol);
     }
     if (o.levels == 0 && !t.empty() && t.size() == wanted)
-        t.back() = 0.0; // end at the leaves
+        t.back() = 0.0; // end at the finest cut
     return t;
 }
 

@@ -1,5 +1,6 @@
 // Tests of the mrtile CLI as a user meets it: exit codes (0 ok, 1 error, 2 usage), one-line errors
 // naming the file, no partial output on failure, the JSON keys scripts depend on, and determinism.
+#include "libmrtile/shapes.h"
 #include "tests/test_dir.h"
 
 #include <nlohmann/json.hpp>
@@ -295,6 +296,37 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
             EXPECT_GT(index[l]["tiles"].get<std::size_t>(), index[l - 1]["tiles"].get<std::size_t>());
         }
     }
+}
+
+// What the build line and the mesh say about a noisy sample with repeated lines: the duplicates merged,
+// the cut stopped at the noise floor (a note), and --below-noise going on to the leaves.
+TEST(Cli, duplicates_and_noise_floor_are_reported)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    PointCloud cloud = shapes::sphere(30000);
+    shapes::add_noise(cloud, 0.02);
+    std::string text;
+    char line[96];
+    for (const Vec3& p : cloud.positions) {
+        std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+        text += line;
+    }
+    text += text.substr(0, text.size() / 3 / 2 * 2); // not cut inside a line: 1/3 of them again, roughly
+    text.resize(text.rfind('\n') + 1);
+    write_text(dir / "noisy.xyz", text);
+    const Result floored = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "a.ply").string() +
+                                      " --tolerance 0.002 --stats-json " + (dir / "a.json").string(), dir);
+    ASSERT_EQ(floored.code, 0) << floored.err;
+    EXPECT_NE(floored.out.find("duplicates merged)"), std::string::npos) << floored.out;
+    EXPECT_NE(floored.out.find("note: the points are noisy"), std::string::npos) << floored.out;
+    const Result below = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "b.ply").string() +
+                                    " --tolerance 0.002 --below-noise --stats-json " + (dir / "b.json").string(), dir);
+    ASSERT_EQ(below.code, 0) << below.err;
+    EXPECT_EQ(below.out.find("note: the points are noisy"), std::string::npos) << below.out;
+    const auto a = nlohmann::json::parse(slurp(dir / "a.json")), b = nlohmann::json::parse(slurp(dir / "b.json"));
+    EXPECT_LT(10 * a["tiles"].get<std::size_t>(), b["tiles"].get<std::size_t>());
+    EXPECT_EQ(a["boundary_loops"].get<int>(), 0);
+    EXPECT_EQ(a["components"].get<int>(), 1);
 }
 
 } // namespace

@@ -4,6 +4,7 @@
 #include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/shapes.h"
+#include "formats/read_points.h"
 
 #include <gtest/gtest.h>
 
@@ -190,6 +191,63 @@ TEST(Cut, predicate_cut)
         EXPECT_TRUE(n.depth == 4 || (n.depth < 4 && n.is_leaf()));
     }
     EXPECT_EQ(cut_by_predicate(h, [](const Hierarchy&, std::int32_t) { return false; }), Cut{0});
+}
+
+// A sphere whose noise is one point spacing (30,000 points, σ = 0.02).
+const Hierarchy& noisy_sphere()
+{
+    static const Hierarchy h = [] {
+        PointCloud c = shapes::sphere(30000);
+        shapes::add_noise(c, 0.02);
+        return build_hierarchy(c);
+    }();
+    return h;
+}
+
+// Clean samples, analytic and scanned, have no noise floor: nothing changes for them.
+TEST(Cut, clean_samples_have_no_noise_floor)
+{
+    EXPECT_EQ(torus().noise_floor, 0.0);
+    EXPECT_EQ(build_hierarchy(shapes::sphere(20000)).noise_floor, 0.0);
+    EXPECT_EQ(build_hierarchy(shapes::three_holes(10000)).noise_floor, 0.0);
+    for (const char* name : {"bun_zipper.ply", "bun000.ply", "igea.ply", "rocker-arm.obj", "fandisk.obj"})
+        EXPECT_EQ(build_hierarchy(read_points(std::string(MRTILE_SHARED_DATA "/") + name)).noise_floor, 0.0) << name;
+}
+
+// A noisy sample's floor is of the order of its noise, and the cuts by tolerance, region and camera
+// never refine a node at or under it (budget cuts still may: they do what they are asked).
+TEST(Cut, tolerance_region_and_camera_cuts_stop_at_the_noise_floor)
+{
+    const Hierarchy& h = noisy_sphere();
+    EXPECT_GT(h.noise_floor, 0.5 * 0.02);
+    EXPECT_LT(h.noise_floor, 3.0 * 0.02);
+    auto parents_above_floor = [&](const Cut& cut) {
+        for (std::int32_t id : cut) {
+            const std::int32_t parent = h.nodes[static_cast<std::size_t>(id)].parent;
+            if (parent >= 0 && !(h.nodes[static_cast<std::size_t>(parent)].rms_plane_distance > h.noise_floor))
+                return false;
+        }
+        return true;
+    };
+    const Cut finest = cut_by_tolerance(h, 0.0);
+    EXPECT_TRUE(is_partition(h, finest));
+    EXPECT_TRUE(parents_above_floor(finest));
+    EXPECT_LT(finest.size(), h.leaf_count() / 10);
+    EXPECT_EQ(cut_by_tolerance(h, 0.001), finest);
+    FocusRegion focus;
+    focus.centre = {1, 0, 0};
+    focus.radius = 0.5;
+    const Cut regions = cut_by_regions(h, 0.01, {focus});
+    EXPECT_TRUE(parents_above_floor(regions));
+    EXPECT_EQ(refine_cut(h, cut_by_tolerance(h, 0.01), 0.01, {focus}), regions);
+    Camera camera;
+    camera.position = {1.2, 0, 0};
+    const Cut near = cut_for_camera(h, camera);
+    EXPECT_TRUE(parents_above_floor(near));
+    EXPECT_FALSE(parents_above_floor(cut_by_budget(h, h.leaf_count())));
+    Hierarchy unfloored = h;
+    unfloored.noise_floor = 0.0;
+    EXPECT_EQ(cut_by_tolerance(unfloored, 0.0).size(), h.leaf_count());
 }
 
 } // namespace

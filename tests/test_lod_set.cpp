@@ -98,6 +98,26 @@ TEST(LodSet, draco_grid_spans_the_meshes_not_a_stray_point)
         }
 }
 
+// A noisy sample's LOD set ends at its noise floor, not at the leaves (levels below it would mesh
+// noise: blobs that break the surface into pieces), and its first level is no finer than that.
+TEST(LodSet, noisy_sample_ends_at_the_noise_floor)
+{
+    PointCloud c = shapes::sphere(30000);
+    shapes::add_noise(c, 0.02);
+    const Hierarchy h = build_hierarchy(c);
+    ASSERT_GT(h.noise_floor, 0.0);
+    LodSetOptions o;
+    o.tileset = false;
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_FALSE(set.levels.empty());
+    EXPECT_EQ(set.levels.back().cut, cut_by_tolerance(h, 0.0));
+    for (const LodLevel& level : set.levels) {
+        const TopologyStats t = topology_stats(level.mesh);
+        EXPECT_EQ(t.boundary_loops, 0u);
+        EXPECT_EQ(t.components, 1u);
+    }
+}
+
 // Whatever the thread count, the levels are the same meshes.
 TEST(LodSet, thread_count_does_not_change_the_result)
 {

@@ -79,6 +79,27 @@ TEST(Reconstruct, a_far_stray_point_leaves_the_tolerance_alone)
     }
 }
 
+// A sphere with noise of one point spacing meshed at a tolerance below its noise: the cut stops at
+// the noise floor and the mesh is a closed sphere whose vertices lie within about the noise of the
+// true surface. Below the floor (as before it existed), the same cut broke into 60-80 pieces.
+TEST(Reconstruct, a_noisy_sample_is_meshed_at_its_noise_floor)
+{
+    PointCloud cloud = shapes::sphere(30000);
+    const double sigma = 0.02; // about the point spacing
+    shapes::add_noise(cloud, sigma);
+    const Hierarchy h = build_hierarchy(cloud);
+    ASSERT_GT(h.noise_floor, 0.0);
+    for (double tolerance : {0.005, 0.002}) {
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        EXPECT_EQ(r.surface.refused_faces, 0u);
+        expect_closed(r.mesh, 0);
+        double sum = 0.0;
+        for (const auto v : r.mesh.vertices())
+            sum += std::pow(norm(to_vec3(r.mesh.point(v)) + h.cloud.origin) - 1.0, 2);
+        EXPECT_LT(std::sqrt(sum / static_cast<double>(r.mesh.n_vertices())), 2.0 * sigma) << tolerance;
+    }
+}
+
 // A camera cut of a torus (fine near the camera, coarse far away) is a closed genus-1 surface.
 TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 {

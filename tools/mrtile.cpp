@@ -62,6 +62,7 @@ struct UsageError : std::runtime_error
 struct Globals
 {
     bool quiet = false;
+    bool below_noise = false; //!< cut below Hierarchy::noise_floor
     bool progress() const { return !quiet && ::isatty(2); }
 };
 
@@ -370,6 +371,12 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     } else {
         cut = cut_args.cut(h);
         r = mesh_cut(h, cut, mesh_args.options());
+        const bool by_tolerance = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty();
+        const double asked = cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance;
+        if (by_tolerance && h.noise_floor > asked * h.scale)
+            std::printf("note: the points are noisy (noise floor %.3g, tolerance %.3g): the cut stops at the noise "
+                        "floor; --below-noise goes on\n",
+                        h.noise_floor / h.scale, asked);
     }
     QualityReport q;
     if (!mesh_args.no_quality)
@@ -632,6 +639,8 @@ int run(int argc, char** argv)
     app.fallthrough(); // global flags (-q) may follow the command
     Globals g;
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
+    app.add_flag("--below-noise", g.below_noise,
+                 "let tolerance cuts refine below the points' noise level (noisy samples break into pieces there)");
     std::size_t threads = 0;
     app.add_option("--threads", threads, "worker threads (0 = one per hardware thread); output does not depend on it")
         ->check(CLI::Range(std::size_t{0}, std::size_t{4096}))
@@ -717,25 +726,34 @@ int run(int argc, char** argv)
     }
     if (*info)
         return run_info(info_in, info_json);
+    // The noise floor is derived when a model is built or loaded; the flag only switches it off.
+    auto apply_globals = [&](Hierarchy& h) {
+        if (g.below_noise)
+            h.noise_floor = 0.0;
+    };
     if (*mesh) {
-        const Hierarchy h = load_model(mesh_in);
+        Hierarchy h = load_model(mesh_in);
+        apply_globals(h);
         naming_input(mesh_in, [&] { mesh_and_write(h, mesh_cut_args, mesh_args, mesh_out_args, mesh_out); });
         return 0;
     }
     if (*rec) {
-        const Hierarchy h = build_from_points(rec_in, rec_build, g);
+        Hierarchy h = build_from_points(rec_in, rec_build, g);
+        apply_globals(h);
         if (!rec_model.empty())
             save_model(h, rec_model);
         naming_input(rec_in, [&] { rec_args.write(h, g, rec_out); });
         return 0;
     }
     if (*lods) {
-        const Hierarchy h = load_model(lods_in);
+        Hierarchy h = load_model(lods_in);
+        apply_globals(h);
         naming_input(lods_in, [&] { write_lods(h, lods_args.exp, lods_args.mesh, lods_args.output, g, lods_out); });
         return 0;
     }
     if (*exp) {
-        const Hierarchy h = load_model(exp_in);
+        Hierarchy h = load_model(exp_in);
+        apply_globals(h);
         naming_input(exp_in, [&] { exp_args.write(h, g, exp_out); });
         return 0;
     }
