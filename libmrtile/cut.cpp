@@ -59,9 +59,10 @@ Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance)
 {
     check_tolerance(tolerance, "tolerance");
-    const double limit = std::max(tolerance * h.scale, h.noise_floor);
+    const double limit = tolerance * h.scale;
     return cut_by_predicate(h, [limit](const Hierarchy& hh, std::int32_t id) {
-        return hh.nodes[static_cast<std::size_t>(id)].rms_plane_distance > limit;
+        const Node& n = hh.nodes[static_cast<std::size_t>(id)];
+        return n.rms_plane_distance > std::max(limit, n.noise_floor);
     });
 }
 
@@ -129,7 +130,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
         for (const FocusRegion& r : regions)
             if (intersects(n, r))
                 tolerance = std::min(tolerance, r.tolerance);
-        return n.rms_plane_distance > std::max(tolerance * side, hh.noise_floor);
+        return n.rms_plane_distance > std::max(tolerance * side, n.noise_floor);
     });
 }
 
@@ -181,7 +182,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
             const std::int32_t k = stack.back();
             stack.pop_back();
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!n.is_leaf() && n.rms_plane_distance > std::max(region_tolerance(n, base_tolerance, regions) * side, h.noise_floor)) {
+            if (!n.is_leaf() && n.rms_plane_distance > std::max(region_tolerance(n, base_tolerance, regions) * side, n.noise_floor)) {
                 stack.push_back(n.right);
                 stack.push_back(n.left);
             } else {
@@ -195,7 +196,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance)
 {
     check_tolerance(tolerance, "tolerance");
-    const double limit = std::max(tolerance * h.scale, h.noise_floor);
+    const double limit = tolerance * h.scale;
     // For each cut node, its highest ancestor (or itself) inside the region and flat enough; a chain
     // qualifies only as long as every node on it does (a parent is never flatter-tested past a failure).
     std::vector<std::int32_t> replacement(cut.size());
@@ -203,7 +204,7 @@ Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, d
         std::int32_t best = cut[i];
         for (std::int32_t k = cut[i]; k >= 0; k = h.nodes[static_cast<std::size_t>(k)].parent) {
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!box_inside(n.box, region) || n.rms_plane_distance > limit)
+            if (!box_inside(n.box, region) || n.rms_plane_distance > std::max(limit, n.noise_floor))
                 break;
             best = k;
         }
@@ -242,7 +243,7 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
         throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height and pixel error, and a finite position");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return screen_space_error(n, camera) > camera.max_pixel_error && n.rms_plane_distance > hh.noise_floor;
+        return screen_space_error(n, camera) > camera.max_pixel_error && n.rms_plane_distance > n.noise_floor;
     });
 }
 

@@ -16,7 +16,7 @@
 //!  - geometric error (max distance of a point to its tile plane), for screen-space error.
 //!
 //! Cuts by tolerance, by region and by camera never refine a node whose RMS plane distance is at
-//! or under Hierarchy::noise_floor (0 for clean samples): below it a noisy sample's clusters are
+//! or under its Node::noise_floor (0 where the sample is clean): below it a noisy sample's clusters are
 //! blobs, not pieces of surface. Cuts by budget, τ and predicate do exactly what they are asked.
 
 #include "libmrtile/hierarchy.h"
@@ -35,8 +35,8 @@ using RefinePredicate = std::function<bool(const Hierarchy& h, std::int32_t node
 //! The general form: refine every internal node for which `refine` says yes.
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine);
 
-//! Scale-free: every tile's RMS plane distance is at most max(tolerance × Hierarchy::scale,
-//! Hierarchy::noise_floor) (or the tile is a leaf). \throw InvalidInput if tolerance is negative or not finite.
+//! Scale-free: every tile's RMS plane distance is at most tolerance × Hierarchy::scale, or the tile
+//! is a leaf, or its parent's RMS plane distance is at most the parent's noise floor. \throw InvalidInput if tolerance is negative or not finite.
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance);
 
 //! The paper's τ: every tile's λ_min(ΔᵀΔ) is at most tau (or the tile is a leaf).

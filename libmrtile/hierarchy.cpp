@@ -37,36 +37,40 @@ double median(std::vector<double> v)
     return *middle;
 }
 
-// See Hierarchy::noise_floor. Medians, so that the nodes on sharp edges and at the sample's borders
-// (rough for other reasons) do not decide.
-double noise_floor(const Hierarchy& h)
+struct Roughness
+{
+    std::vector<double> rms;       // RMS plane distances of leaves
+    std::vector<double> roughness; // RMS plane distance / RMS extent along the second axis
+    void add(const Node& n)
+    {
+        if (n.count() < 3 || !(n.frame.values[1] > 0))
+            return;
+        rms.push_back(n.rms_plane_distance);
+        roughness.push_back(node_roughness(n));
+    }
+    static double node_roughness(const Node& n)
+    {
+        return n.rms_plane_distance / std::sqrt(n.frame.values[1] / static_cast<double>(n.count()));
+    }
+};
+
+constexpr std::size_t kMinLeaves = 8;
+
+// The floor of a region whose leaves are `leaves` and whose own roughness is `region` (see
+// derive_noise_floor in hierarchy.h).
+double floor_of(Roughness leaves, double region)
 {
     constexpr double kSmooth = 0.2, kRough = 0.4; // leaf roughness: no floor .. full floor
-    constexpr double kCurved = 1.0, kNoisy = 0.6; // roughness 16-32x larger / at the leaves: no .. full
+    constexpr double kCurved = 1.0, kNoisy = 0.7; // region roughness / leaf roughness: no .. full
     constexpr double kFactor = 3.0;
-    constexpr std::size_t kMinNodes = 8;
-    const std::size_t min_cluster = h.info.min_cluster > 0 ? h.info.min_cluster : 16;
-    auto roughness = [](const Node& n) {
-        return n.rms_plane_distance / std::sqrt(n.frame.values[1] / static_cast<double>(n.count()));
-    };
-    std::vector<double> leaf_rms, leaf_roughness, coarse_roughness;
-    for (const Node& n : h.nodes) {
-        if (n.count() < 3 || !(n.frame.values[1] > 0))
-            continue;
-        if (n.is_leaf()) {
-            leaf_rms.push_back(n.rms_plane_distance);
-            leaf_roughness.push_back(roughness(n));
-        } else if (n.count() >= 16 * min_cluster && n.count() < 32 * min_cluster) {
-            coarse_roughness.push_back(roughness(n));
-        }
-    }
-    if (leaf_rms.size() < kMinNodes || coarse_roughness.size() < kMinNodes)
+    if (leaves.rms.size() < kMinLeaves)
         return 0.0;
-    const double rough = median(leaf_roughness);
-    const double ratio = median(coarse_roughness) / rough;
+    const double rough = median(leaves.roughness);
+    if (!(rough > 0))
+        return 0.0;
     const double weight = std::clamp((rough - kSmooth) / (kRough - kSmooth), 0.0, 1.0) *
-                          std::clamp((kCurved - ratio) / (kCurved - kNoisy), 0.0, 1.0);
-    return weight * kFactor * median(leaf_rms);
+                          std::clamp((kCurved - region / rough) / (kCurved - kNoisy), 0.0, 1.0);
+    return weight > 0 ? weight * kFactor * median(leaves.rms) : 0.0;
 }
 
 } // namespace
@@ -78,7 +82,79 @@ void update_derived(Hierarchy& h)
         n.rms_plane_distance = n.moments.count ? std::sqrt(n.frame.values[0] / static_cast<double>(n.moments.count)) : 0.0;
     }
     h.scale = tolerance_scale(h.cloud.positions);
-    h.noise_floor = noise_floor(h);
+    derive_noise_floor(h);
+}
+
+void derive_noise_floor(Hierarchy& h)
+{
+    const std::size_t count = h.nodes.size();
+    if (count == 0)
+        return;
+    const std::size_t min_cluster = h.info.min_cluster > 0 ? h.info.min_cluster : 16;
+    const std::size_t region_max = 32 * min_cluster, region_min = 8 * min_cluster;
+    auto is_region = [&](const Node& n) {
+        return n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max);
+    };
+    // The whole sample's measure, for regions too small to judge alone: its leaves, and the median
+    // roughness of its regions of 16-31 x min_cluster points.
+    Roughness all;
+    std::vector<double> region_roughness;
+    for (const Node& n : h.nodes) {
+        if (n.is_leaf())
+            all.add(n);
+        if (n.count() >= 16 * min_cluster && n.count() < region_max && n.frame.values[1] > 0)
+            region_roughness.push_back(Roughness::node_roughness(n));
+    }
+    const double global = region_roughness.size() >= kMinLeaves ? floor_of(all, median(region_roughness)) : 0.0;
+
+    // Parents come before children: a region computes its floor, its descendants copy it.
+    std::vector<std::int32_t> stack;
+    for (std::size_t k = 0; k < count; ++k) {
+        Node& n = h.nodes[k];
+        n.noise_floor = 0.0;
+        if (n.parent >= 0 && h.nodes[static_cast<std::size_t>(n.parent)].count() < region_max) {
+            n.noise_floor = h.nodes[static_cast<std::size_t>(n.parent)].noise_floor;
+        } else if (is_region(n)) {
+            if (n.count() < region_min || !(n.frame.values[1] > 0)) {
+                n.noise_floor = global;
+                continue;
+            }
+            Roughness leaves;
+            stack.assign(1, static_cast<std::int32_t>(k));
+            while (!stack.empty()) {
+                const Node& m = h.nodes[static_cast<std::size_t>(stack.back())];
+                stack.pop_back();
+                if (m.is_leaf()) {
+                    leaves.add(m);
+                } else {
+                    stack.push_back(m.left);
+                    stack.push_back(m.right);
+                }
+            }
+            n.noise_floor = leaves.rms.size() >= kMinLeaves ? floor_of(std::move(leaves), Roughness::node_roughness(n)) : global;
+        }
+    }
+    // Above the regions: the smallest floor below, so that a node is refined wherever a part needs it.
+    for (std::size_t k = count; k-- > 0;) {
+        Node& n = h.nodes[k];
+        if (!n.is_leaf() && n.count() >= region_max)
+            n.noise_floor = std::min(h.nodes[static_cast<std::size_t>(n.left)].noise_floor,
+                                     h.nodes[static_cast<std::size_t>(n.right)].noise_floor);
+    }
+}
+
+void clear_noise_floor(Hierarchy& h)
+{
+    for (Node& n : h.nodes)
+        n.noise_floor = 0.0;
+}
+
+double max_noise_floor(const Hierarchy& h)
+{
+    double m = 0.0;
+    for (const Node& n : h.nodes)
+        m = std::max(m, n.noise_floor);
+    return m;
 }
 
 } // namespace mrt

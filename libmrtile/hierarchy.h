@@ -50,6 +50,10 @@ struct Node
     // Derived from `moments` when the hierarchy is built or loaded (not stored in the file).
     Eigen3x3 frame;                  //!< PCA: frame.vectors[0] = normal, frame.values[0] = λ_min(M)
     double rms_plane_distance = 0.0; //!< sqrt(λ_min / count)
+    //! RMS plane distance at or under which refining this node fits the noise of the points, not the
+    //! surface (model units; 0 where the sample is clean). Cuts by tolerance, region and camera (cut.h)
+    //! never refine a node whose rms_plane_distance is at or under it. See derive_noise_floor.
+    double noise_floor = 0.0;
 
     bool is_leaf() const { return left < 0; }
     std::uint32_t count() const { return end - begin; }
@@ -81,16 +85,6 @@ struct Hierarchy
     //! The length scale-free tolerances are relative to: tolerance_scale(cloud.positions) (the largest
     //! side of the bounding box, far stray points aside; point_cloud.h). Derived (update_derived).
     double scale = 0.0;
-    //! RMS plane distance below which refining fits the noise of the points, not the surface (model
-    //! units; 0 for a clean sample). Cuts by tolerance (cut.h) never refine a node at or under it.
-    //! Derived from the leaves (update_derived): 3 × their median RMS plane distance (a leaf of 16
-    //! noisy points fits its plane to the noise: its RMS is about half the noise's σ), weighted by
-    //! how rough they are — the median of RMS plane distance / RMS extent along the second axis,
-    //! from 0 at a roughness of 0.2 to full weight at 0.4. Clean scans and CAD samples have leaf
-    //! roughness 0.04–0.17 (no floor); a sample whose noise is half its point spacing or more,
-    //! 0.55–0.7: its 16-point leaves are blobs, not pieces of surface, and a cut made of them breaks
-    //! into hundreds of pieces. Set it to 0 to cut below the noise anyway.
-    double noise_floor = 0.0;
 
     std::size_t leaf_count() const;
     std::uint32_t max_depth() const;
@@ -101,7 +95,26 @@ struct Hierarchy
 };
 
 //! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, then
-//! scale and noise_floor.
+//! scale and the nodes' noise floors (derive_noise_floor).
 void update_derived(Hierarchy& h);
+
+//! \brief Sets every node's noise_floor (update_derived calls it).
+//! \details Where a sample's noise is about half its point spacing or more, its 16-point leaves are
+//! blobs, not pieces of surface, and a cut made of them breaks into hundreds of pieces. Judged per
+//! region: the highest nodes under 32 × min_cluster points partition the points; for each of at least
+//! 8 × min_cluster points, its leaves' roughness (median RMS plane distance / RMS extent along the
+//! second axis) says how rough the sample is at the finest scale, and the region's own roughness over
+//! that says whether roughness rises with scale (curvature: 2–13 on every clean scan and CAD part) or
+//! falls (noise: 0.2–0.5). The floor is 3 × the leaves' median RMS plane distance (a 16-point leaf fits
+//! its plane to the noise: about half its σ), weighted from 0 at leaf roughness 0.2 to 1 at 0.4 and from
+//! 0 at a ratio of 1 to 1 at 0.6; clean regions get 0. Smaller regions take the same measure over the
+//! whole sample; nodes below a region take its floor, nodes above the smallest of their children's.
+void derive_noise_floor(Hierarchy& h);
+
+//! Sets every node's noise_floor to 0 (cut below the noise anyway).
+void clear_noise_floor(Hierarchy& h);
+
+//! The largest noise floor of any node (0 for a clean sample).
+double max_noise_floor(const Hierarchy& h);
 
 } // namespace mrt

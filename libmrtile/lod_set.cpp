@@ -231,7 +231,7 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
     const std::size_t wanted = (o.levels > 0 ? o.levels : o.max_levels) - 1;
     double tol = first;
     // The finest cut a tolerance gives: the leaves, or the cut at the noise floor of a noisy sample
-    // (Hierarchy::noise_floor), below which levels would only mesh noise.
+    // (Node::noise_floor), below which levels would only mesh noise.
     const std::size_t finest = cut_by_tolerance(h, 0.0).size();
     while (t.size() < wanted) {
         if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= finest)

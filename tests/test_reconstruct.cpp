@@ -88,7 +88,7 @@ TEST(Reconstruct, a_noisy_sample_is_meshed_at_its_noise_floor)
     const double sigma = 0.02; // about the point spacing
     shapes::add_noise(cloud, sigma);
     const Hierarchy h = build_hierarchy(cloud);
-    ASSERT_GT(h.noise_floor, 0.0);
+    ASSERT_GT(max_noise_floor(h), 0.0);
     for (double tolerance : {0.005, 0.002}) {
         const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
         EXPECT_EQ(r.surface.refused_faces, 0u);

@@ -62,7 +62,7 @@ struct UsageError : std::runtime_error
 struct Globals
 {
     bool quiet = false;
-    bool below_noise = false; //!< cut below Hierarchy::noise_floor
+    bool below_noise = false; //!< cut below the nodes' noise floors
     bool progress() const { return !quiet && ::isatty(2); }
 };
 
@@ -371,12 +371,18 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     } else {
         cut = cut_args.cut(h);
         r = mesh_cut(h, cut, mesh_args.options());
-        const bool by_tolerance = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty();
-        const double asked = cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance;
-        if (by_tolerance && h.noise_floor > asked * h.scale)
-            std::printf("note: the points are noisy (noise floor %.3g, tolerance %.3g): the cut stops at the noise "
-                        "floor; --below-noise goes on\n",
-                        h.noise_floor / h.scale, asked);
+        // Tiles of a plain tolerance cut that only their noise floor kept from refining.
+        const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
+        const double limit = (cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance) * h.scale;
+        std::size_t stopped = 0;
+        for (std::int32_t id : cut) {
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            stopped += plain && !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
+        }
+        if (stopped > 0)
+            std::printf("note: the points are noisy: %zu of %zu tiles stop at their noise floor (up to %.3g of the "
+                        "size); --below-noise goes on\n",
+                        stopped, cut.size(), max_noise_floor(h) / h.scale);
     }
     QualityReport q;
     if (!mesh_args.no_quality)
@@ -729,7 +735,7 @@ int run(int argc, char** argv)
     // The noise floor is derived when a model is built or loaded; the flag only switches it off.
     auto apply_globals = [&](Hierarchy& h) {
         if (g.below_noise)
-            h.noise_floor = 0.0;
+            clear_noise_floor(h);
     };
     if (*mesh) {
         Hierarchy h = load_model(mesh_in);
