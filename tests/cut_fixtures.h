@@ -40,6 +40,7 @@ inline FlatCut hierarchy_from_labels(const PointCloud& cloud, const std::vector<
         n.begin = begin;
         n.end = end;
         n.moments = compute_moments(h.cloud.positions.data() + begin, end - begin);
+        n.box = bounding_box(std::vector<Vec3>(h.cloud.positions.begin() + begin, h.cloud.positions.begin() + end));
         out.cut.push_back(static_cast<std::int32_t>(h.nodes.size()));
         h.nodes.push_back(n);
         begin = end;
