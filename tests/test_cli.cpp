@@ -327,6 +327,14 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_LT(10 * a["tiles"].get<std::size_t>(), b["tiles"].get<std::size_t>());
     EXPECT_EQ(a["boundary_loops"].get<int>(), 0);
     EXPECT_EQ(a["components"].get<int>(), 1);
+    // `info` says how much of the sample is noisy and up to which floor.
+    ASSERT_EQ(mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "n.mrt").string(), dir).code, 0);
+    const Result info = mrtile("info --json " + (dir / "n.mrt").string(), dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    const auto j = nlohmann::json::parse(info.out);
+    EXPECT_GT(j["noisy_share"].get<double>(), 0.9);
+    EXPECT_GT(j["noise_floor_max"].get<double>(), 0.0);
+    EXPECT_GT(j["scale"].get<double>(), 1.9);
 }
 
 } // namespace

@@ -603,6 +603,14 @@ int run_info(const fs::path& model, bool json)
     const Vec3 lo = box.min + h.cloud.origin, hi = box.max + h.cloud.origin;
     const bool timed = std::isfinite(h.info.build_seconds);
     const std::string criterion = h.info.criterion == Criterion::Tau ? "tau" : "tolerance";
+    // Share of the points in tiles-to-be whose noise floor is set (the leaves' floors: where a cut
+    // by tolerance stops short of the leaves).
+    std::uint64_t noisy_points = 0;
+    for (const Node& n : h.nodes)
+        if (n.is_leaf() && n.noise_floor > 0)
+            noisy_points += n.count();
+    const double noisy_share = h.cloud.size() > 0 ? static_cast<double>(noisy_points) / static_cast<double>(h.cloud.size()) : 0.0;
+    const double floor_max = h.scale > 0 ? max_noise_floor(h) / h.scale : 0.0;
     if (json) {
         nlohmann::json j;
         j["file"] = model.string();
@@ -620,6 +628,9 @@ int run_info(const fs::path& model, bool json)
         j["reclassify"] = h.info.reclassify;
         j["colors"] = h.cloud.has_colors();
         j["build_seconds"] = timed ? nlohmann::json(h.info.build_seconds) : nlohmann::json(nullptr);
+        j["scale"] = h.scale;
+        j["noise_floor_max"] = floor_max;
+        j["noisy_share"] = noisy_share;
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
@@ -629,6 +640,12 @@ int run_info(const fs::path& model, bool json)
     std::printf("bbox min    %.17g %.17g %.17g\nbbox max    %.17g %.17g %.17g\n", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
     std::printf("criterion   %s %g, pca limit %u, min cluster %u, reclassify %s\n", criterion.c_str(), h.info.criterion_value,
                 h.info.pca_limit, h.info.min_cluster, h.info.reclassify ? "on" : "off");
+    std::printf("scale       %.17g (tolerances are relative to it)\n", h.scale);
+    if (noisy_points > 0)
+        std::printf("noise       %.0f%% of the points are noisy: cuts by tolerance stop at floors up to %.3g of the scale\n",
+                    100.0 * noisy_share, floor_max);
+    else
+        std::printf("noise       none found (no noise floor)\n");
     if (timed)
         std::printf("build time  %.3f s\n", h.info.build_seconds);
     else
