@@ -1,6 +1,8 @@
 // The persistent hierarchy of paper §4.1 as a data structure: derived per-node values and queries.
-// Derived values (PCA frames) are recomputed from the stored moments instead of being stored, so the
-// model file holds only exact, mergeable statistics.
+// Derived values (PCA frames, the tolerance scale, the noise floors) are recomputed when a model is
+// built or loaded instead of being stored, so the model file holds only exact, mergeable statistics.
+// The noise floor goes beyond the paper, which assumes that its smallest clusters are pieces of surface:
+// under noise of about a point spacing they are blobs, and the floor keeps cuts above them.
 #include "libmrtile/hierarchy.h"
 
 #include <algorithm>
@@ -58,7 +60,7 @@ constexpr std::size_t kMinLeaves = 8;
 
 // The floor of a region whose leaves are `leaves` and whose own roughness is `region` (see
 // derive_noise_floor in hierarchy.h).
-double floor_of(Roughness leaves, double region)
+double floor_of(const Roughness& leaves, double region)
 {
     constexpr double kSmooth = 0.2, kRough = 0.4; // leaf roughness: no floor .. full floor
     constexpr double kCurved = 1.0, kNoisy = 0.7; // region roughness / leaf roughness: no .. full
@@ -95,8 +97,8 @@ void derive_noise_floor(Hierarchy& h)
     auto is_region = [&](const Node& n) {
         return n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max);
     };
-    // The whole sample's measure, for regions too small to judge alone: its leaves, and the median
-    // roughness of its regions of 16-31 x min_cluster points.
+    // The whole sample's measure, for regions too small to judge alone: all its leaves, and the median
+    // roughness of all its nodes of 16-31 x min_cluster points.
     Roughness all;
     std::vector<double> region_roughness;
     for (const Node& n : h.nodes) {
@@ -131,7 +133,7 @@ void derive_noise_floor(Hierarchy& h)
                     stack.push_back(m.right);
                 }
             }
-            n.noise_floor = leaves.rms.size() >= kMinLeaves ? floor_of(std::move(leaves), Roughness::node_roughness(n)) : global;
+            n.noise_floor = leaves.rms.size() >= kMinLeaves ? floor_of(leaves, Roughness::node_roughness(n)) : global;
         }
     }
     // Above the regions: the smallest floor below, so that a node is refined wherever a part needs it.

@@ -1,5 +1,7 @@
-// Input handling shared by every stage: bounding box, origin shift and validation. Not part of the
-// paper's method; it exists so that every later stage can assume finite, origin-centred positions.
+// Input handling shared by every stage: bounding box, origin shift, validation, duplicate merging and
+// the length tolerances are relative to. Not part of the paper's method; it exists so that every later
+// stage can assume finite, origin-centred, distinct positions, and a scale that a few stray points do not
+// decide.
 #include "libmrtile/point_cloud.h"
 
 #include "libmrtile/errors.h"
@@ -94,11 +96,9 @@ double tolerance_scale(const std::vector<Vec3>& positions)
     const std::uint64_t k = std::max<std::uint64_t>(1, n / kSampleSize);
     std::array<std::vector<double>, 3> sample;
     for (const Vec3& p : positions)
-        if (k == 1 || mix(mix(mix(0, p.x), p.y), p.z) % k == 0) {
-            sample[0].push_back(p.x);
-            sample[1].push_back(p.y);
-            sample[2].push_back(p.z);
-        }
+        if (k == 1 || mix(mix(mix(0, p.x), p.y), p.z) % k == 0)
+            for (int axis = 0; axis < 3; ++axis)
+                sample[static_cast<std::size_t>(axis)].push_back(p[axis]);
     const std::size_t m = sample[0].size();
     if (m < 200)
         return full.largest_side();
@@ -108,11 +108,9 @@ double tolerance_scale(const std::vector<Vec3>& positions)
     for (int axis = 0; axis < 3; ++axis) {
         std::vector<double>& v = sample[static_cast<std::size_t>(axis)];
         std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(lo), v.end());
-        const double low = v[lo];
+        core.min[axis] = v[lo];
         std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(hi), v.end());
-        const double high = v[hi];
-        (axis == 0 ? core.min.x : axis == 1 ? core.min.y : core.min.z) = low;
-        (axis == 0 ? core.max.x : axis == 1 ? core.max.y : core.max.z) = high;
+        core.max[axis] = v[hi];
     }
     const double reach = core.largest_side();
     if (!(reach > 0))
