@@ -215,7 +215,9 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
     LodLevel level;
     for (int attempt = 0; attempt < 6; ++attempt) {
         level.cut = tiles >= finest.size() ? finest : cut_by_budget(h, tiles);
-        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        MeshResult meshed = mesh_cut(h, level.cut, o.mesh);
+        level.cut = std::move(meshed.cut); // with small separate objects refined (MeshOptions)
+        level.mesh = std::move(meshed.mesh);
         const auto faces = static_cast<double>(level.mesh.n_faces());
         if (faces <= budget || tiles == 1)
             break;
@@ -273,9 +275,9 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         throw InvalidInput("lods: empty hierarchy");
     LodSet set;
     double previous_error = std::numeric_limits<double>::infinity();
-    // Levels arrive meshed and strictly finer than the one before (the finer ones are filtered below).
+    // Levels arrive meshed and finer than the one before (the finer ones are filtered below; meshing may
+    // have refined a level's small separate objects, MeshOptions::small_object_rounds).
     auto add_level = [&](LodLevel level) {
-        assert(set.levels.empty() || level.cut.size() > set.levels.back().cut.size());
         level.max_plane_distance = level_max_plane_distance(h, level.cut);
         level.geometric_error = std::min(previous_error, level.max_plane_distance);
         previous_error = level.geometric_error;
@@ -313,7 +315,9 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         o.progress(done, total);
     run_parallel(order.size(), o.threads, [&](std::size_t k) {
         LodLevel& level = finer[order[k]];
-        level.mesh = mesh_cut(h, level.cut, o.mesh).mesh;
+        MeshResult meshed = mesh_cut(h, level.cut, o.mesh);
+        level.cut = std::move(meshed.cut); // with small separate objects refined (MeshOptions)
+        level.mesh = std::move(meshed.mesh);
         if (o.progress) {
             const std::lock_guard<std::mutex> hold(progress_lock);
             o.progress(++done, total);

@@ -100,6 +100,39 @@ TEST(Reconstruct, a_noisy_sample_is_meshed_at_its_noise_floor)
     }
 }
 
+// Fifty unit spheres 5 apart at a coarse cut, most of them two tiles: every one gets its own closed
+// surface (the tiles of a piece of at most two tiles are refined first; two hemisphere fans alone made a
+// flat pillow and 33 of the spheres were dropped). Without other pieces (one object) nothing changes.
+TEST(Reconstruct, small_separate_objects_each_get_a_closed_surface)
+{
+    PointCloud cloud;
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 5; ++j) {
+            PointCloud one = shapes::sphere(800, 1.0, static_cast<std::uint32_t>(100 + 5 * i + j));
+            shapes::translate(one, {5.0 * i, 5.0 * j, 0.0});
+            cloud.positions.insert(cloud.positions.end(), one.positions.begin(), one.positions.end());
+        }
+    const Hierarchy h = build_hierarchy(cloud);
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    ASSERT_LT(cut.size(), 120u); // about two tiles per sphere
+    const MeshResult r = mesh_cut(h, cut);
+    EXPECT_GT(r.cut.size(), cut.size());
+    EXPECT_TRUE(is_partition(h, r.cut));
+    EXPECT_EQ(r.tiles, r.cut.size());
+    const TopologyStats t = topology_stats(r.mesh);
+    EXPECT_EQ(t.nonmanifold_edges, 0u);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.components, 50u);
+    EXPECT_EQ(t.genus, 0);
+
+    MeshOptions as_given;
+    as_given.small_object_rounds = 0;
+    EXPECT_EQ(mesh_cut(h, cut, as_given).cut, cut);
+    const Hierarchy one = build_hierarchy(shapes::sphere(800));
+    const Cut two = cut_by_budget(one, 2);
+    EXPECT_EQ(mesh_cut(one, two).cut, two);
+}
+
 // A camera cut of a torus (fine near the camera, coarse far away) is a closed genus-1 surface.
 TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 {

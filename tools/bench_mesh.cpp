@@ -73,7 +73,7 @@ MethodMeasurement measure_ours(const MeshInput& input, double tolerance)
         m.peak = peak_resident_bytes();
         m.tiles = cut.size();
         m.faces = result.mesh.n_faces();
-        const QualityReport quality = measure_quality(h, cut, result.mesh);
+        const QualityReport quality = measure_quality(h, result.cut, result.mesh);
         m.distance = quality.point_to_mesh;
         m.topology = quality.topology;
         return m;
@@ -316,7 +316,7 @@ void add_paper_rows(Table& table, const PaperSet& set)
             cut = cut_by_tau(h, row.tau);
             result = mesh_cut(h, cut);
         });
-        const QualityReport q = measure_quality(h, cut, result.mesh);
+        const QualityReport q = measure_quality(h, result.cut, result.mesh);
         table.rows.push_back({set.label, fixed(row.tau, row.tau < 1 ? 3 : 0), fixed(build.cpu, 3), fixed(time.cpu, 3),
                               fixed(row.paper_seconds, 2), with_commas(cut.size()), with_commas(row.paper_tiles),
                               with_commas(result.mesh.n_vertices()), with_commas(row.paper_vertices),

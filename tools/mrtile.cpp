@@ -386,7 +386,7 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     }
     QualityReport q;
     if (!mesh_args.no_quality)
-        q = measure_quality(h, cut, r.mesh);
+        q = measure_quality(h, r.cut, r.mesh);
     write_any_mesh(r.mesh, h.cloud.origin, out, out_args);
     nlohmann::json j = mesh_json(r, mesh_args.no_quality ? nullptr : &q, seconds_since(start));
     if (!mesh_args.stats_json.empty())
