@@ -1,5 +1,7 @@
 // Glue of the method's stages (paper Fig. 1: clustering → tiles → reconstruction) and the error
 // measures of paper §5 (eq. 4-6), so the CLI, the demo and the benchmarks all run the same pipeline.
+// One step between the stages goes beyond the paper: a separate object that a cut gives one to three
+// tiles cannot close, so those tiles are refined before meshing (MeshOptions::small_object_rounds).
 #include "libmrtile/reconstruct.h"
 
 #include "libmrtile/errors.h"
@@ -16,6 +18,7 @@ namespace {
 // other pieces exist, and its node can be refined (see MeshOptions::small_object_rounds). Three: two
 // fans make a flat pillow, and of 50 spheres refined from two tiles to three or four, one kept a hole.
 constexpr std::size_t kSmallObjectTiles = 3;
+
 std::vector<bool> small_object_tiles(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles)
 {
     const std::size_t n = tiles.size();
