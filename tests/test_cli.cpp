@@ -335,6 +335,10 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_GT(j["noisy_share"].get<double>(), 0.9);
     EXPECT_GT(j["noise_floor_max"].get<double>(), 0.0);
     EXPECT_GT(j["scale"].get<double>(), 1.9);
+    // LOD chains end at the floor, and say so.
+    const Result lods = mrtile("lods " + (dir / "n.mrt").string() + " -o " + (dir / "lods").string(), dir);
+    ASSERT_EQ(lods.code, 0) << lods.err;
+    EXPECT_NE(lods.out.find("note: the points are noisy: the levels end at the noise floor"), std::string::npos) << lods.out;
 }
 
 } // namespace

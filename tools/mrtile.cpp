@@ -447,12 +447,25 @@ void show_level_progress(LodSetOptions& o, const Globals& g)
     };
 }
 
+// A noisy sample's levels end at its noise floor, above the leaves (hierarchy.h): say so, once.
+void note_noise_floor(const Hierarchy& h, const LodSet& set)
+{
+    if (set.levels.empty() || max_noise_floor(h) <= 0)
+        return;
+    const std::size_t finest = cut_by_tolerance(h, 0.0).size();
+    if (finest < h.leaf_count() && set.levels.back().cut.size() <= finest * 3 / 2)
+        std::printf("note: the points are noisy: the levels end at the noise floor (%zu tiles, not the %zu leaves); "
+                    "--below-noise goes on\n",
+                    finest, h.leaf_count());
+}
+
 void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
+    note_noise_floor(h, set);
     TilesetOptions t;
     t.gltf = o.gltf();
     if (!e.enu.empty()) {
@@ -480,6 +493,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     options.tileset = false;
     show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
+    note_noise_floor(h, set);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
         fine_to_coarse.push_back(&set.levels[l].mesh);
@@ -499,6 +513,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     options.first_level_triangles = std::min<std::size_t>(options.max_tile_triangles, 4096);
     show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
+    note_noise_floor(h, set);
     // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
     // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
     // of a scan are too fine for its sampling, the extra levels would only add faces.
