@@ -143,6 +143,21 @@ std::vector<std::uint32_t> convex_hull(std::vector<Projected>& pts, double toler
     return out;
 }
 
+// Points of `pts` that lie apart: those in one cell of a grid of side `cell` in the plane count once
+// (cells are a bound, not a metric: two points a hair apart across a cell border count twice, which
+// only a clump straddling a border does, and the clumps this is for are far smaller than a cell).
+std::uint32_t distinct_in_plane(const std::vector<Projected>& pts, double cell)
+{
+    if (!(cell > 0.0))
+        return static_cast<std::uint32_t>(pts.size());
+    std::vector<std::pair<double, double>> cells;
+    cells.reserve(pts.size());
+    for (const Projected& p : pts)
+        cells.push_back({std::floor(p.x / cell), std::floor(p.y / cell)});
+    std::sort(cells.begin(), cells.end());
+    return static_cast<std::uint32_t>(std::unique(cells.begin(), cells.end()) - cells.begin());
+}
+
 // The tile of `node` built from the points `indices` (into h.cloud.positions).
 Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t* indices, std::size_t count,
                       const TileOptions& options)
@@ -214,6 +229,7 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             cy += (a.second + b.second) * cross;
         }
         t.area = 0.5 * twice;
+        t.distinct_points = distinct_in_plane(pts, 0.01 * std::sqrt(std::max(t.area, 0.0) / static_cast<double>(count)));
         // The apex must lie inside the hull, or fan faces fold or have no area. The node's mean is its
         // Voronoi site, inside its cell, but the cell's few points need not surround it (a cell of two or
         // three stray points): then the apex moves to the hull's centroid, at the same height.

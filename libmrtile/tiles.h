@@ -67,12 +67,21 @@ struct Tile
     std::vector<std::uint32_t> boundary;
     double area = 0.0;        //!< area of the projected hull (tile plane units²)
     std::uint32_t points = 0; //!< number of points the tile was built from (its Voronoi cell's, or its node's)
+    //! Of those, how many lie apart in the tile plane: points within a hundredth of the mean spacing of
+    //! each other (clumps of near-equal points, such as repeated frames of one view) count once. 0
+    //! without a fan.
+    std::uint32_t distinct_points = 0;
     //! Indices (into the tile vector, ascending) of the tiles that meet this one on the sampled surface:
     //! the restricted Delaunay neighbours found from the points (voronoi_trim only; else empty).
     std::vector<std::uint32_t> neighbours;
 
-    //! Mean point spacing sqrt(area / points) (0 without a fan).
-    double spacing() const { return points > 0 && area > 0.0 ? std::sqrt(area / points) : 0.0; }
+    //! Mean point spacing sqrt(area / distinct_points) (0 without a fan). Counting clumped points as
+    //! one keeps the spacing of the surface's sampling, which gap widths and split lengths follow.
+    double spacing() const
+    {
+        const std::uint32_t n = distinct_points > 0 ? distinct_points : points;
+        return n > 0 && area > 0.0 ? std::sqrt(area / n) : 0.0;
+    }
     bool has_fan() const { return boundary.size() >= 3; }
 };
 
