@@ -34,6 +34,13 @@ bool boxes_meet(const BoundingBox& a, const BoundingBox& b)
            a.min.z <= b.max.z && b.min.z <= a.max.z;
 }
 
+// The refinement rule of every cut by tolerance, region or camera: the node's RMS plane distance is
+// above `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h).
+bool rougher_than(const Node& n, double limit)
+{
+    return n.rms_plane_distance > std::max(limit, n.noise_floor);
+}
+
 } // namespace
 
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
@@ -61,8 +68,7 @@ Cut cut_by_tolerance(const Hierarchy& h, double tolerance)
     check_tolerance(tolerance, "tolerance");
     const double limit = tolerance * h.scale;
     return cut_by_predicate(h, [limit](const Hierarchy& hh, std::int32_t id) {
-        const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return n.rms_plane_distance > std::max(limit, n.noise_floor);
+        return rougher_than(hh.nodes[static_cast<std::size_t>(id)], limit);
     });
 }
 
@@ -130,7 +136,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
         for (const FocusRegion& r : regions)
             if (intersects(n, r))
                 tolerance = std::min(tolerance, r.tolerance);
-        return n.rms_plane_distance > std::max(tolerance * side, n.noise_floor);
+        return rougher_than(n, tolerance * side);
     });
 }
 
@@ -182,7 +188,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
             const std::int32_t k = stack.back();
             stack.pop_back();
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!n.is_leaf() && n.rms_plane_distance > std::max(region_tolerance(n, base_tolerance, regions) * side, n.noise_floor)) {
+            if (!n.is_leaf() && rougher_than(n, region_tolerance(n, base_tolerance, regions) * side)) {
                 stack.push_back(n.right);
                 stack.push_back(n.left);
             } else {
@@ -204,7 +210,7 @@ Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, d
         std::int32_t best = cut[i];
         for (std::int32_t k = cut[i]; k >= 0; k = h.nodes[static_cast<std::size_t>(k)].parent) {
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!box_inside(n.box, region) || n.rms_plane_distance > std::max(limit, n.noise_floor))
+            if (!box_inside(n.box, region) || rougher_than(n, limit))
                 break;
             best = k;
         }
@@ -243,7 +249,7 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
         throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height and pixel error, and a finite position");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return screen_space_error(n, camera) > camera.max_pixel_error && n.rms_plane_distance > n.noise_floor;
+        return screen_space_error(n, camera) > camera.max_pixel_error && rougher_than(n, 0.0);
     });
 }
 

@@ -203,21 +203,27 @@ BoundingBox mesh_box(const Mesh& m, BoundingBox box)
     return box;
 }
 
+// Meshes a level's cut; the level keeps the cut meshed (small separate objects refined, MeshOptions).
+void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
+{
+    MeshResult meshed = mesh_cut(h, level.cut, options);
+    level.cut = std::move(meshed.cut);
+    level.mesh = std::move(meshed.mesh);
+}
+
 // Level 0 is the best cut whose mesh fits one tile: start from a guess of the triangles per tile and
-// correct it from the measured mesh (meshing a coarse cut is cheap).
-LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
+// correct it from the measured mesh (meshing a coarse cut is cheap). `finest`: cut_by_tolerance(h, 0),
+// the leaves or, for a noisy sample, the cut at its noise floor
+// (Node::noise_floor), below which levels would only mesh noise; no level is finer.
+LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& finest)
 {
     const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
     const auto budget = static_cast<double>(triangles * 3 / 4);
     std::size_t tiles = std::max<std::size_t>(1, triangles / 32);
-    // Never finer than the finest tolerance cut (the noise floor of a noisy sample, hierarchy.h).
-    const Cut finest = cut_by_tolerance(h, 0.0);
     LodLevel level;
     for (int attempt = 0; attempt < 6; ++attempt) {
         level.cut = tiles >= finest.size() ? finest : cut_by_budget(h, tiles);
-        MeshResult meshed = mesh_cut(h, level.cut, o.mesh);
-        level.cut = std::move(meshed.cut); // with small separate objects refined (MeshOptions)
-        level.mesh = std::move(meshed.mesh);
+        mesh_level(h, level, o.mesh);
         const auto faces = static_cast<double>(level.mesh.n_faces());
         if (faces <= budget || tiles == 1)
             break;
@@ -227,14 +233,11 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o)
     return level;
 }
 
-std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o, double first)
+std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o, double first, std::size_t finest)
 {
     std::vector<double> t;
     const std::size_t wanted = (o.levels > 0 ? o.levels : o.max_levels) - 1;
     double tol = first;
-    // The finest cut a tolerance gives: the leaves, or the cut at the noise floor of a noisy sample
-    // (Node::noise_floor), below which levels would only mesh noise.
-    const std::size_t finest = cut_by_tolerance(h, 0.0).size();
     while (t.size() < wanted) {
         if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= finest)
             break;
@@ -288,8 +291,9 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         if (!(tolerances[i] >= 0) || (i > 0 && !(tolerances[i] < tolerances[i - 1])))
             throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
     if (tolerances.empty()) {
-        LodLevel first = first_level(h, o);
-        tolerances = finer_tolerances(h, o, first.tolerance);
+        const Cut finest = cut_by_tolerance(h, 0.0);
+        LodLevel first = first_level(h, o, finest);
+        tolerances = finer_tolerances(h, o, first.tolerance, finest.size());
         add_level(std::move(first));
     }
     // The finer levels are independent meshing jobs: cut them, mesh them on worker threads (largest
@@ -315,9 +319,7 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         o.progress(done, total);
     run_parallel(order.size(), o.threads, [&](std::size_t k) {
         LodLevel& level = finer[order[k]];
-        MeshResult meshed = mesh_cut(h, level.cut, o.mesh);
-        level.cut = std::move(meshed.cut); // with small separate objects refined (MeshOptions)
-        level.mesh = std::move(meshed.mesh);
+        mesh_level(h, level, o.mesh);
         if (o.progress) {
             const std::lock_guard<std::mutex> hold(progress_lock);
             o.progress(++done, total);

@@ -7,6 +7,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/parallel.h"
 #include "libmrtile/point_cloud.h"
+#include "libmrtile/union_find.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -58,34 +59,6 @@ Soup mesh_to_soup(const Mesh& mesh)
     }
     return soup;
 }
-
-class UnionFind
-{
-public:
-    explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }
-
-    std::uint32_t find(std::uint32_t i)
-    {
-        while (parent_[i] != i) {
-            parent_[i] = parent_[parent_[i]];  // path halving
-            i = parent_[i];
-        }
-        return i;
-    }
-    // The smaller index becomes the root, so roots do not depend on the order of the unions.
-    void unite(std::uint32_t a, std::uint32_t b)
-    {
-        a = find(a);
-        b = find(b);
-        if (a < b)
-            parent_[b] = a;
-        else if (b < a)
-            parent_[a] = b;
-    }
-
-private:
-    std::vector<std::uint32_t> parent_;
-};
 
 bool has_repeated_vertex(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 

@@ -5,6 +5,7 @@
 #include "libmrtile/reconstruct.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/union_find.h"
 
 #include <algorithm>
 #include <chrono>
@@ -22,23 +23,16 @@ constexpr std::size_t kSmallObjectTiles = 3;
 std::vector<bool> small_object_tiles(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles)
 {
     const std::size_t n = tiles.size();
-    std::vector<std::uint32_t> parent(n);
-    for (std::uint32_t k = 0; k < n; ++k)
-        parent[k] = k;
-    auto find = [&](std::uint32_t k) {
-        while (parent[k] != k)
-            k = parent[k] = parent[parent[k]];
-        return k;
-    };
+    UnionFind pieces(n);
     for (std::uint32_t k = 0; k < n; ++k)
         for (std::uint32_t j : tiles[k].neighbours)
-            parent[find(k)] = find(j);
+            pieces.unite(k, j);
     std::vector<std::size_t> size(n, 0);
     for (std::uint32_t k = 0; k < n; ++k)
-        ++size[find(k)];
+        ++size[pieces.find(k)];
     std::vector<bool> small(n, false);
     for (std::uint32_t k = 0; k < n; ++k) {
-        const std::size_t piece = size[find(k)];
+        const std::size_t piece = size[pieces.find(k)];
         small[k] = piece <= kSmallObjectTiles && piece < n && !h.nodes[static_cast<std::size_t>(cut[k])].is_leaf();
     }
     return small;

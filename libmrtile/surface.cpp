@@ -57,6 +57,7 @@
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/parallel.h"
 #include "libmrtile/pca.h"
+#include "libmrtile/union_find.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
@@ -747,25 +748,6 @@ private:
     std::uint64_t clock_ = 0;
 };
 
-struct UnionFind
-{
-    std::vector<std::uint32_t> parent;
-    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    std::uint32_t find(std::uint32_t x)
-    {
-        while (parent[x] != x)
-            x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b)
-    {
-        a = find(a);
-        b = find(b);
-        if (a != b)
-            parent[std::max(a, b)] = std::min(a, b);
-    }
-};
-
 // Angles of points around a centre, counter-clockwise about a normal, from a fixed zero direction:
 // orders the fans of a pinched vertex.
 class AngleAround
@@ -1179,38 +1161,28 @@ private:
     }
 
     // Pieces of the surface as split_pinches will leave it: faces joined across shared edges (a pinched
-    // vertex joins nothing). A growable union-find over face ids, synced lazily with the faces added.
-    std::uint32_t piece_of(std::uint32_t f)
-    {
-        while (pieces_[f] != f) {
-            pieces_[f] = pieces_[pieces_[f]];
-            f = pieces_[f];
-        }
-        return f;
-    }
+    // vertex joins nothing). A union-find over face ids, grown and synced lazily with the faces added.
     void sync_pieces()
     {
         const auto& faces = surface_.faces();
         if (pieces_.size() > faces.size())
             reset_pieces(); // faces were rolled back: start again
-        for (auto f = static_cast<std::uint32_t>(pieces_.size()); f < faces.size(); ++f)
-            pieces_.push_back(f);
+        while (pieces_.size() < faces.size())
+            pieces_.add();
         for (; pieces_synced_ < faces.size(); ++pieces_synced_) {
             const std::uint32_t f = pieces_synced_;
             if (!surface_.alive(f))
                 continue;
             for (int k = 0; k < 3; ++k) {
                 const std::uint32_t g = surface_.face_of(faces[f][(k + 1) % 3], faces[f][k]);
-                if (g != kNone && surface_.alive(g)) {
-                    const std::uint32_t x = piece_of(f), y = piece_of(g);
-                    pieces_[std::max(x, y)] = std::min(x, y);
-                }
+                if (g != kNone && surface_.alive(g))
+                    pieces_.unite(f, g);
             }
         }
     }
     void reset_pieces()
     {
-        pieces_.clear();
+        pieces_ = UnionFind();
         pieces_synced_ = 0;
     }
 
@@ -1231,8 +1203,8 @@ private:
             return false; // not a front edge (cannot happen: the front runs along faces' half-edges)
         // Glued half-edges of another piece join two pieces: no handle.
         sync_pieces();
-        const std::uint32_t mine = piece_of(fab);
-        const bool ac = fac != kNone && piece_of(fac) == mine, cb = fcb != kNone && piece_of(fcb) == mine;
+        const std::uint32_t mine = pieces_.find(fab);
+        const bool ac = fac != kNone && pieces_.find(fac) == mine, cb = fcb != kNone && pieces_.find(fcb) == mine;
         if (!ac && !cb)
             return false;
         // Walk the split-view cycle of b -> a both ways at once (the glued half-edges are usually a step
@@ -1509,7 +1481,7 @@ private:
     std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
     bool allow_handles_ = false;
     std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
-    std::vector<std::uint32_t> pieces_; // see piece_of
+    UnionFind pieces_;                  // see sync_pieces
     std::uint32_t pieces_synced_ = 0;
     UnionFind parts_;          // connected pieces of the surface, over vertices
     std::vector<EdgeState> edges_; // by face and edge, see edge_state
