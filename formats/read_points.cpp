@@ -160,6 +160,9 @@ public:
         }
         if (!line.empty() && line.back() == '\r')
             line.remove_suffix(1);
+        // Windows tools open text files with a UTF-8 byte order mark.
+        if (line_number_ == 0 && line.substr(0, 3) == "\xEF\xBB\xBF")
+            line.remove_prefix(3);
         ++line_number_;
         return true;
     }
@@ -316,13 +319,121 @@ std::uint8_t unit_to_byte(double v) { return static_cast<std::uint8_t>(std::lrou
 // ---------------------------------------------------------------------------------------------------
 // XYZ / PTS / TXT / CSV
 
-PointCloud read_columns(Input& in, const ReadOptions& options, bool csv)
+constexpr Separators kSemicolonSeparators(" \t;");
+
+// Where the coordinates are on a line of a column file, decided on its first content line: files come
+// from spreadsheets and scanner software whose conventions differ, and a misread layout would give a
+// wrong cloud without any error.
+struct ColumnLayout
+{
+    std::array<int, 3> column = {0, 1, 2}; // x, y, z
+    std::array<int, 3> color = {-1, -1, -1}; // red, green, blue (0-255), when the file has them
+    int columns_needed = 3;
+    // "1,5;2,5;3,5" (a European spreadsheet's CSV): semicolons separate, commas are decimal points.
+    bool decimal_comma = false;
+    const Separators* separators = &kColumnSeparators;
+};
+
+std::string lower_name(std::string_view token)
+{
+    std::string name;
+    for (char c : token)
+        if (c != '"' && c != '\'')
+            name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return name;
+}
+
+bool has_all(const std::array<int, 3>& columns) { return columns[0] >= 0 && columns[1] >= 0 && columns[2] >= 0; }
+
+// A line of column names ("x,y,z,intensity", CloudCompare's "//X,Y,Z,R,G,B"): the coordinates are in the
+// columns named x, y and z if all three are named, else in the first three; colours (0-255) in the
+// columns named r, g, b or red, green, blue.
+void read_column_names(std::string_view line, bool keep_colors, ColumnLayout& layout)
+{
+    while (!line.empty() && (line.front() == ' ' || line.front() == '\t'))
+        line.remove_prefix(1);
+    if (line.substr(0, 2) == "//")
+        line.remove_prefix(2);
+    Tokens tokens(line, *layout.separators);
+    static const char* const kColorNames[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
+    std::array<int, 3> named = {-1, -1, -1};
+    std::array<int, 3> color = {-1, -1, -1};
+    std::string_view token;
+    for (int index = 0; tokens.next(token); ++index) {
+        const std::string name = lower_name(token);
+        for (int axis = 0; axis < 3; ++axis) {
+            if (named[axis] < 0 && name == std::string(1, static_cast<char>('x' + axis)))
+                named[axis] = index;
+            if (color[axis] < 0 && (name == kColorNames[axis][0] || name == kColorNames[axis][1]))
+                color[axis] = index;
+        }
+    }
+    if (has_all(named))
+        layout.column = named;
+    if (has_all(color) && keep_colors)
+        layout.color = color;
+    for (int axis = 0; axis < 3; ++axis)
+        layout.columns_needed = std::max({layout.columns_needed, layout.column[axis] + 1, layout.color[axis] + 1});
+}
+
+// Leica's PTS convention without a header: x y z intensity r g b, or x y z r g b.
+void read_pts_colors(std::string_view line, bool keep_colors, ColumnLayout& layout)
+{
+    Tokens tokens(line, *layout.separators);
+    std::string_view token;
+    int count = 0;
+    while (tokens.next(token))
+        ++count;
+    if (!keep_colors || (count != 6 && count != 7))
+        return;
+    const int first = count - 3;
+    layout.color = {first, first + 1, first + 2};
+    layout.columns_needed = count;
+}
+
+// A colour channel from 0 to 255; false for anything else.
+bool color_byte(std::string_view token, std::uint8_t& byte)
+{
+    double value = 0;
+    if (parse_number(token, value) != Parsed::number || value < 0 || value > 255)
+        return false;
+    byte = static_cast<std::uint8_t>(std::lround(value));
+    return true;
+}
+
+bool is_column_names(std::string_view first_token)
+{
+    double ignored = 0;
+    if (first_token.substr(0, 2) == "//")
+        return true;
+    const unsigned char c = static_cast<unsigned char>(first_token.front());
+    return parse_number(first_token, ignored) == Parsed::not_a_number && (std::isalpha(c) || c == '"');
+}
+
+double column_number(const Input& in, std::string_view token, const ColumnLayout& layout)
+{
+    if (!layout.decimal_comma || token.find(',') == std::string_view::npos)
+        return number_on_line(in, token);
+    char buffer[64];
+    if (token.size() > sizeof buffer)
+        return number_on_line(in, token); // too long to be a number: reports it as it is
+    std::replace_copy(token.begin(), token.end(), buffer, ',', '.');
+    return number_on_line(in, std::string_view(buffer, token.size()));
+}
+
+PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
 {
     PointCloud cloud;
+    ColumnLayout layout;
+    bool layout_known = false;
     std::string_view line;
     bool first_content_line = true;
     while (in.next_line(line)) {
-        Tokens tokens(line, kColumnSeparators);
+        if (first_content_line && line.find(';') != std::string_view::npos) {
+            layout.separators = &kSemicolonSeparators;
+            layout.decimal_comma = true;
+        }
+        Tokens tokens(line, *layout.separators);
         std::string_view token;
         if (!tokens.next(token))
             continue;
@@ -334,15 +445,53 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool csv)
             // PTS files (and some XYZ exports) open with the point count on a line of its own.
             if (!rest.next(second) && parse_count(token, count))
                 continue;
-            // A CSV file may open with the column names.
-            double ignored = 0;
-            if (csv && parse_number(token, ignored) == Parsed::not_a_number &&
-                std::isalpha(static_cast<unsigned char>(token[0])))
+            if (is_column_names(token)) {
+                read_column_names(line, options.keep_colors, layout);
+                layout_known = true;
                 continue;
+            }
         }
-        const Vec3 p = position_on_line(in, tokens, token);
+        if (!layout_known) {
+            layout_known = true;
+            if (pts)
+                read_pts_colors(line, options.keep_colors, layout);
+        }
+        // CloudCompare and other tools write "//" comment lines.
+        if (token.substr(0, 2) == "//")
+            continue;
+        std::array<std::string_view, 3> fields;
+        std::array<std::string_view, 3> color_fields;
+        for (int index = 0; index < layout.columns_needed; ++index) {
+            if (index > 0 && !tokens.next(token)) {
+                if (layout.columns_needed == 3)
+                    fail_line(in, "expected 3 coordinates, found " + std::to_string(index));
+                fail_line(in, "expected " + std::to_string(layout.columns_needed) + " columns (as " +
+                                  (pts ? "the first line" : "the header") + " has), found " + std::to_string(index));
+            }
+            for (int axis = 0; axis < 3; ++axis) {
+                if (layout.column[axis] == index)
+                    fields[axis] = token;
+                if (layout.color[axis] == index)
+                    color_fields[axis] = token;
+            }
+        }
+        Vec3 p;
+        for (int axis = 0; axis < 3; ++axis)
+            p[axis] = column_number(in, fields[axis], layout);
         check_max_points(in, cloud.positions.size() + 1, options);
         cloud.positions.push_back(p);
+        if (has_all(layout.color)) {
+            Rgba c = {0, 0, 0, 255};
+            if (color_byte(color_fields[0], c[0]) && color_byte(color_fields[1], c[1]) &&
+                color_byte(color_fields[2], c[2])) {
+                cloud.colors.push_back(c);
+            } else {
+                // Not colours after all (normals, say): the file is read without them.
+                layout.color = {-1, -1, -1};
+                cloud.colors.clear();
+                cloud.colors.shrink_to_fit();
+            }
+        }
     }
     return cloud;
 }
@@ -833,7 +982,7 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
 
 // ---------------------------------------------------------------------------------------------------
 
-enum class Format { ply, columns, csv, obj, off };
+enum class Format { ply, columns, pts, obj, off };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
@@ -846,10 +995,10 @@ Format format_of(const fs::path& path, const std::string& name)
         ext = lower(path.stem().extension().string());
     if (ext == ".ply")
         return Format::ply;
-    if (ext == ".xyz" || ext == ".pts" || ext == ".txt")
+    if (ext == ".pts")
+        return Format::pts;
+    if (ext == ".xyz" || ext == ".txt" || ext == ".csv")
         return Format::columns;
-    if (ext == ".csv")
-        return Format::csv;
     if (ext == ".obj")
         return Format::obj;
     if (ext == ".off")
@@ -869,7 +1018,7 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     switch (format) {
     case Format::ply: cloud = read_ply(in, options); break;
     case Format::columns: cloud = read_columns(in, options, false); break;
-    case Format::csv: cloud = read_columns(in, options, true); break;
+    case Format::pts: cloud = read_columns(in, options, true); break;
     case Format::obj: cloud = read_obj(in, options); break;
     case Format::off: cloud = read_off(in, options); break;
     }

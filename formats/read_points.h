@@ -6,9 +6,15 @@
 //!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
 //!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
 //!    element instance per line (as every writer produces it).
-//!  - XYZ/PTS/TXT/CSV: the first three columns of each line (separated by spaces, tabs, commas or
-//!    semicolons). Blank lines and lines starting with '#' are skipped, so is a first line holding a
-//!    single integer (the point count of PTS files) and, for .csv, a first line of column names.
+//!  - XYZ/PTS/TXT/CSV: three columns of each line (separated by spaces, tabs, commas or semicolons).
+//!    Blank lines, lines starting with '#' or "//" and a UTF-8 byte order mark are skipped, so is a
+//!    first line holding a single integer (the point count of PTS files). A first line of column names
+//!    ("x,y,z,intensity", CloudCompare's "//X,Y,Z,R,G,B") picks the columns named x, y, z (any case, any
+//!    order; else the first three) and r, g, b or red, green, blue as 0-255 colours; without names a
+//!    .pts line of 6 or 7 values is x y z [intensity] r g b (Leica's convention). Colours that are not
+//!    all within 0-255 are dropped (they were something else, normals say). When the first line holds
+//!    a semicolon, semicolons separate and commas are decimal points ("1,5;2,5;3,5", as a European
+//!    spreadsheet writes CSV).
 //!  - OBJ: `v x y z [w]` lines; `v x y z r g b` colours (0..1) are kept when every v line has them.
 //!  - OFF (also COFF, NOFF, STOFF...): the vertices; faces, normals and colours are ignored.
 

@@ -305,6 +305,61 @@ TEST(ReadColumns, separators_comments_count_line_and_header)
     });
 }
 
+// Files from spreadsheets and scanner software: a misread layout would give a wrong cloud with no error.
+TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
+{
+    expect_all_read_as_kpoints({
+        // Column names pick the coordinates, in any order and among other columns.
+        {"named.csv", "id,Z,x,\"Y\"\n0,2,0.5,-1.25\n1,-5.5,3,4.75\n2,8,-0.125,0\n3,1,1,1\n"},
+        {"named.txt", "x y z\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n"},
+        // CloudCompare's header line and comment lines.
+        {"cc.txt", "//X,Y,Z,Intensity\n0.5,-1.25,2,7\n// a comment\n3,4.75,-5.5,7\n-0.125,0,8,7\n1,1,1,7\n"},
+        // A European spreadsheet: semicolons separate, commas are decimal points.
+        {"eu.csv", "X;Y;Z\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        {"eu.xyz", "0,5; -1,25; 2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        // A UTF-8 byte order mark (Windows tools write one).
+        {"bom.xyz", "\xEF\xBB\xBF" "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n"},
+        {"bom.csv", "\xEF\xBB\xBF" "x,y,z\n0.5,-1.25,2\n3,4.75,-5.5\n-0.125,0,8\n1,1,1\n"},
+    });
+    const fs::path dir = test_dir();
+    // A header naming columns the data lines do not have.
+    const fs::path short_line = write_file(dir / "short.csv", "a,b,x,y,z\n1,2,3,4,5\n1,2,3,4\n");
+    expect_error<InvalidInput>([&] { read_points(short_line); }, {short_line.string(), "line 3", "expected 5 columns"});
+}
+
+TEST(ReadColumns, colours_from_named_columns_and_pts_convention)
+{
+    const fs::path dir = test_dir();
+    const auto expect_colors = [](const PointCloud& c, const std::vector<std::array<int, 3>>& rgb) {
+        ASSERT_EQ(c.colors.size(), rgb.size());
+        for (std::size_t i = 0; i < rgb.size(); ++i)
+            EXPECT_EQ((std::array<int, 4>{c.colors[i][0], c.colors[i][1], c.colors[i][2], c.colors[i][3]}),
+                      (std::array<int, 4>{rgb[i][0], rgb[i][1], rgb[i][2], 255}));
+    };
+    const std::vector<std::array<int, 3>> rgb = {{255, 0, 0}, {0, 128, 0}, {1, 2, 3}, {9, 8, 7}};
+    const PointCloud named = read_points(write_file(dir / "c.txt", "//X,Y,Z,R,G,B\n0.5,-1.25,2,255,0,0\n"
+                                                                   "3,4.75,-5.5,0,128,0\n-0.125,0,8,1,2,3\n1,1,1,9,8,7\n"));
+    expect_points(named, kPoints);
+    expect_colors(named, rgb);
+    const PointCloud words = read_points(write_file(dir / "c.csv", "blue,green,red,x,y,z\n0,0,255,0.5,-1.25,2\n"
+                                                                   "0,128,0,3,4.75,-5.5\n3,2,1,-0.125,0,8\n7,8,9,1,1,1\n"));
+    expect_points(words, kPoints);
+    expect_colors(words, rgb);
+    // Leica PTS: x y z intensity r g b.
+    const PointCloud pts = read_points(write_file(dir / "c.pts", "4\n0.5 -1.25 2 -300 255 0 0\n3 4.75 -5.5 12 0 128 0\n"
+                                                                 "-0.125 0 8 0 1 2 3\n1 1 1 5 9 8 7\n"));
+    expect_points(pts, kPoints);
+    expect_colors(pts, rgb);
+    // Six columns that are not colours (normals): the points are read without colours.
+    const PointCloud normals = read_points(write_file(dir / "n.pts", "0.5 -1.25 2 0 0 1\n3 4.75 -5.5 0 -1 0\n"
+                                                                     "-0.125 0 8 1 0 0\n1 1 1 0 0 1\n"));
+    expect_points(normals, kPoints);
+    EXPECT_FALSE(normals.has_colors());
+    ReadOptions no_colors;
+    no_colors.keep_colors = false;
+    EXPECT_FALSE(read_points(dir / "c.txt", no_colors).has_colors());
+}
+
 TEST(ReadObj, vertex_lines_only_and_colours)
 {
     const fs::path dir = test_dir();
