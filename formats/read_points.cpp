@@ -982,7 +982,116 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
 
 // ---------------------------------------------------------------------------------------------------
 
-enum class Format { ply, columns, pts, obj, off };
+// ---------------------------------------------------------------------------------------------------
+// LAS (ASPRS LAS 1.0-1.4, uncompressed): airborne and terrestrial lidar's exchange format.
+
+// Where the public header keeps what we read (the LAS specification's byte offsets).
+constexpr std::size_t kLasHeaderMin = 227; // LAS 1.0-1.2; 1.3 adds 8 bytes, 1.4 adds 148
+constexpr std::size_t kLasHeader14 = 375;
+
+// Smallest point record of each point data format 0-10; records may carry extra bytes after it.
+constexpr std::uint16_t kLasRecordSize[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
+// Where red/green/blue start in the formats that have them, else 0.
+constexpr std::uint16_t kLasColorOffset[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
+
+PointCloud read_las(Input& in, const ReadOptions& options)
+{
+    const char* header = in.take(kLasHeaderMin);
+    if (!header || std::memcmp(header, "LASF", 4) != 0)
+        throw InvalidInput(in.name() + ": not a LAS file (no 'LASF' signature)");
+    const bool swap = !host_is_little_endian();
+    const unsigned major = static_cast<unsigned char>(header[24]);
+    const unsigned minor = static_cast<unsigned char>(header[25]);
+    const std::uint16_t header_size = load<std::uint16_t>(header + 94, swap);
+    const std::uint32_t point_offset = load<std::uint32_t>(header + 96, swap);
+    const unsigned format_byte = static_cast<unsigned char>(header[104]);
+    const std::uint16_t record_size = load<std::uint16_t>(header + 105, swap);
+    std::uint64_t count = load<std::uint32_t>(header + 107, swap);
+    double scale[3], offset[3];
+    for (int axis = 0; axis < 3; ++axis) {
+        scale[axis] = load<double>(header + 131 + 8 * axis, swap);
+        offset[axis] = load<double>(header + 155 + 8 * axis, swap);
+    }
+    const std::string version = std::to_string(major) + "." + std::to_string(minor);
+    if (major != 1 || minor > 4)
+        throw InvalidInput(in.name() + ": LAS version " + version + " is not supported (1.0 to 1.4 are)");
+    // LASzip marks compressed point data by setting the top bits of the format.
+    if (format_byte & 0xC0)
+        throw InvalidInput(in.name() + ": LAZ-compressed points; decompress first (laszip -i IN.laz -o OUT.las, "
+                                       "or pdal translate)");
+    const unsigned format = format_byte;
+    if (format > 10)
+        throw InvalidInput(in.name() + ": unknown LAS point data format " + std::to_string(format));
+    if (record_size < kLasRecordSize[format])
+        throw InvalidInput(in.name() + ": LAS point records of " + std::to_string(record_size) +
+                           " bytes are shorter than format " + std::to_string(format) + " needs (" +
+                           std::to_string(kLasRecordSize[format]) + ")");
+    if (header_size < kLasHeaderMin || point_offset < header_size)
+        throw InvalidInput(in.name() + ": malformed LAS header (header size " + std::to_string(header_size) +
+                           ", points at byte " + std::to_string(point_offset) + ")");
+    for (int axis = 0; axis < 3; ++axis)
+        if (!std::isfinite(scale[axis]) || scale[axis] == 0 || !std::isfinite(offset[axis]))
+            throw InvalidInput(in.name() + ": LAS scale or offset of " + std::string(1, static_cast<char>('x' + axis)) +
+                               " is zero or not finite");
+    // LAS 1.4 keeps a 64-bit count (the 32-bit one is 0 for formats 6-10 and for large files).
+    if (major == 1 && minor >= 4 && header_size >= kLasHeader14) {
+        const char* extended = in.take(kLasHeader14 - kLasHeaderMin);
+        if (!extended)
+            throw IoError(in.name() + ": truncated: the LAS header ends early");
+        const std::uint64_t count64 = load<std::uint64_t>(extended + (247 - kLasHeaderMin), swap);
+        if (count64 != 0)
+            count = count64;
+    }
+    check_max_points(in, count, options);
+    // Before allocating anything, check that an uncompressed file can hold what the header declares.
+    const std::uint64_t needed = saturating_add(point_offset, saturating_mul(count, record_size));
+    if (in.file_size() > 0 && needed > in.file_size())
+        throw IoError(in.name() + ": truncated: the header declares " + std::to_string(count) + " points (" +
+                      std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) + " bytes");
+    if (!in.skip(point_offset - in.offset()))
+        throw IoError(in.name() + ": truncated: the file ends before its point data");
+
+    PointCloud cloud;
+    reserve_capped(cloud, count, in.file_size() > 0 ? SIZE_MAX : kReserveCap, false);
+    const std::uint16_t color_offset = options.keep_colors ? kLasColorOffset[format] : 0;
+    std::vector<std::array<std::uint16_t, 3>> colors16;
+    bool colors_16_bit = false;
+    for (std::uint64_t i = 0; i < count; ++i) {
+        const char* record = in.take(record_size);
+        if (!record)
+            throw IoError(in.name() + ": truncated: " + std::to_string(i) + " of " + std::to_string(count) +
+                          " points");
+        // Withheld points and points classified as noise are not part of the surface.
+        const unsigned char flags = static_cast<unsigned char>(record[15]);
+        const bool withheld = format < 6 ? (flags & 0x80) != 0 : (flags & 0x04) != 0;
+        const unsigned classification = format < 6 ? (flags & 0x1Fu) : static_cast<unsigned char>(record[16]);
+        if (withheld || classification == 7 || classification == 18)
+            continue;
+        Vec3 p;
+        for (int axis = 0; axis < 3; ++axis)
+            p[axis] = load<std::int32_t>(record + 4 * axis, swap) * scale[axis] + offset[axis];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw InvalidInput(in.name() + ": point " + std::to_string(i) + " is out of range after scaling");
+        cloud.positions.push_back(p);
+        if (color_offset > 0) {
+            std::array<std::uint16_t, 3> c;
+            for (int k = 0; k < 3; ++k) {
+                c[static_cast<std::size_t>(k)] = load<std::uint16_t>(record + color_offset + 2 * k, swap);
+                colors_16_bit = colors_16_bit || c[static_cast<std::size_t>(k)] > 255;
+            }
+            colors16.push_back(c);
+        }
+    }
+    // The specification asks for 16-bit colours, but many writers store 0-255 values: any value above
+    // 255 means the file uses the full range.
+    for (const auto& c : colors16)
+        cloud.colors.push_back({static_cast<std::uint8_t>(colors_16_bit ? c[0] >> 8 : c[0]),
+                                static_cast<std::uint8_t>(colors_16_bit ? c[1] >> 8 : c[1]),
+                                static_cast<std::uint8_t>(colors_16_bit ? c[2] >> 8 : c[2]), 255});
+    return cloud;
+}
+
+enum class Format { ply, columns, pts, obj, off, las };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
@@ -997,6 +1106,11 @@ Format format_of(const fs::path& path, const std::string& name)
         return Format::ply;
     if (ext == ".pts")
         return Format::pts;
+    if (ext == ".las")
+        return Format::las;
+    if (ext == ".laz")
+        throw InvalidInput(name + ": LAZ (compressed LAS) is not read; decompress first (laszip -i IN.laz -o "
+                                  "OUT.las, or pdal translate)");
     if (ext == ".xyz" || ext == ".txt" || ext == ".csv")
         return Format::columns;
     if (ext == ".obj")
@@ -1004,7 +1118,7 @@ Format format_of(const fs::path& path, const std::string& name)
     if (ext == ".off")
         return Format::off;
     throw InvalidInput(name + ": unknown point file extension " + (ext.empty() ? "(none)" : quote_token(ext)) +
-                       "; expected .ply, .xyz, .pts, .txt, .csv, .obj or .off (optionally .gz)");
+                       "; expected .ply, .las, .xyz, .pts, .txt, .csv, .obj or .off (optionally .gz)");
 }
 
 } // namespace
@@ -1019,6 +1133,7 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     case Format::ply: cloud = read_ply(in, options); break;
     case Format::columns: cloud = read_columns(in, options, false); break;
     case Format::pts: cloud = read_columns(in, options, true); break;
+    case Format::las: cloud = read_las(in, options); break;
     case Format::obj: cloud = read_obj(in, options); break;
     case Format::off: cloud = read_off(in, options); break;
     }

@@ -540,6 +540,169 @@ TEST(ReadRealScans, igea_binary_matches_ascii_reencoding)
 
 // --- bad input ---------------------------------------------------------------------------------
 
+// --- LAS ------------------------------------------------------------------------------------------
+
+// A LAS file of the given version and point format holding `points` (and one colour per point if the
+// format has colours), with `gap` bytes of variable-length records before the points and `extra` bytes
+// after each record. Scales are powers of two so that the coordinates come back exactly.
+struct LasFile
+{
+    int minor = 2;
+    int format = 3;
+    int gap = 54;
+    int extra = 4;
+    std::vector<Vec3> points = kPoints;
+    std::vector<std::array<std::uint16_t, 3>> colors;
+    std::vector<unsigned char> classification; // per point, 0 if empty
+    std::vector<bool> withheld;
+    std::uint64_t declared = 0; // point count in the header, 0 = the real count
+
+    std::string bytes() const
+    {
+        static const int kSize[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
+        static const int kColor[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
+        const double scale[3] = {1.0 / 1024, 1.0 / 64, 1.0 / 256};
+        const double offset[3] = {500000, 4100000, 100};
+        const int header_size = minor >= 4 ? 375 : minor == 3 ? 235 : 227;
+        const int record = kSize[format] + extra;
+        const std::uint64_t count = declared ? declared : points.size();
+        Bytes h;
+        h.data = "LASF" + std::string(20, '\0');
+        h.put(static_cast<std::uint8_t>(1));
+        h.put(static_cast<std::uint8_t>(minor));
+        h.data += std::string(64, ' ') + std::string(4, '\0'); // system, software, day, year
+        h.put(static_cast<std::uint16_t>(header_size));
+        h.put(static_cast<std::uint32_t>(header_size + gap));
+        h.put(static_cast<std::uint32_t>(gap > 0 ? 1 : 0));
+        h.put(static_cast<std::uint8_t>(format));
+        h.put(static_cast<std::uint16_t>(record));
+        h.put(static_cast<std::uint32_t>(format >= 6 ? 0 : count));
+        h.data += std::string(20, '\0');
+        for (double s : scale)
+            h.put(s);
+        for (double o : offset)
+            h.put(o);
+        h.data += std::string(48, '\0'); // bounds
+        if (minor >= 3)
+            h.data += std::string(8, '\0');
+        if (minor >= 4) {
+            h.data += std::string(12, '\0');
+            h.put(count);
+            h.data += std::string(120, '\0');
+        }
+        EXPECT_EQ(h.data.size(), static_cast<std::size_t>(header_size));
+        h.data += std::string(static_cast<std::size_t>(gap), 'v');
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            Bytes r;
+            for (int a = 0; a < 3; ++a)
+                r.put(static_cast<std::int32_t>((points[i][a] - offset[a]) / scale[a]));
+            r.data += std::string(static_cast<std::size_t>(record - 12), '\0');
+            const unsigned char cls = i < classification.size() ? classification[i] : 1;
+            const bool held = i < withheld.size() && withheld[i];
+            if (format < 6) {
+                r.data[15] = static_cast<char>(cls | (held ? 0x80 : 0));
+            } else {
+                r.data[15] = static_cast<char>(held ? 0x04 : 0);
+                r.data[16] = static_cast<char>(cls);
+            }
+            if (i < colors.size())
+                for (int k = 0; k < 3; ++k) {
+                    const std::uint16_t c = colors[i][static_cast<std::size_t>(k)];
+                    std::memcpy(&r.data[static_cast<std::size_t>(kColor[format] + 2 * k)], &c, 2);
+                }
+            h.data += r.data;
+        }
+        return h.data;
+    }
+};
+
+TEST(ReadLas, versions_formats_scales_and_colours)
+{
+    const fs::path dir = test_dir();
+    // LAS 1.2, format 3 (GPS time and colours), colours stored as 0-255 as many writers do.
+    LasFile v12;
+    v12.colors = {{255, 0, 0}, {0, 128, 0}, {1, 2, 3}, {9, 8, 7}};
+    const PointCloud a = read_points(write_file(dir / "a.las", v12.bytes()));
+    expect_points(a, kPoints);
+    ASSERT_EQ(a.colors.size(), 4u);
+    EXPECT_EQ(a.colors[1][1], 128);
+    EXPECT_EQ(a.colors[2][2], 3);
+    // The same points through gzip and in formats without colours and 1.0-1.3 headers.
+    expect_points(read_points(write_gz(dir / "a.las.gz", v12.bytes())), kPoints);
+    for (int format : {0, 1, 4}) {
+        LasFile plain;
+        plain.format = format;
+        plain.minor = format == 4 ? 3 : 0;
+        plain.gap = 0;
+        SCOPED_TRACE(format);
+        const PointCloud c = read_points(write_file(dir / "p.las", plain.bytes()));
+        expect_points(c, kPoints);
+        EXPECT_FALSE(c.has_colors());
+    }
+    // LAS 1.4, format 7: the 64-bit count, full-range 16-bit colours, and two points left out (one
+    // withheld, one classified as noise).
+    LasFile v14;
+    v14.minor = 4;
+    v14.format = 7;
+    v14.points = {kPoints[0], {9, 9, 9}, kPoints[1], kPoints[2], {7, 7, 7}, kPoints[3]};
+    v14.colors = {{65535, 0, 0}, {1, 1, 1}, {0, 32768, 0}, {256, 512, 768}, {1, 1, 1}, {2304, 2048, 1792}};
+    v14.withheld = {false, true, false, false, false, false};
+    v14.classification = {2, 2, 2, 2, 18, 6};
+    const PointCloud b = read_points(write_file(dir / "b.las", v14.bytes()));
+    expect_points(b, kPoints);
+    ASSERT_EQ(b.colors.size(), 4u);
+    EXPECT_EQ(b.colors[0][0], 255);
+    EXPECT_EQ(b.colors[1][1], 128);
+    EXPECT_EQ((std::array<int, 3>{b.colors[2][0], b.colors[2][1], b.colors[2][2]}), (std::array<int, 3>{1, 2, 3}));
+    EXPECT_EQ(b.colors[3][0], 9);
+}
+
+TEST(ReadLas, malformed_files_fail_cleanly)
+{
+    const fs::path dir = test_dir();
+    const std::string good = LasFile().bytes();
+    struct Case { std::string name, bytes, expect; bool io; };
+    std::string laz = good;
+    laz[104] = static_cast<char>(3 | 0x80);
+    std::string zero_scale = good;
+    std::memset(&zero_scale[139], 0, 8);
+    std::string short_record = good;
+    short_record[105] = 20; // format 3 needs 34 bytes
+    std::string version = good;
+    version[25] = 9;
+    std::string bad_offset = good;
+    bad_offset[96] = 10; // points "inside" the header
+    bad_offset[97] = bad_offset[98] = bad_offset[99] = 0;
+    LasFile absurd;
+    absurd.declared = 4000000000u;
+    LasFile noise_only;
+    noise_only.classification = {7, 7, 7, 7};
+    const std::vector<Case> cases = {
+        {"sig.las", "LASX" + good.substr(4), "not a LAS file", false},
+        {"tiny.las", good.substr(0, 100), "not a LAS file", false},
+        {"laz.las", laz, "LAZ-compressed", false},
+        {"scale.las", zero_scale, "scale or offset of y", false},
+        {"short.las", short_record, "shorter than format 3", false},
+        {"version.las", version, "version 1.9", false},
+        {"offset.las", bad_offset, "malformed LAS header", false},
+        {"cut.las", good.substr(0, good.size() - 10), "truncated", true},
+        {"absurd.las", absurd.bytes(), "4000000000 points", true},
+        {"noise.las", noise_only.bytes(), "no points", false},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const fs::path path = write_file(dir / c.name, c.bytes);
+        if (c.io)
+            expect_error<IoError>([&] { read_points(path); }, {path.string(), c.expect});
+        else
+            expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect});
+    }
+    const fs::path cut_gz = write_gz(dir / "cut.las.gz", good.substr(0, good.size() - 10));
+    expect_error<IoError>([&] { read_points(cut_gz); }, {cut_gz.string(), "truncated", "3 of 4 points"});
+    const fs::path laz_file = write_file(dir / "a.laz", good);
+    expect_error<InvalidInput>([&] { read_points(laz_file); }, {laz_file.string(), "decompress first"});
+}
+
 TEST(ReadErrors, missing_file_directory_and_unknown_extension)
 {
     const fs::path dir = test_dir();
@@ -547,8 +710,8 @@ TEST(ReadErrors, missing_file_directory_and_unknown_extension)
     expect_error<IoError>([&] { read_points(missing); }, {missing.string(), "no such file"});
     fs::create_directories(dir / "folder.xyz");
     expect_error<IoError>([&] { read_points(dir / "folder.xyz"); }, {(dir / "folder.xyz").string(), "directory"});
-    const fs::path las = write_file(dir / "scan.las", "LASF");
-    expect_error<InvalidInput>([&] { read_points(las); }, {las.string(), "'.las'"});
+    const fs::path e57 = write_file(dir / "scan.e57", "ASTM-E57");
+    expect_error<InvalidInput>([&] { read_points(e57); }, {e57.string(), "'.e57'"});
     const fs::path none = write_file(dir / "scan", "1 2 3\n");
     expect_error<InvalidInput>([&] { read_points(none); }, {none.string(), "extension"});
 }
