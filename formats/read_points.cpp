@@ -983,6 +983,82 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
 // ---------------------------------------------------------------------------------------------------
 
 // ---------------------------------------------------------------------------------------------------
+// PTX (Leica, FARO and other terrestrial scanners' export): scans one after another, each a header of
+// columns, rows, the scanner position and axes and a 4x4 registration matrix, then columns x rows
+// lines "x y z intensity [r g b]" in the scanner's frame, "0 0 0" where the laser saw nothing.
+
+// The next line's numbers; false at the end of the input. Blank lines are skipped.
+bool next_numbers(Input& in, std::vector<double>& values)
+{
+    std::string_view line;
+    while (in.next_line(line)) {
+        Tokens tokens(line, kBlanks);
+        std::string_view token;
+        values.clear();
+        while (tokens.next(token))
+            values.push_back(number_on_line(in, token));
+        if (!values.empty())
+            return true;
+    }
+    return false;
+}
+
+PointCloud read_ptx(Input& in, const ReadOptions& options)
+{
+    PointCloud cloud;
+    std::vector<Rgba> colors;
+    bool all_colored = options.keep_colors;
+    std::vector<double> v;
+    for (int scan = 1; next_numbers(in, v); ++scan) {
+        const std::string where = "scan " + std::to_string(scan);
+        std::uint64_t size[2] = {0, 0};
+        for (int k = 0; k < 2; ++k) {
+            if (k > 0 && !next_numbers(in, v))
+                throw IoError(in.name() + ": truncated: " + where + " header ends early");
+            if (v.size() != 1 || !(v[0] >= 0 && v[0] <= 1e9) || v[0] != std::floor(v[0]))
+                fail_line(in, "expected the " + where + (k == 0 ? " column" : " row") + " count");
+            size[k] = static_cast<std::uint64_t>(v[0]);
+        }
+        double m[4][4];
+        for (int row = 0; row < 8; ++row) {
+            if (!next_numbers(in, v))
+                throw IoError(in.name() + ": truncated: " + where + " header ends early");
+            const std::size_t expected = row < 4 ? 3 : 4;
+            if (v.size() != expected)
+                fail_line(in, "expected " + std::to_string(expected) + " numbers in the " + where + " header, found " +
+                                  std::to_string(v.size()));
+            if (row >= 4)
+                std::copy(v.begin(), v.end(), m[row - 4]);
+        }
+        const std::uint64_t count = size[0] * size[1];
+        for (std::uint64_t i = 0; i < count; ++i) {
+            if (!next_numbers(in, v))
+                throw IoError(in.name() + ": truncated: " + where + " has " + std::to_string(i) + " of " +
+                              std::to_string(count) + " points");
+            if (v.size() < 3)
+                fail_line(in, "expected 3 coordinates, found " + std::to_string(v.size()));
+            if (v[0] == 0 && v[1] == 0 && v[2] == 0)
+                continue; // no return
+            // Row vectors: [x y z 1] times the matrix, whose last row is the translation.
+            Vec3 p;
+            for (int axis = 0; axis < 3; ++axis)
+                p[axis] = v[0] * m[0][axis] + v[1] * m[1][axis] + v[2] * m[2][axis] + m[3][axis];
+            check_max_points(in, cloud.positions.size() + 1, options);
+            cloud.positions.push_back(p);
+            if (all_colored && v.size() == 7 && v[4] >= 0 && v[4] <= 255 && v[5] >= 0 && v[5] <= 255 &&
+                v[6] >= 0 && v[6] <= 255)
+                colors.push_back({static_cast<std::uint8_t>(std::lround(v[4])), static_cast<std::uint8_t>(std::lround(v[5])),
+                                  static_cast<std::uint8_t>(std::lround(v[6])), 255});
+            else
+                all_colored = false;
+        }
+    }
+    if (all_colored)
+        cloud.colors = std::move(colors);
+    return cloud;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // LAS (ASPRS LAS 1.0-1.4, uncompressed): airborne and terrestrial lidar's exchange format.
 
 // Where the public header keeps what we read (the LAS specification's byte offsets).
@@ -1091,7 +1167,7 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     return cloud;
 }
 
-enum class Format { ply, columns, pts, obj, off, las };
+enum class Format { ply, columns, pts, ptx, obj, off, las };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
@@ -1108,6 +1184,8 @@ Format format_of(const fs::path& path, const std::string& name)
         return Format::pts;
     if (ext == ".las")
         return Format::las;
+    if (ext == ".ptx")
+        return Format::ptx;
     if (ext == ".laz")
         throw InvalidInput(name + ": LAZ (compressed LAS) is not read; decompress first (laszip -i IN.laz -o "
                                   "OUT.las, or pdal translate)");
@@ -1118,7 +1196,7 @@ Format format_of(const fs::path& path, const std::string& name)
     if (ext == ".off")
         return Format::off;
     throw InvalidInput(name + ": unknown point file extension " + (ext.empty() ? "(none)" : quote_token(ext)) +
-                       "; expected .ply, .las, .xyz, .pts, .txt, .csv, .obj or .off (optionally .gz)");
+                       "; expected .ply, .las, .ptx, .xyz, .pts, .txt, .csv, .obj or .off (optionally .gz)");
 }
 
 } // namespace
@@ -1134,6 +1212,7 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     case Format::columns: cloud = read_columns(in, options, false); break;
     case Format::pts: cloud = read_columns(in, options, true); break;
     case Format::las: cloud = read_las(in, options); break;
+    case Format::ptx: cloud = read_ptx(in, options); break;
     case Format::obj: cloud = read_obj(in, options); break;
     case Format::off: cloud = read_off(in, options); break;
     }

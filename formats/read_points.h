@@ -1,7 +1,7 @@
 #pragma once
 //! \file read_points.h
-//! \brief Point readers: PLY (ascii, binary little/big endian), LAS 1.0-1.4, XYZ/PTS/TXT/CSV, OBJ (v lines),
-//! OFF, each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
+//! \brief Point readers: PLY (ascii, binary little/big endian), LAS 1.0-1.4, PTX, XYZ/PTS/TXT/CSV, OBJ
+//! (v lines), OFF, each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
 //! \details What is read from each format:
 //!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
 //!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
@@ -10,6 +10,9 @@
 //!    16-bit, or 0-255 as many writers store them: read as 0-255 unless some value exceeds 255).
 //!    Withheld points and points classified as noise (classes 7 and 18) are left out. LAZ-compressed
 //!    files are refused with a hint (no LASzip here).
+//!  - PTX (terrestrial scanners): every scan, each through its registration matrix (row vectors, the
+//!    translation in the last row); "0 0 0" points (no return) are left out; x y z intensity r g b
+//!    colours are kept when every point has them.
 //!  - XYZ/PTS/TXT/CSV: three columns of each line (separated by spaces, tabs, commas or semicolons).
 //!    Blank lines, lines starting with '#' or "//" and a UTF-8 byte order mark are skipped, so is a
 //!    first line holding a single integer (the point count of PTS files). A first line of column names

@@ -540,6 +540,59 @@ TEST(ReadRealScans, igea_binary_matches_ascii_reencoding)
 
 // --- bad input ---------------------------------------------------------------------------------
 
+// --- PTX ------------------------------------------------------------------------------------------
+
+// A file that must fail: its name, its bytes, a part of the message, and whether it is an IoError
+// (truncation) rather than InvalidInput.
+struct ReadErrorCase { std::string name, bytes, expect; bool io; };
+
+void expect_read_errors(const fs::path& dir, const std::vector<ReadErrorCase>& cases)
+{
+    for (const ReadErrorCase& c : cases) {
+        SCOPED_TRACE(c.name);
+        const fs::path path = write_file(dir / c.name, c.bytes);
+        if (c.io)
+            expect_error<IoError>([&] { read_points(path); }, {path.string(), c.expect});
+        else
+            expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect});
+    }
+}
+
+// Two scans: the first in the registered frame already (identity), with a "no return" point; the second
+// rotated 90 degrees about z and moved by (10, 20, 30).
+std::string ptx_file(bool second_colored)
+{
+    std::string s = "3\n1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+    s += "0.5 -1.25 2 0.5 255 0 0\n0 0 0 0.5 0 0 0\n3 4.75 -5.5 0.25 0 128 0\n";
+    s += "1\n2\n10 20 30\n0 1 0\n-1 0 0\n0 0 1\n0 1 0 0\n-1 0 0 0\n0 0 1 0\n10 20 30 1\n";
+    s += second_colored ? "-20 10.125 -22 0.1 1 2 3\n-19 9 -29 0.9 9 8 7\n" : "-20 10.125 -22 0.1\n-19 9 -29 0.9\n";
+    return s;
+}
+
+TEST(ReadPtx, scans_registered_no_returns_dropped_and_colours)
+{
+    const fs::path dir = test_dir();
+    const PointCloud colored = read_points(write_file(dir / "a.ptx", ptx_file(true)));
+    expect_points(colored, kPoints);
+    ASSERT_EQ(colored.colors.size(), 4u);
+    EXPECT_EQ(colored.colors[1][1], 128);
+    EXPECT_EQ(colored.colors[3][2], 7);
+    const PointCloud plain = read_points(write_gz(dir / "b.ptx.gz", ptx_file(false)));
+    expect_points(plain, kPoints);
+    EXPECT_FALSE(plain.has_colors());
+
+    const std::string good = ptx_file(true);
+    const std::vector<ReadErrorCase> cases = {
+        {"cut.ptx", good.substr(0, good.size() - 24), "scan 2 has 1 of 2 points", true},
+        {"header.ptx", good.substr(0, 28), "scan 1 header ends early", true},
+        {"count.ptx", "3.5\n1\n" + good.substr(4), "line 1: expected the scan 1 column count", false},
+        {"matrix.ptx", "1\n1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0\n", "line 7: expected 4 numbers", false},
+        {"nan.ptx", "1\n1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n1 nan 2 0\n", "line 11", false},
+        {"empty.ptx", "1\n1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n0 0 0 0\n", "no points", false},
+    };
+    expect_read_errors(dir, cases);
+}
+
 // --- LAS ------------------------------------------------------------------------------------------
 
 // A LAS file of the given version and point format holding `points` (and one colour per point if the
@@ -661,7 +714,6 @@ TEST(ReadLas, malformed_files_fail_cleanly)
 {
     const fs::path dir = test_dir();
     const std::string good = LasFile().bytes();
-    struct Case { std::string name, bytes, expect; bool io; };
     std::string laz = good;
     laz[104] = static_cast<char>(3 | 0x80);
     std::string zero_scale = good;
@@ -677,7 +729,7 @@ TEST(ReadLas, malformed_files_fail_cleanly)
     absurd.declared = 4000000000u;
     LasFile noise_only;
     noise_only.classification = {7, 7, 7, 7};
-    const std::vector<Case> cases = {
+    const std::vector<ReadErrorCase> cases = {
         {"sig.las", "LASX" + good.substr(4), "not a LAS file", false},
         {"tiny.las", good.substr(0, 100), "not a LAS file", false},
         {"laz.las", laz, "LAZ-compressed", false},
@@ -689,14 +741,7 @@ TEST(ReadLas, malformed_files_fail_cleanly)
         {"absurd.las", absurd.bytes(), "4000000000 points", true},
         {"noise.las", noise_only.bytes(), "no points", false},
     };
-    for (const Case& c : cases) {
-        SCOPED_TRACE(c.name);
-        const fs::path path = write_file(dir / c.name, c.bytes);
-        if (c.io)
-            expect_error<IoError>([&] { read_points(path); }, {path.string(), c.expect});
-        else
-            expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect});
-    }
+    expect_read_errors(dir, cases);
     const fs::path cut_gz = write_gz(dir / "cut.las.gz", good.substr(0, good.size() - 10));
     expect_error<IoError>([&] { read_points(cut_gz); }, {cut_gz.string(), "truncated", "3 of 4 points"});
     const fs::path laz_file = write_file(dir / "a.laz", good);
