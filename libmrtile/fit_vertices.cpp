@@ -174,16 +174,8 @@ double squared_error(const std::vector<Vec3>& points, const std::vector<std::uin
 // within 60 degrees of the old pair's normal. The two faces of a flip are not touched again in the
 // pass (their points are stale). On a mesh with tile ids (mesh.h), a flipped face keeps its tile id only
 // if both faces had the same one, and becomes a gap face otherwise.
-// Whether triangle (p, q, r) has an area that is more than rounding noise for its size.
-bool has_area(const Vec3& p, const Vec3& q, const Vec3& r)
-{
-    const double scale = std::max({squared_distance(p, q), squared_distance(q, r), squared_distance(r, p)});
-    const Vec3 n = cross(q - p, r - p);
-    return dot(n, n) > 1e-20 * scale * scale;
-}
-
 std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest, const Vec3* up,
-                       const std::vector<Mesh::Point>& start_position)
+                       const std::vector<Mesh::Point>& start_position, double max_angle)
 {
     OpenMesh::FPropHandleT<int> tile;
     OpenMesh::FPropHandleT<bool> gap;
@@ -224,6 +216,11 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
             continue;
         if (up && (!(dot(n0, *up) > 0.0) || !(dot(n1, *up) > 0.0)))
             continue; // a height field stays a graph
+        // No flip makes a cap (a face with an angle near 180 degrees) that was not there: its normal
+        // is noise, and a cap fits a ridge of points only as a crease that shading shows.
+        if (std::max(largest_angle(c, a, d), largest_angle(d, b, c)) >
+            std::max({max_angle, largest_angle(a, b, c), largest_angle(b, a, d)}))
+            continue;
         const double before = squared_error(points, ids0, ids1, old0, old1);
         const double after = squared_error(points, ids0, ids1, new0, new1);
         if (!(after < 0.98 * before))
@@ -487,7 +484,8 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         move_vertices(mesh, heights, direction, options.max_move, stats, moved_sum, moved_count);
         if (options.flip_edges) {
             const Vec3 up = normalized(options.axis);
-            stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr, start_position);
+            stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr, start_position,
+                                      options.max_flip_angle_degrees * std::acos(-1.0) / 180.0);
         }
         ++stats.rounds;
     }

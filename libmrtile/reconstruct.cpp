@@ -73,6 +73,14 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         fit.vertical = true;
         fit.axis = result.surface.height_field_axis;
     }
+    SliverOptions slivers = options.slivers;
+    if (result.surface.height_field_used) {
+        slivers.vertical = true;
+        slivers.axis = result.surface.height_field_axis;
+    }
+    // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
+    // no new caps: FitOptions::max_flip_angle_degrees).
+    result.slivers = remove_slivers(result.mesh, slivers);
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

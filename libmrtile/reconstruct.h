@@ -14,6 +14,7 @@
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/refine_fans.h"
+#include "libmrtile/remove_slivers.h"
 #include "libmrtile/surface.h"
 #include "libmrtile/tiles.h"
 
@@ -26,6 +27,8 @@ struct MeshOptions
     FanRefineOptions refine; //!< interior vertices where a fan deviates from its tile (refine_fans.h)
     //! vertex positions fitted to the points, last (fit_vertices.h); vertical in height-field mode
     FitOptions fit;
+    //! caps and needles flipped and collapsed away, after the fit (remove_slivers.h)
+    SliverOptions slivers;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
     //! of at most three tiles, while other pieces exist, are refined (replaced by their children) up to
@@ -44,7 +47,8 @@ struct MeshResult
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     FitStats fit;                   //!< the vertex fit (fit_vertices)
-    double seconds = 0.0; //!< tiles + surface + fit
+    SliverStats slivers;            //!< caps and needles removed (remove_slivers)
+    double seconds = 0.0; //!< tiles + surface + fit + slivers
 };
 
 //! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.

@@ -4,6 +4,7 @@
 //! \details Positions are stored relative to a double origin (see point_cloud.h), so doubles keep
 //! georeferenced clouds as accurate as clouds near the origin.
 
+#include <algorithm>
 #include <cmath>
 
 namespace mrt {
@@ -87,6 +88,24 @@ inline Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& 
 inline double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
 {
     return distance(p, closest_point_on_triangle(p, a, b, c));
+}
+
+//! The largest angle of triangle (p, q, r), in radians (near pi for a cap).
+inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
+{
+    const auto corner = [](const Vec3& u, const Vec3& v, const Vec3& w) {
+        const Vec3 x = u - w, y = v - w;
+        return std::atan2(norm(cross(x, y)), dot(x, y));
+    };
+    return std::max({corner(q, r, p), corner(r, p, q), corner(p, q, r)});
+}
+
+//! Whether triangle (p, q, r) has an area that is more than rounding noise for its size.
+inline bool has_area(const Vec3& p, const Vec3& q, const Vec3& r)
+{
+    const double scale = std::max({squared_distance(p, q), squared_distance(q, r), squared_distance(r, p)});
+    const Vec3 n = cross(q - p, r - p);
+    return dot(n, n) > 1e-20 * scale * scale;
 }
 
 } // namespace mrt
