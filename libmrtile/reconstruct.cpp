@@ -158,6 +158,7 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
         q.point_to_mesh = point_to_mesh_distance(h.cloud.positions, mesh);
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();
+    q.caps = count_caps(mesh);
     return q;
 }
 

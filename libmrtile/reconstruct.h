@@ -81,6 +81,8 @@ struct QualityReport
     DistanceStats point_to_mesh;
     //! Pairs of faces that intersect geometrically (self_intersecting_faces); 0 for a clean surface.
     std::size_t self_intersections = 0;
+    //! Faces with an angle above 150 degrees (count_caps): their normals are noise, which shading shows.
+    std::size_t caps = 0;
 };
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);

@@ -205,6 +205,18 @@ private:
 
 } // namespace
 
+std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees)
+{
+    const double limit = cap_angle_degrees * kPi / 180.0;
+    std::size_t caps = 0;
+    for (const auto f : mesh.faces()) {
+        auto fv = mesh.cfv_iter(f);
+        const Vec3 p = point(mesh, *fv), q = point(mesh, *++fv), r = point(mesh, *++fv);
+        caps += largest_angle(p, q, r) > limit;
+    }
+    return caps;
+}
+
 SliverStats remove_slivers(Mesh& mesh, const SliverOptions& options)
 {
     if (!(options.cap_angle_degrees > 90.0 && options.cap_angle_degrees <= 180.0) ||

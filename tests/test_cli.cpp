@@ -143,6 +143,9 @@ TEST(Cli, build_info_mesh_and_determinism)
         EXPECT_TRUE(stats.contains(key)) << key;
     EXPECT_EQ(stats["nonmanifold_edges"], 0);
     EXPECT_EQ(stats["nonmanifold_vertices"], 0);
+    // Caps (faces with an angle above 150 degrees) are flipped away: a handful at most are left.
+    ASSERT_TRUE(stats.contains("caps"));
+    EXPECT_LT(stats["caps"].get<std::size_t>() * 50, stats["faces"].get<std::size_t>());
     EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.xyz").string(), dir).code, 2);
 
     // Exports: a georeferenced Draco tileset and the single-file MSFT_lod GLB.

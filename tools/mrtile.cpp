@@ -317,6 +317,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["fit_clamped"] = r.fit.clamped;
     j["fit_flips"] = r.fit.flips;
     j["fit_reverted"] = r.fit.reverted;
+    j["sliver_flips"] = r.slivers.flips;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {
@@ -328,6 +329,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["consistently_oriented"] = q->topology.consistently_oriented;
         j["e_rms"] = q->e_rms;
         j["self_intersections"] = q->self_intersections;
+        j["caps"] = q->caps;
         j["mean_distance"] = q->point_to_mesh.mean;
         j["max_distance"] = q->point_to_mesh.max;
         j["median_distance"] = q->point_to_mesh.median;
