@@ -23,11 +23,22 @@ Vec3 point(const Mesh& mesh, Mesh::VertexHandle vh) { return to_vec3(mesh.point(
 
 Vec3 triangle_normal(const Vec3& p, const Vec3& q, const Vec3& r) { return normalized(cross(q - p, r - p)); }
 
+// Whether triangle (p, q, r) has an angle whose cosine is below cos_limit (< 0): the law of cosines at
+// the corner opposite the longest edge, without trigonometry (this runs for every face of a mesh).
+bool is_cap_triangle(const Vec3& p, const Vec3& q, const Vec3& r, double cos_limit)
+{
+    const double a = squared_distance(q, r), b = squared_distance(r, p), c = squared_distance(p, q);
+    const double longest = std::max({a, b, c});
+    const double others = a + b + c - longest;
+    const double product = longest == a ? b * c : longest == b ? a * c : a * b;
+    return others - longest < 2.0 * std::sqrt(product) * cos_limit;
+}
+
 class SliverRemover
 {
 public:
     SliverRemover(Mesh& mesh, const SliverOptions& options)
-        : mesh_(mesh), options_(options), cap_angle_(options.cap_angle_degrees * kPi / 180.0),
+        : mesh_(mesh), options_(options), cap_cos_(std::cos(options.cap_angle_degrees * kPi / 180.0)),
           min_cos_(std::cos(options.max_turn_degrees * kPi / 180.0)), up_(normalized(options.axis))
     {
         has_tiles_ = mesh_.get_property_handle(tile_, kFaceTile) && mesh_.get_property_handle(gap_, kFaceGap);
@@ -38,22 +49,44 @@ public:
         SliverStats stats;
         count(stats.caps_before, stats.needles_before);
         if (options_.cap_angle_degrees < 180.0 || options_.needle_ratio > 0.0) {
-            for (int pass = 0; pass < options_.passes; ++pass) {
+            // The first pass looks at every face, later ones only at faces next to a change.
+            std::vector<Mesh::FaceHandle> work(mesh_.faces_begin(), mesh_.faces_end());
+            std::vector<char> queued(mesh_.n_faces(), 0);
+            std::vector<Mesh::FaceHandle> next;
+            const auto enqueue = [&](Mesh::FaceHandle g) {
+                if (g.is_valid() && !mesh_.status(g).deleted() && !queued[static_cast<std::size_t>(g.idx())]) {
+                    queued[static_cast<std::size_t>(g.idx())] = 1;
+                    next.push_back(g);
+                }
+            };
+            for (int pass = 0; pass < options_.passes && !work.empty(); ++pass) {
                 mesh_.update_normals();
-                std::size_t changes = 0;
-                for (const auto f : mesh_.faces()) {
+                next.clear();
+                std::fill(queued.begin(), queued.end(), 0);
+                for (const auto f : work) {
                     if (mesh_.status(f).deleted())
                         continue;
-                    if (is_cap(f) && flip_cap(f)) {
-                        ++stats.flips;
-                        ++changes;
-                    } else if (is_needle(f) && collapse_needle(f)) {
-                        ++stats.collapses;
-                        ++changes;
+                    if (is_cap(f)) {
+                        const auto e = flip_cap(f);
+                        if (e.is_valid()) {
+                            ++stats.flips;
+                            for (int side = 0; side < 2; ++side) {
+                                const auto g = mesh_.face_handle(mesh_.halfedge_handle(e, side));
+                                enqueue(g);
+                                for (const auto n : mesh_.ff_range(g))
+                                    enqueue(n);
+                            }
+                        }
+                    } else if (is_needle(f)) {
+                        const auto kept = collapse_needle(f);
+                        if (kept.is_valid()) {
+                            ++stats.collapses;
+                            for (const auto g : mesh_.vf_range(kept))
+                                enqueue(g);
+                        }
                     }
                 }
-                if (changes == 0)
-                    break;
+                work.swap(next);
             }
         }
         mesh_.garbage_collection();
@@ -75,7 +108,7 @@ private:
         if (options_.cap_angle_degrees >= 180.0)
             return false;
         const auto [p, q, r] = corners(f);
-        return largest_angle(p, q, r) > cap_angle_;
+        return is_cap_triangle(p, q, r, cap_cos_);
     }
 
     bool is_needle(Mesh::FaceHandle f) const
@@ -118,12 +151,12 @@ private:
     }
 
     // Flips the long edge of cap f if the other diagonal of its quad is better and the quad nearly flat.
-    bool flip_cap(Mesh::FaceHandle f)
+    Mesh::EdgeHandle flip_cap(Mesh::FaceHandle f)
     {
         const auto h0 = extreme_edge(f, true);
         const auto e = mesh_.edge_handle(h0);
         if (mesh_.is_boundary(e) || !mesh_.is_flip_ok(e))
-            return false;
+            return Mesh::EdgeHandle();
         // h0 = a -> b in f0 = (a, b, c); h1 = b -> a in f1 = (b, a, d); flipped: (c, a, d) and (d, b, c).
         const auto h1 = mesh_.opposite_halfedge_handle(h0);
         const auto va = mesh_.from_vertex_handle(h0), vb = mesh_.to_vertex_handle(h0);
@@ -131,21 +164,21 @@ private:
         const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
         const Vec3 a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
         if (!has_area(c, a, d) || !has_area(d, b, c))
-            return false;
+            return Mesh::EdgeHandle();
         const Vec3 across = cross(a - b, d - b); // plane of the face across the long edge
         if (std::abs(dot(c - b, normalized(across))) > options_.max_flip_height * distance(a, b))
-            return false;
+            return Mesh::EdgeHandle();
         const double before = std::max(largest_angle(a, b, c), largest_angle(b, a, d));
         const double after = std::max(largest_angle(c, a, d), largest_angle(d, b, c));
         if (!(after < before - 1e-6))
-            return false;
+            return Mesh::EdgeHandle();
         Vec3 reference{0, 0, 0};
         for (const auto v : {va, vb, vc, vd})
             reference += to_vec3(mesh_.normal(v));
         reference = normalized(reference);
         const Vec3 n0 = triangle_normal(c, a, d), n1 = triangle_normal(d, b, c);
         if (!(dot(n0, reference) >= min_cos_) || !(dot(n1, reference) >= min_cos_) || !faces_up(n0) || !faces_up(n1))
-            return false;
+            return Mesh::EdgeHandle();
         const auto f0 = mesh_.face_handle(h0), f1 = mesh_.face_handle(h1);
         const bool same_tile = !has_tiles_ || mesh_.property(tile_, f0) == mesh_.property(tile_, f1);
         mesh_.flip(e);
@@ -153,15 +186,21 @@ private:
             mesh_.property(tile_, f0) = mesh_.property(tile_, f1) = -1;
             mesh_.property(gap_, f0) = mesh_.property(gap_, f1) = true;
         }
-        return true;
+        return e;
     }
 
     // Collapses the short edge of needle f into one of its ends (the other end's position is kept, so
     // a mesh that interpolates its points still does), if that turns no face around it too far.
-    bool collapse_needle(Mesh::FaceHandle f)
+    // Returns the vertex kept (invalid if nothing was collapsed).
+    Mesh::VertexHandle collapse_needle(Mesh::FaceHandle f)
     {
         const auto h = extreme_edge(f, false);
-        return try_collapse(h) || try_collapse(mesh_.opposite_halfedge_handle(h));
+        if (try_collapse(h))
+            return mesh_.to_vertex_handle(h);
+        const auto o = mesh_.opposite_halfedge_handle(h);
+        if (try_collapse(o))
+            return mesh_.to_vertex_handle(o);
+        return Mesh::VertexHandle();
     }
 
     // collapse(h) removes h's from-vertex u and keeps its to-vertex v where it is.
@@ -195,7 +234,7 @@ private:
 
     Mesh& mesh_;
     const SliverOptions& options_;
-    double cap_angle_;
+    double cap_cos_;
     double min_cos_;
     Vec3 up_;
     bool has_tiles_ = false;
@@ -207,12 +246,12 @@ private:
 
 std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees)
 {
-    const double limit = cap_angle_degrees * kPi / 180.0;
+    const double cos_limit = std::cos(cap_angle_degrees * kPi / 180.0);
     std::size_t caps = 0;
     for (const auto f : mesh.faces()) {
         auto fv = mesh.cfv_iter(f);
         const Vec3 p = point(mesh, *fv), q = point(mesh, *++fv), r = point(mesh, *++fv);
-        caps += largest_angle(p, q, r) > limit;
+        caps += is_cap_triangle(p, q, r, cos_limit);
     }
     return caps;
 }
