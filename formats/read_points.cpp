@@ -1073,7 +1073,12 @@ constexpr std::uint16_t kLasColorOffset[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0
 PointCloud read_las(Input& in, const ReadOptions& options)
 {
     const char* header = in.take(kLasHeaderMin);
-    if (!header || std::memcmp(header, "LASF", 4) != 0)
+    if (!header) {
+        if (in.request(4) && std::memcmp(in.data(), "LASF", 4) == 0)
+            throw IoError(in.name() + ": truncated: the file ends inside the LAS header");
+        throw InvalidInput(in.name() + ": not a LAS file (no 'LASF' signature)");
+    }
+    if (std::memcmp(header, "LASF", 4) != 0)
         throw InvalidInput(in.name() + ": not a LAS file (no 'LASF' signature)");
     const bool swap = !host_is_little_endian();
     const unsigned major = static_cast<unsigned char>(header[24]);
@@ -1217,6 +1222,25 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     case Format::off: cloud = read_off(in, options); break;
     }
     validate(cloud, name);
+    recenter(cloud);
+    return cloud;
+}
+
+PointCloud read_points(const std::vector<std::filesystem::path>& paths, const ReadOptions& options)
+{
+    if (paths.empty())
+        throw InvalidInput("read_points: no point file given");
+    PointCloud cloud;
+    for (const std::filesystem::path& path : paths) {
+        PointCloud next = read_points(path, options);
+        if (cloud.empty())
+            cloud = std::move(next);
+        else
+            append(cloud, next);
+        if (options.max_points > 0 && cloud.size() > options.max_points)
+            throw InvalidInput(path.string() + ": the files hold " + std::to_string(cloud.size()) +
+                               " points together so far, more than max_points " + std::to_string(options.max_points));
+    }
     recenter(cloud);
     return cloud;
 }

@@ -28,6 +28,7 @@
 #include "libmrtile/point_cloud.h"
 
 #include <filesystem>
+#include <vector>
 
 namespace mrt {
 
@@ -49,5 +50,11 @@ struct ReadOptions
 //! extension or too many points; messages start with the file name and give the line number for text
 //! formats.
 PointCloud read_points(const std::filesystem::path& path, const ReadOptions& options = {});
+
+//! \brief Reads several point files into one cloud (the scans of one scene, the tiles of a lidar survey),
+//! in absolute coordinates: files in one coordinate system line up. Colours as append() merges them.
+//! \throw as read_points, naming the file at fault; InvalidInput if `paths` is empty or the files hold
+//! more than max_points together.
+PointCloud read_points(const std::vector<std::filesystem::path>& paths, const ReadOptions& options = {});
 
 } // namespace mrt

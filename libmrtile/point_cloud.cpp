@@ -51,6 +51,27 @@ void recenter(PointCloud& cloud)
     cloud.origin += shift;
 }
 
+void append(PointCloud& into, const PointCloud& from)
+{
+    if (into.empty() && into.colors.empty()) {
+        into = from;
+        return;
+    }
+    const Vec3 shift = from.origin - into.origin;
+    const std::size_t old_size = into.positions.size();
+    into.positions.reserve(old_size + from.positions.size());
+    for (const Vec3& p : from.positions)
+        into.positions.push_back(p + shift);
+    if (into.has_colors() || from.has_colors()) {
+        const std::array<std::uint8_t, 4> white = {255, 255, 255, 255};
+        into.colors.resize(old_size, white);
+        if (from.has_colors())
+            into.colors.insert(into.colors.end(), from.colors.begin(), from.colors.end());
+        else
+            into.colors.resize(into.positions.size(), white);
+    }
+}
+
 void validate(const PointCloud& cloud, const std::string& what)
 {
     if (cloud.empty())

@@ -48,6 +48,11 @@ BoundingBox bounding_box(const std::vector<Vec3>& positions);
 //! so that the origin is exact in every output format; positions change by the same offset.
 void recenter(PointCloud& cloud);
 
+//! \brief Appends `from` to `into` in absolute coordinates (positions rebased onto `into`'s origin; call
+//! recenter afterwards). Colours are kept when either cloud has them; the points of a cloud without
+//! colours are white (glTF multiplies vertex colours into the material, and white leaves it as it is).
+void append(PointCloud& into, const PointCloud& from);
+
 //! \brief Checks a cloud before building a hierarchy.
 //! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with
 //! its index), if colours do not match positions, or if the cloud is empty.

@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <sys/wait.h>
 
 namespace mrt {
@@ -281,6 +282,43 @@ TEST(Cli, build_removes_outliers_on_request)
 }
 
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
+
+// Several input files are one cloud: the two halves of a sphere, in two formats, mesh to a closed sphere.
+TEST(Cli, several_point_files_are_one_cloud)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::ifstream in(sphere_xyz(dir, 6000));
+    std::string line, north = "x,y,z\n", south;
+    while (std::getline(in, line)) {
+        std::istringstream fields(line);
+        double x = 0, y = 0, z = 0;
+        fields >> x >> y >> z;
+        if (z >= 0) {
+            north += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + "\n";
+        } else {
+            south += line + "\n";
+        }
+    }
+    write_text(dir / "north.csv", north);
+    write_text(dir / "south.xyz", south);
+    const Result r = mrtile("reconstruct " + (dir / "north.csv").string() + " " + (dir / "south.xyz").string() + " -o " +
+                                (dir / "m.ply").string() + " --stats-json " + (dir / "m.json").string(),
+                            dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("north.csv (and 1 more file): 6000 points"), std::string::npos) << r.out;
+    const auto stats = nlohmann::json::parse(slurp(dir / "m.json"));
+    EXPECT_EQ(stats["boundary_loops"], 0);
+    EXPECT_EQ(stats["genus"], 0);
+    EXPECT_EQ(stats["components"], 1);
+    // A bad second file fails the whole command, naming that file, and writes nothing.
+    write_text(dir / "bad.xyz", "1 2\n");
+    const Result bad = mrtile("reconstruct " + (dir / "north.csv").string() + " " + (dir / "bad.xyz").string() + " -o " +
+                                  (dir / "n.ply").string(),
+                              dir);
+    EXPECT_EQ(bad.code, 1);
+    EXPECT_NE(bad.err.find("bad.xyz: line 1"), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists(dir / "n.ply"));
+}
 // coarser level to a finer one (levels that would not improve are not written).
 TEST(Cli, lods_on_the_bunny_are_consistent)
 {

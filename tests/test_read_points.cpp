@@ -459,6 +459,32 @@ TEST(ReadPoints, many_points_cross_buffer_boundaries)
 }
 
 // Coordinates near 5e6 (projected map coordinates) survive to the last bit: origin + position.
+// Several files (lidar tiles, scans of one scene) are one cloud in absolute coordinates, whatever
+// origin each file was recentred on; colours of files without them are white.
+TEST(ReadPoints, several_files_merge_in_absolute_coordinates)
+{
+    const fs::path dir = test_dir();
+    const fs::path a = write_file(dir / "a.xyz", "500000.5 4100000.25 100\n500001 4100001 101\n");
+    const fs::path b = write_file(dir / "b.csv", "x,y,z,red,green,blue\n500900.75 4100900 150,10,20,30\n");
+    const fs::path c = write_file(dir / "c.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\n"
+                                                 "property double y\nproperty double z\nend_header\n0.125 -3 7\n");
+    const PointCloud merged = read_points(std::vector<fs::path>{a, b, c});
+    expect_points(merged, {{500000.5, 4100000.25, 100}, {500001, 4100001, 101}, {500900.75, 4100900, 150}, {0.125, -3, 7}});
+    ASSERT_EQ(merged.colors.size(), 4u);
+    EXPECT_EQ(merged.colors[0][0], 255); // a.xyz has no colours: white
+    EXPECT_EQ(merged.colors[2][0], 10);
+    EXPECT_EQ(merged.colors[2][2], 30);
+    EXPECT_EQ(merged.colors[3][1], 255);
+    // One file alone reads as it does by itself; an error names the file at fault.
+    expect_points(read_points(std::vector<fs::path>{a}), absolute(read_points(a)));
+    const fs::path bad = write_file(dir / "bad.xyz", "1 2\n");
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{a, bad}); }, {bad.string(), "line 1"});
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{}); }, {"no point file"});
+    ReadOptions few;
+    few.max_points = 3;
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{a, b, c}, few); }, {c.string(), "max_points 3"});
+}
+
 TEST(ReadPoints, far_from_origin_keeps_full_precision)
 {
     const fs::path dir = test_dir();
@@ -731,7 +757,8 @@ TEST(ReadLas, malformed_files_fail_cleanly)
     noise_only.classification = {7, 7, 7, 7};
     const std::vector<ReadErrorCase> cases = {
         {"sig.las", "LASX" + good.substr(4), "not a LAS file", false},
-        {"tiny.las", good.substr(0, 100), "not a LAS file", false},
+        {"tiny.las", good.substr(0, 100), "ends inside the LAS header", true},
+        {"text.las", "1 2 3\n", "not a LAS file", false},
         {"laz.las", laz, "LAZ-compressed", false},
         {"scale.las", zero_scale, "scale or offset of y", false},
         {"short.las", short_record, "shorter than format 3", false},

@@ -576,10 +576,19 @@ struct ProduceArgs
     }
 };
 
-Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const Globals& g)
+// How messages name the input: its file, or the first file and how many more.
+std::string inputs_name(const std::vector<fs::path>& points)
+{
+    std::string name = points.front().string();
+    if (points.size() > 1)
+        name += " (and " + std::to_string(points.size() - 1) + " more file" + (points.size() > 2 ? "s" : "") + ")";
+    return name;
+}
+
+Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs& args, const Globals& g)
 {
     const auto start = Clock::now();
-    PointCloud cloud = read_points(points);
+    PointCloud cloud = points.size() == 1 ? read_points(points.front()) : read_points(points);
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
@@ -590,7 +599,7 @@ Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const
     duplicates += h.info.duplicates_merged;
     if (g.progress())
         std::fprintf(stderr, "\r%40s\r", "");
-    std::printf("read and built %s: %zu points", points.string().c_str(), n);
+    std::printf("read and built %s: %zu points", inputs_name(points).c_str(), n);
     if (duplicates > 0)
         std::printf(" (%zu duplicates merged)", duplicates);
     if (args.remove_outliers)
@@ -601,16 +610,21 @@ Hierarchy build_from_points(const fs::path& points, const BuildArgs& args, const
 
 // Library errors about the data (not the file) do not know which input they came from: name it.
 template <typename Work>
-void naming_input(const fs::path& input, Work work)
+void naming_input(const std::string& input, Work work)
 {
     try {
         work();
     } catch (const InvalidInput& e) {
         const std::string what = e.what();
-        if (what.rfind(input.string(), 0) == 0)
+        if (what.rfind(input, 0) == 0)
             throw;
-        throw InvalidInput(input.string() + ": " + what);
+        throw InvalidInput(input + ": " + what);
     }
+}
+template <typename Work>
+void naming_input(const fs::path& input, Work work)
+{
+    naming_input(input.string(), work);
 }
 
 int run_info(const fs::path& model, bool json)
@@ -688,10 +702,14 @@ int run(int argc, char** argv)
 
     // build
     auto* build = app.add_subcommand("build", "build the cluster hierarchy of a point cloud into a .mrt model");
-    fs::path build_in, build_out;
+    std::vector<fs::path> build_in;
+    fs::path build_out;
     BuildArgs build_args;
     bool record_time = false;
-    build->add_option("POINTS", build_in, "point file: .ply .xyz .pts .txt .csv .obj .off, optionally .gz")->required();
+    build->add_option("POINTS", build_in,
+                      "point files (one or more, merged in absolute coordinates): .ply .las .ptx .xyz .pts .txt .csv "
+                      ".obj .off, optionally .gz")
+        ->required();
     build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
     build_args.add(build, "");
     build->add_flag("--record-time", record_time, "store the build time in the model (the file then differs between runs)");
@@ -717,10 +735,11 @@ int run(int argc, char** argv)
 
     // reconstruct
     auto* rec = app.add_subcommand("reconstruct", "build and mesh in one step (or write 3D Tiles with --format 3dtiles)");
-    fs::path rec_in, rec_out, rec_model;
+    std::vector<fs::path> rec_in;
+    fs::path rec_out, rec_model;
     BuildArgs rec_build;
     ProduceArgs rec_args;
-    rec->add_option("POINTS", rec_in, "point file")->required();
+    rec->add_option("POINTS", rec_in, "point files (one or more, merged)")->required();
     rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
     rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
     rec_build.add(rec, "build-");
@@ -757,7 +776,7 @@ int run(int argc, char** argv)
 
     if (*build) {
         Hierarchy h;
-        naming_input(build_in, [&] { h = build_from_points(build_in, build_args, g); });
+        naming_input(inputs_name(build_in), [&] { h = build_from_points(build_in, build_args, g); });
         SaveOptions s;
         s.record_build_time = record_time;
         save_model(h, build_out, s);
@@ -782,7 +801,7 @@ int run(int argc, char** argv)
         apply_globals(h);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        naming_input(rec_in, [&] { rec_args.write(h, g, rec_out); });
+        naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out); });
         return 0;
     }
     if (*lods) {
