@@ -283,6 +283,34 @@ TEST(Cli, build_removes_outliers_on_request)
 
 // `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
 
+// A tileset of projected coordinates (UTM-like, far from the origin but not on the Earth's surface in
+// ECEF) says how to place it on the globe; with --enu, or near the origin, nothing is said.
+TEST(Cli, tileset_placement_note)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::ifstream in(sphere_xyz(dir, 2000));
+    std::string line, utm;
+    while (std::getline(in, line)) {
+        std::istringstream fields(line);
+        double x = 0, y = 0, z = 0;
+        fields >> x >> y >> z;
+        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+    }
+    write_text(dir / "utm.xyz", utm);
+    const std::string note = "note: the tileset is placed at its input coordinates";
+    const Result far = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "a").string() + " --format 3dtiles", dir);
+    ASSERT_EQ(far.code, 0) << far.err;
+    EXPECT_NE(far.out.find(note), std::string::npos) << far.out;
+    const Result placed = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "b").string() +
+                                     " --format 3dtiles --enu 7.45,46.95,540",
+                                 dir);
+    ASSERT_EQ(placed.code, 0) << placed.err;
+    EXPECT_EQ(placed.out.find(note), std::string::npos) << placed.out;
+    const Result local = mrtile("reconstruct " + (dir / "sphere.xyz").string() + " -o " + (dir / "c").string() + " --format 3dtiles", dir);
+    ASSERT_EQ(local.code, 0) << local.err;
+    EXPECT_EQ(local.out.find(note), std::string::npos) << local.out;
+}
+
 // Several input files are one cloud: the two halves of a sphere, in two formats, mesh to a closed sphere.
 TEST(Cli, several_point_files_are_one_cloud)
 {

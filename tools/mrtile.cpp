@@ -461,6 +461,22 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
                     finest, h.leaf_count());
 }
 
+// A tileset without --enu is placed at its input coordinates, taken as ECEF metres. Input far from the
+// origin but not on the Earth's surface in ECEF (projected coordinates such as UTM, or a local survey
+// grid) would then float inside the globe of a web viewer: say how to place it.
+void note_placement(const Hierarchy& h, const ExportArgs& e)
+{
+    if (!e.enu.empty())
+        return;
+    const double r = norm(h.bbox().centre() + h.cloud.origin);
+    const double earth = 6371000.0;
+    if (r > 100000.0 && std::abs(r - earth) > 30000.0)
+        std::printf("note: the tileset is placed at its input coordinates as ECEF metres, %.0f km from the "
+                    "Earth's centre (projected coordinates such as UTM?); to put it on the globe give --enu "
+                    "LON,LAT,HEIGHT of its origin and coordinates relative to it\n",
+                    r / 1000.0);
+}
+
 void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
@@ -477,6 +493,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         t.root_transform = enu_to_ecef_transform(v[0], v[1], v[2]);
     }
     write_lod_tileset(set, h.cloud.origin, dir, t);
+    note_placement(h, e);
     std::size_t contents = 0, triangles = 0;
     for (const LodTile& tile : set.tiles)
         if (tile.mesh.n_faces() > 0) {
@@ -486,6 +503,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
                 dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
+
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
 void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out)
