@@ -110,6 +110,9 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     const Mesh& src = level.mesh;
     const QuietOpenMesh quiet; // refusals below are handled, not reported on the console
     Mesh out;
+    const bool colored = src.has_vertex_colors();
+    if (colored)
+        out.request_vertex_colors();
     std::vector<int> map(src.n_vertices(), -1);
     std::vector<char> selected(src.n_faces(), 0);
     // The faces owned by nodes inside the region, in face order: an owner inside the region starts in
@@ -134,6 +137,8 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
             if (m < 0) {
                 const Mesh::VertexHandle nv = out.add_vertex(src.point(v));
                 out.set_normal(nv, src.normal(v));
+                if (colored)
+                    out.set_color(nv, src.color(v));
                 m = nv.idx();
             }
             vs[static_cast<std::size_t>(k++)] = Mesh::VertexHandle(m);
@@ -145,6 +150,8 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
             for (auto& v : vs) {
                 const Mesh::VertexHandle copy = out.add_vertex(out.point(v));
                 out.set_normal(copy, out.normal(v));
+                if (colored)
+                    out.set_color(copy, out.color(v));
                 v = copy;
             }
             const Mesh::FaceHandle added = out.add_face(vs[0], vs[1], vs[2]);
@@ -163,6 +170,8 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
             const OpenMesh::Vec3d n = src.normal(src_v);
             const Mesh::VertexHandle nv = out.add_vertex(src.point(src_v) - n * skirt_depth);
             out.set_normal(nv, n);
+            if (colored)
+                out.set_color(nv, src.color(src_v));
             l = nv.idx();
         }
         return Mesh::VertexHandle(l);

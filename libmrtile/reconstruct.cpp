@@ -82,6 +82,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     // no new caps: FitOptions::max_flip_angle_degrees).
     result.slivers = remove_slivers(result.mesh, slivers);
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
+    color_vertices(result.mesh, h.cloud, options.colors);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

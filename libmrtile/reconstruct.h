@@ -9,6 +9,7 @@
 //!   QualityReport q = measure_quality(h, r.cut, r.mesh);              // numbers users can trust
 //! \endcode
 
+#include "libmrtile/color_vertices.h"
 #include "libmrtile/cut.h"
 #include "libmrtile/fit_vertices.h"
 #include "libmrtile/mesh.h"
@@ -29,6 +30,8 @@ struct MeshOptions
     FitOptions fit;
     //! caps and needles flipped and collapsed away, after the fit (remove_slivers.h)
     SliverOptions slivers;
+    //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
+    ColorOptions colors;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
     //! of at most three tiles, while other pieces exist, are refined (replaced by their children) up to

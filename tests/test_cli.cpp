@@ -316,13 +316,13 @@ TEST(Cli, several_point_files_are_one_cloud)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
     std::ifstream in(sphere_xyz(dir, 6000));
-    std::string line, north = "x,y,z\n", south;
+    std::string line, north = "x,y,z,red,green,blue\n", south;
     while (std::getline(in, line)) {
         std::istringstream fields(line);
         double x = 0, y = 0, z = 0;
         fields >> x >> y >> z;
         if (z >= 0) {
-            north += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + "\n";
+            north += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + ",200,30,30\n";
         } else {
             south += line + "\n";
         }
@@ -338,6 +338,13 @@ TEST(Cli, several_point_files_are_one_cloud)
     EXPECT_EQ(stats["boundary_loops"], 0);
     EXPECT_EQ(stats["genus"], 0);
     EXPECT_EQ(stats["components"], 1);
+    // The north half's colours reach the mesh (the south half's points are white); --no-colors drops them.
+    EXPECT_NE(slurp(dir / "m.ply").find("property uchar red"), std::string::npos);
+    const Result plain = mrtile("reconstruct " + (dir / "north.csv").string() + " " + (dir / "south.xyz").string() +
+                                    " -o " + (dir / "p.ply").string() + " --no-colors",
+                                dir);
+    ASSERT_EQ(plain.code, 0) << plain.err;
+    EXPECT_EQ(slurp(dir / "p.ply").find("property uchar red"), std::string::npos);
     // A bad second file fails the whole command, naming that file, and writes nothing.
     write_text(dir / "bad.xyz", "1 2\n");
     const Result bad = mrtile("reconstruct " + (dir / "north.csv").string() + " " + (dir / "bad.xyz").string() + " -o " +

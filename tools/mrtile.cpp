@@ -228,6 +228,7 @@ struct MeshArgs
     bool no_quality = false;
     double refine_fans = 0.0;
     int fit_rounds = FitOptions{}.rounds;
+    bool no_colors = false;
 
     void add(CLI::App* cmd)
     {
@@ -246,6 +247,7 @@ struct MeshArgs
                         "least-squares rounds fitting the vertices to the points (0 = interpolate, as the paper)")
             ->check(CLI::Range(0, 100))
             ->capture_default_str();
+        cmd->add_flag("--no-colors", no_colors, "leave the mesh uncoloured even when the points have colours");
     }
 
     MeshOptions options() const
@@ -256,6 +258,7 @@ struct MeshArgs
         o.surface.bridge_steps = !keep_steps;
         o.refine.max_deviation = refine_fans;
         o.fit.rounds = fit_rounds;
+        o.colors.enabled = !no_colors;
         return o;
     }
 };
