@@ -2,8 +2,8 @@
 // and where two rims run side by side the strip is made of caps (faces with an angle near 180
 // degrees). They are correct as geometry but their normals are noise, which every renderer shows.
 // The fix is the classic one for almost-degenerate faces (as in mesh repair tools): flip a cap's long
-// edge, collapse the short edge of a needle. Both are local and keep the
-// topology, so every guarantee of the surface stage holds after them.
+// edge (by default the only change: no vertex moves), or collapse the short edge of a needle (opt-in).
+// Both are local and keep the topology, so every guarantee of the surface stage holds after them.
 #include "libmrtile/remove_slivers.h"
 
 #include "libmrtile/errors.h"
