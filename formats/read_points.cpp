@@ -437,28 +437,31 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         std::string_view token;
         if (!tokens.next(token))
             continue;
+        // PTS files (and some XYZ exports) open with the point count on a line of its own, and a PTS file
+        // of several scans repeats it before each scan.
+        std::string_view second;
+        Tokens rest = tokens;
+        std::uint64_t count = 0;
+        if ((first_content_line || pts) && !rest.next(second) && parse_count(token, count)) {
+            first_content_line = false;
+            continue;
+        }
         if (first_content_line) {
             first_content_line = false;
-            std::string_view second;
-            Tokens rest = tokens;
-            std::uint64_t count = 0;
-            // PTS files (and some XYZ exports) open with the point count on a line of its own.
-            if (!rest.next(second) && parse_count(token, count))
-                continue;
             if (is_column_names(token)) {
                 read_column_names(line, options.keep_colors, layout);
                 layout_known = true;
                 continue;
             }
         }
+        // CloudCompare and other tools write "//" comment lines.
+        if (token.substr(0, 2) == "//")
+            continue;
         if (!layout_known) {
             layout_known = true;
             if (pts)
                 read_pts_colors(line, options.keep_colors, layout);
         }
-        // CloudCompare and other tools write "//" comment lines.
-        if (token.substr(0, 2) == "//")
-            continue;
         std::array<std::string_view, 3> fields;
         std::array<std::string_view, 3> color_fields;
         for (int index = 0; index < layout.columns_needed; ++index) {

@@ -15,7 +15,8 @@
 //!    colours are kept when every point has them.
 //!  - XYZ/PTS/TXT/CSV: three columns of each line (separated by spaces, tabs, commas or semicolons).
 //!    Blank lines, lines starting with '#' or "//" and a UTF-8 byte order mark are skipped, so is a
-//!    first line holding a single integer (the point count of PTS files). A first line of column names
+//!    first line holding a single integer (the point count of PTS files; in a .pts file every such line, as
+//!    multi-scan PTS files repeat it before each scan). A first line of column names
 //!    ("x,y,z,intensity", CloudCompare's "//X,Y,Z,R,G,B") picks the columns named x, y, z (any case, any
 //!    order; else the first three) and r, g, b or red, green, blue as 0-255 colours; without names a
 //!    .pts line of 6 or 7 values is x y z [intensity] r g b (Leica's convention). Colours that are not

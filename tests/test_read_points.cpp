@@ -300,6 +300,8 @@ TEST(ReadColumns, separators_comments_count_line_and_header)
     expect_all_read_as_kpoints({
         {"a.xyz", "# comment\n\n0.5 -1.25 2\n3\t4.75\t-5.5 99 98\n  -0.125  0 8  \r\n1,1;1\n"},
         {"a.pts", "4\n0.5 -1.25 2 10 1 2 3\n3 4.75 -5.5 10 1 2 3\n-0.125 0 +8 10 1 2 3\n1 1 1 0 0 0 0\n"},
+        // Two scans, each after its own count line (Leica's multi-scan PTS).
+        {"scans.pts", "2\n0.5 -1.25 2 10 1 2 3\n3 4.75 -5.5 10 1 2 3\n2\n-0.125 0 +8 10 1 2 3\n1 1 1 0 0 0 0\n"},
         {"a.csv", "x,y,z,intensity\n0.5,-1.25,2,7\n3,4.75,-5.5,7\n-0.125,0,8,7\n1;1;1;7\n"},
         {"A.TXT", "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1"},
     });
