@@ -10,6 +10,10 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
 #include <algorithm>
+#include <cstring>
+#include <cstdio>
+#include <cstdint>
+#include <cmath>
 #include <cctype>
 #include <string>
 
@@ -63,6 +67,136 @@ OpenMesh::IO::Options io_options(MeshFormat format, const Mesh& mesh, const Writ
     return io;
 }
 
+// Float keeps 24 bits: beyond about 16 extents from the origin it loses more than a millionth of the
+// mesh's extent (a survey in UTM coordinates, 5,000 km north: half a metre). Such meshes are written with
+// double coordinates (PLY, OBJ, OFF; .om always keeps doubles, STL has only floats).
+bool needs_doubles(const Mesh& absolute)
+{
+    double largest = 0.0;
+    Mesh::Point lo(0, 0, 0), hi(0, 0, 0);
+    bool first = true;
+    for (const auto v : absolute.vertices()) {
+        const Mesh::Point& p = absolute.point(v);
+        for (int a = 0; a < 3; ++a) {
+            largest = std::max(largest, std::abs(p[a]));
+            lo[a] = first ? p[a] : std::min(lo[a], p[a]);
+            hi[a] = first ? p[a] : std::max(hi[a], p[a]);
+        }
+        first = false;
+    }
+    const double extent = (hi - lo).norm();
+    return largest * std::ldexp(1.0, -24) > 1e-6 * extent;
+}
+
+// Little-endian bytes of a value, whatever the host.
+template <typename T>
+void put_le(std::string& out, T value)
+{
+    unsigned char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    const std::uint16_t one = 1;
+    unsigned char low = 0;
+    std::memcpy(&low, &one, 1);
+    if (low != 1)
+        std::reverse(bytes, bytes + sizeof(T));
+    out.append(reinterpret_cast<const char*>(bytes), sizeof(T));
+}
+
+std::string format_number(double value, int digits)
+{
+    char buffer[40];
+    std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+    return buffer;
+}
+
+// The double-precision writers (PLY, OBJ, OFF) for meshes far from the origin; the layout is the one
+// OpenMesh writes for near meshes, with double x y z.
+std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary, bool normals, bool colors)
+{
+    std::string out;
+    const auto vertex_line = [&](Mesh::VertexHandle v, bool color_ints) {
+        const Mesh::Point& p = m.point(v);
+        std::string line = format_number(p[0], 17) + " " + format_number(p[1], 17) + " " + format_number(p[2], 17);
+        if (normals) {
+            const Mesh::Normal& n = m.normal(v);
+            line += " " + format_number(n[0], 9) + " " + format_number(n[1], 9) + " " + format_number(n[2], 9);
+        }
+        if (colors && color_ints) {
+            const Mesh::Color& c = m.color(v);
+            for (int k = 0; k < 4; ++k)
+                line += " " + std::to_string(static_cast<int>(c[k]));
+        }
+        return line + "\n";
+    };
+    if (format == MeshFormat::ply) {
+        out = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") + " 1.0\n";
+        out += "element vertex " + std::to_string(m.n_vertices()) + "\n";
+        out += "property double x\nproperty double y\nproperty double z\n";
+        if (normals)
+            out += "property float nx\nproperty float ny\nproperty float nz\n";
+        if (colors)
+            out += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+        out += "element face " + std::to_string(m.n_faces()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+        for (const auto v : m.vertices()) {
+            if (!binary) {
+                out += vertex_line(v, true);
+                continue;
+            }
+            for (int a = 0; a < 3; ++a)
+                put_le(out, m.point(v)[a]);
+            if (normals)
+                for (int a = 0; a < 3; ++a)
+                    put_le(out, static_cast<float>(m.normal(v)[a]));
+            if (colors)
+                for (int k = 0; k < 4; ++k)
+                    put_le(out, m.color(v)[k]);
+        }
+        for (const auto f : m.faces()) {
+            if (!binary) {
+                out += "3";
+                for (const auto v : m.fv_range(f))
+                    out += " " + std::to_string(v.idx());
+                out += "\n";
+                continue;
+            }
+            put_le(out, static_cast<std::uint8_t>(3));
+            for (const auto v : m.fv_range(f))
+                put_le(out, static_cast<std::int32_t>(v.idx()));
+        }
+    } else if (format == MeshFormat::obj) {
+        // OBJ has no vertex colours (OpenMesh's writer refuses them too).
+        for (const auto v : m.vertices()) {
+            const Mesh::Point& p = m.point(v);
+            out += "v " + format_number(p[0], 17) + " " + format_number(p[1], 17) + " " + format_number(p[2], 17) + "\n";
+        }
+        if (normals)
+            for (const auto v : m.vertices()) {
+                const Mesh::Normal& n = m.normal(v);
+                out += "vn " + format_number(n[0], 9) + " " + format_number(n[1], 9) + " " + format_number(n[2], 9) + "\n";
+            }
+        for (const auto f : m.faces()) {
+            out += "f";
+            for (const auto v : m.fv_range(f)) {
+                const std::string i = std::to_string(v.idx() + 1);
+                out += " " + i + (normals ? "//" + i : "");
+            }
+            out += "\n";
+        }
+    } else { // OFF: [C][N]OFF, vertex lines x y z [nx ny nz] [r g b a]
+        out = std::string(colors ? "C" : "") + (normals ? "N" : "") + "OFF\n";
+        out += std::to_string(m.n_vertices()) + " " + std::to_string(m.n_faces()) + " 0\n";
+        for (const auto v : m.vertices())
+            out += vertex_line(v, true);
+        for (const auto f : m.faces()) {
+            out += "3";
+            for (const auto v : m.fv_range(f))
+                out += " " + std::to_string(v.idx());
+            out += "\n";
+        }
+    }
+    return out;
+}
+
 } // namespace
 
 void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
@@ -82,6 +216,14 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
     for (const auto v : out.vertices())
         out.set_point(v, out.point(v) + shift);
 
+    const bool colors = options.colors && out.has_vertex_colors() && format != MeshFormat::obj;
+    if ((format == MeshFormat::ply || format == MeshFormat::obj || format == MeshFormat::off) && needs_doubles(out)) {
+        AtomicFile file(path);
+        const std::string bytes = double_precision_file(out, format, options.binary, options.normals, colors);
+        file.write(bytes.data(), bytes.size());
+        file.commit();
+        return;
+    }
     const OpenMesh::IO::Options io = io_options(format, out, options);
     AtomicFile file(path);
     bool ok = false;

@@ -34,7 +34,8 @@ struct WriteMeshOptions
 
 //! \brief Writes `mesh` (positions relative to `origin`) to `path`; the format follows the extension
 //! (.ply, .obj, .off, .stl, .om; case-insensitive).
-//! \details Atomic: the file is written next to the target under a temporary name and renamed, so a
+//! \details PLY, OBJ and OFF far from the origin (where float would lose more than a millionth of the
+//! mesh's extent, as georeferenced meshes do) are written with double coordinates. Atomic: the file is written next to the target under a temporary name and renamed, so a
 //! failure leaves no partial file. Deleted elements are not written. Deterministic: the same mesh and
 //! options give byte-identical files.
 //! \throw InvalidInput for an unknown extension; IoError naming `path` if it cannot be written.

@@ -5,6 +5,7 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+#include "formats/read_points.h"
 #include "formats/write_mesh.h"
 #include "libmrtile/errors.h"
 #include "tests/test_dir.h"
@@ -115,7 +116,50 @@ TEST(WriteMesh, every_format_reads_back_with_counts_positions_and_normals)
     EXPECT_EQ(read_bytes(dir / "b.ply").rfind("ply\nformat ascii", 0), 0u);
 }
 
-// .om keeps double coordinates far from the origin; float formats round to float.
+// Far from the origin (a survey in UTM coordinates), float would round a northing of 4,200 km to a
+// quarter metre: PLY (binary and ascii), OBJ and OFF are written with double coordinates, which our own
+// reader gets back exactly (OpenMesh's readers round them to float), with colours where the format has them.
+TEST(WriteMesh, far_meshes_keep_double_coordinates)
+{
+    const fs::path dir = test_dir();
+    Mesh mesh = octahedron();
+    for (const auto v : mesh.vertices())
+        mesh.set_point(v, mesh.point(v) * 0.123456789);
+    mesh.request_vertex_colors();
+    for (const auto v : mesh.vertices())
+        mesh.set_color(v, Mesh::Color(static_cast<unsigned char>(10 * v.idx()), 20, 30, 255));
+    const Vec3 origin{4999999.0, 4200001.0, 312.0};
+    std::vector<Vec3> expected;
+    for (const auto v : mesh.vertices())
+        expected.push_back(origin + to_vec3(mesh.point(v)));
+    for (const char* name : {"far.ply", "far_ascii.ply", "far.obj", "far.off"}) {
+        SCOPED_TRACE(name);
+        WriteMeshOptions options;
+        options.binary = std::string(name) != "far_ascii.ply";
+        write_mesh(mesh, origin, dir / name, options);
+        const PointCloud back = read_points(dir / name);
+        ASSERT_EQ(back.size(), expected.size());
+        for (std::size_t i = 0; i < expected.size(); ++i)
+            EXPECT_EQ(back.origin + back.positions[i], expected[i]) << i;
+        if (std::string(name).find(".ply") != std::string::npos) { // our OFF reader skips colours; OBJ has none
+            ASSERT_EQ(back.colors.size(), expected.size());
+            EXPECT_EQ(back.colors[3][0], 30);
+        }
+        // OpenMesh reads every one of them as a closed mesh.
+        O read_options = O::VertexNormal | O::VertexColor;
+        if (options.binary && std::string(name) == "far.ply")
+            read_options += O::Binary;
+        const Mesh m = read_back(dir / name, read_options);
+        EXPECT_EQ(m.n_vertices(), 6u);
+        EXPECT_EQ(m.n_faces(), 8u);
+    }
+    // Near the origin nothing changes: OpenMesh's float PLY as before.
+    write_mesh(octahedron(), {0, 0, 0}, dir / "near.ply");
+    EXPECT_NE(read_bytes(dir / "near.ply").find("property float x"), std::string::npos);
+    EXPECT_NE(read_bytes(dir / "far.ply").find("property double x"), std::string::npos);
+}
+
+// .om keeps double coordinates far from the origin (OpenMesh's readers round the other formats to float).
 TEST(WriteMesh, om_keeps_doubles_far_from_origin)
 {
     const fs::path dir = test_dir();
