@@ -1052,8 +1052,10 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
                 v[6] >= 0 && v[6] <= 255)
                 colors.push_back({static_cast<std::uint8_t>(std::lround(v[4])), static_cast<std::uint8_t>(std::lround(v[5])),
                                   static_cast<std::uint8_t>(std::lround(v[6])), 255});
-            else
-                all_colored = false;
+            else if (all_colored) {
+                all_colored = false; // one point without colour: the file is read without colours
+                colors = {};
+            }
         }
     }
     if (all_colored)
