@@ -43,6 +43,7 @@ struct MethodMeasurement
     std::uint64_t peak = 0;  // bytes, the child's peak resident size at the end of the method
     std::uint64_t tiles = 0; // ours only
     std::uint64_t faces = 0;
+    std::uint64_t caps = 0;  // faces with an angle above 150 degrees (count_caps): creases under shading
     DistanceStats distance;  // input points -> mesh, fractions of the bbox diagonal
     TopologyStats topology;
 };
@@ -76,6 +77,7 @@ MethodMeasurement measure_ours(const MeshInput& input, double tolerance)
         const QualityReport quality = measure_quality(h, result.cut, result.mesh);
         m.distance = quality.point_to_mesh;
         m.topology = quality.topology;
+        m.caps = quality.caps;
         return m;
     });
 }
@@ -84,7 +86,9 @@ void measure_soup(const TriangleSoup& soup, const std::vector<Vec3>& points, Met
 {
     m.faces = soup.triangles.size();
     m.topology = topology_stats(soup.positions, soup.triangles);
-    m.distance = point_to_mesh_distance(points, unshared_mesh(soup));
+    const Mesh mesh = unshared_mesh(soup);
+    m.distance = point_to_mesh_distance(points, mesh);
+    m.caps = count_caps(mesh);
 }
 
 PeerMeasurement measure_peers(const MeshInput& input, const std::array<std::uint64_t, kTolerances>& target_faces)
@@ -129,6 +133,7 @@ std::vector<std::string> method_row(const std::string& input, const std::string&
             std::to_string(t.nonmanifold_edges) + " / " + std::to_string(t.nonmanifold_vertices),
             std::to_string(t.boundary_loops),
             t.genus < 0 ? "n/a" : std::to_string(t.genus),
+            m.faces > 0 ? fixed(100.0 * static_cast<double>(m.caps) / static_cast<double>(m.faces), 1) : "",
             check};
 }
 
@@ -186,6 +191,7 @@ Table peers_table(const std::vector<MeshInput>& inputs)
                  {"non-manifold E / V"},
                  {"loops"},
                  {"genus"},
+                 {"caps %"},
                  {"check", Align::Left}};
     for (const MeshInput& input : inputs)
         add_input_rows(t, input);
@@ -205,6 +211,8 @@ Table peers_table(const std::vector<MeshInput>& inputs)
         "interpolates the points, so its distances are those of points it left out.",
         "Topology: `topology_stats` of the triangle set (peers: the raw soup, so non-manifold edges count); genus "
         "n/a = a non-manifold or non-orientable component.",
+        "Caps %: faces with an angle above 150° (`count_caps`), as a share of the faces: their normals are noise, "
+        "which shading draws as creases (ours flips them away, `remove_slivers`).",
         "Targets: ours ≥ " + fixed(kMinSpeedupOverAfsr, 0) + "× faster than AFSR at the finest tolerance (CPU); our "
         "mean distance ≤ " + fixed(kMaxDistanceRatio, 1) + "× that of AFSR+meshopt at the same face count."};
     return t;
