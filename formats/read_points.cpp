@@ -984,8 +984,6 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
 }
 
 // ---------------------------------------------------------------------------------------------------
-
-// ---------------------------------------------------------------------------------------------------
 // PTX (Leica, FARO and other terrestrial scanners' export): scans one after another, each a header of
 // columns, rows, the scanner position and axes and a 4x4 registration matrix, then columns x rows
 // lines "x y z intensity [r g b]" in the scanner's frame, "0 0 0" where the laser saw nothing.
@@ -1177,6 +1175,9 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     return cloud;
 }
 
+// ---------------------------------------------------------------------------------------------------
+// The format by extension
+
 enum class Format { ply, columns, pts, ptx, obj, off, las };
 
 Format format_of(const fs::path& path, const std::string& name)
@@ -1237,11 +1238,7 @@ PointCloud read_points(const std::vector<std::filesystem::path>& paths, const Re
         throw InvalidInput("read_points: no point file given");
     PointCloud cloud;
     for (const std::filesystem::path& path : paths) {
-        PointCloud next = read_points(path, options);
-        if (cloud.empty())
-            cloud = std::move(next);
-        else
-            append(cloud, next);
+        append(cloud, read_points(path, options));
         if (options.max_points > 0 && cloud.size() > options.max_points)
             throw InvalidInput(path.string() + ": the files hold " + std::to_string(cloud.size()) +
                                " points together so far, more than max_points " + std::to_string(options.max_points));

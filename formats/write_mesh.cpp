@@ -10,11 +10,11 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
 #include <algorithm>
-#include <cstring>
-#include <cstdio>
-#include <cstdint>
-#include <cmath>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <string>
 
 namespace mrt {
@@ -114,18 +114,25 @@ std::string format_number(double value, int digits)
 std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary, bool normals, bool colors)
 {
     std::string out;
-    const auto vertex_line = [&](Mesh::VertexHandle v, bool color_ints) {
+    // Text lines: "x y z [nx ny nz] [r g b a]" (PLY ascii and OFF alike) and "3 i j k".
+    const auto vertex_line = [&](Mesh::VertexHandle v) {
         const Mesh::Point& p = m.point(v);
         std::string line = format_number(p[0], 17) + " " + format_number(p[1], 17) + " " + format_number(p[2], 17);
         if (normals) {
             const Mesh::Normal& n = m.normal(v);
             line += " " + format_number(n[0], 9) + " " + format_number(n[1], 9) + " " + format_number(n[2], 9);
         }
-        if (colors && color_ints) {
+        if (colors) {
             const Mesh::Color& c = m.color(v);
             for (int k = 0; k < 4; ++k)
                 line += " " + std::to_string(static_cast<int>(c[k]));
         }
+        return line + "\n";
+    };
+    const auto face_line = [&](Mesh::FaceHandle f) {
+        std::string line = "3";
+        for (const auto v : m.fv_range(f))
+            line += " " + std::to_string(v.idx());
         return line + "\n";
     };
     if (format == MeshFormat::ply) {
@@ -139,7 +146,7 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
         out += "element face " + std::to_string(m.n_faces()) + "\nproperty list uchar int vertex_indices\nend_header\n";
         for (const auto v : m.vertices()) {
             if (!binary) {
-                out += vertex_line(v, true);
+                out += vertex_line(v);
                 continue;
             }
             for (int a = 0; a < 3; ++a)
@@ -153,10 +160,7 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
         }
         for (const auto f : m.faces()) {
             if (!binary) {
-                out += "3";
-                for (const auto v : m.fv_range(f))
-                    out += " " + std::to_string(v.idx());
-                out += "\n";
+                out += face_line(f);
                 continue;
             }
             put_le(out, static_cast<std::uint8_t>(3));
@@ -186,13 +190,9 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
         out = std::string(colors ? "C" : "") + (normals ? "N" : "") + "OFF\n";
         out += std::to_string(m.n_vertices()) + " " + std::to_string(m.n_faces()) + " 0\n";
         for (const auto v : m.vertices())
-            out += vertex_line(v, true);
-        for (const auto f : m.faces()) {
-            out += "3";
-            for (const auto v : m.fv_range(f))
-                out += " " + std::to_string(v.idx());
-            out += "\n";
-        }
+            out += vertex_line(v);
+        for (const auto f : m.faces())
+            out += face_line(f);
     }
     return out;
 }

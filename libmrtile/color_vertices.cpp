@@ -35,15 +35,10 @@ std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptio
     if (!options.enabled || !cloud.has_colors() || mesh.n_faces() == 0 || cloud.empty())
         return 0;
     const std::size_t n = mesh.n_vertices();
-    const std::size_t wanted = options.points_per_vertex * n;
-    const std::size_t stride =
-        options.points_per_vertex == 0 || wanted >= cloud.size() ? 1 : (cloud.size() + wanted - 1) / wanted;
-    std::vector<Vec3> sample;
-    std::vector<std::size_t> source; // index into the cloud of each sampled point
-    for (std::size_t i = 0; i < cloud.size(); i += stride) {
+    const std::size_t stride = sample_stride(cloud.size(), options.points_per_vertex * n);
+    std::vector<Vec3> sample; // sample[k] is cloud point k * stride
+    for (std::size_t i = 0; i < cloud.size(); i += stride)
         sample.push_back(cloud.positions[i]);
-        source.push_back(i);
-    }
     const std::vector<ClosestPoint> closest = closest_points(sample, mesh, options.threads);
 
     // Weighted sums per vertex, accumulated in point order (deterministic).
@@ -60,7 +55,7 @@ std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptio
             ++j;
         }
         const std::array<double, 3> b = barycentric(closest[k].point, p[0], p[1], p[2]);
-        const auto& color = cloud.colors[source[k]];
+        const auto& color = cloud.colors[k * stride];
         for (std::size_t c = 0; c < 3; ++c) {
             const auto v = static_cast<std::size_t>(corner[c].idx());
             weight[v] += b[c];
@@ -76,8 +71,7 @@ std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptio
                 s /= weight[v];
             known[v] = 1;
         }
-    for (bool changed = true; changed;) {
-        changed = false;
+    for (;;) {
         std::vector<std::size_t> filled;
         for (const auto vh : mesh.vertices()) {
             const auto v = static_cast<std::size_t>(vh.idx());
@@ -97,9 +91,10 @@ std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptio
                 filled.push_back(v);
             }
         }
+        if (filled.empty())
+            break;
         for (const std::size_t v : filled)
             known[v] = 1;
-        changed = !filled.empty();
     }
     mesh.request_vertex_colors();
     for (const auto vh : mesh.vertices()) {

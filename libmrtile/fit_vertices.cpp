@@ -10,6 +10,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/parallel.h"
+#include "libmrtile/point_cloud.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
@@ -453,10 +454,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)
         return stats;
     const std::size_t n = mesh.n_vertices();
-    // Every stride-th point: points are usually in a spatially coherent order (the hierarchy's), so
-    // a fixed stride keeps the sample spread over the whole surface.
-    const std::size_t wanted = options.points_per_vertex * n;
-    const std::size_t stride = options.points_per_vertex == 0 || wanted >= points.size() ? 1 : (points.size() + wanted - 1) / wanted;
+    const std::size_t stride = sample_stride(points.size(), options.points_per_vertex * n);
     std::vector<Vec3> sample;
     if (stride > 1) {
         sample.reserve(points.size() / stride + 1);

@@ -51,10 +51,10 @@ void recenter(PointCloud& cloud)
     cloud.origin += shift;
 }
 
-void append(PointCloud& into, const PointCloud& from)
+void append(PointCloud& into, PointCloud from)
 {
-    if (into.empty() && into.colors.empty()) {
-        into = from;
+    if (into.empty()) {
+        into = std::move(from);
         return;
     }
     const Vec3 shift = from.origin - into.origin;

@@ -49,9 +49,18 @@ BoundingBox bounding_box(const std::vector<Vec3>& positions);
 void recenter(PointCloud& cloud);
 
 //! \brief Appends `from` to `into` in absolute coordinates (positions rebased onto `into`'s origin; call
-//! recenter afterwards). Colours are kept when either cloud has them; the points of a cloud without
-//! colours are white (glTF multiplies vertex colours into the material, and white leaves it as it is).
-void append(PointCloud& into, const PointCloud& from);
+//! recenter afterwards; into an empty cloud, `from` is moved as it is). Colours are kept when either
+//! cloud has them; the points of a cloud without colours are white (glTF multiplies vertex colours into
+//! the material, and white leaves it as it is).
+void append(PointCloud& into, PointCloud from);
+
+//! \brief Step k for using every k-th of `count` points so that at most about `max_points` are used
+//! (1 when max_points is 0 or not below count). Points in a spatially coherent order (the hierarchy's)
+//! stay spread over the whole surface under a fixed step.
+inline std::size_t sample_stride(std::size_t count, std::size_t max_points)
+{
+    return max_points == 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
+}
 
 //! \brief Checks a cloud before building a hierarchy.
 //! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with

@@ -68,15 +68,12 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     result.tiles = tiles.size();
     result.mesh = build_surface(h, tiles, options.surface, &result.surface);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
+    // A height field stays a graph through both: every face they change faces up its axis.
     FitOptions fit = options.fit;
-    if (result.surface.height_field_used) {
-        fit.vertical = true;
-        fit.axis = result.surface.height_field_axis;
-    }
     SliverOptions slivers = options.slivers;
     if (result.surface.height_field_used) {
-        slivers.vertical = true;
-        slivers.axis = result.surface.height_field_axis;
+        fit.vertical = slivers.vertical = true;
+        fit.axis = slivers.axis = result.surface.height_field_axis;
     }
     // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
     // no new caps: FitOptions::max_flip_angle_degrees).

@@ -26,9 +26,9 @@ struct MeshOptions
     TileOptions tiles;       //!< tile generation (§4.2)
     SurfaceOptions surface;  //!< gap triangulation and manifold assembly (§4.3)
     FanRefineOptions refine; //!< interior vertices where a fan deviates from its tile (refine_fans.h)
-    //! vertex positions fitted to the points, last (fit_vertices.h); vertical in height-field mode
+    //! vertex positions fitted to the points (fit_vertices.h); vertical in height-field mode
     FitOptions fit;
-    //! caps and needles flipped and collapsed away, after the fit (remove_slivers.h)
+    //! caps flipped away before the fit (remove_slivers.h); vertical in height-field mode
     SliverOptions slivers;
     //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
     ColorOptions colors;
@@ -51,7 +51,7 @@ struct MeshResult
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     FitStats fit;                   //!< the vertex fit (fit_vertices)
     SliverStats slivers;            //!< caps and needles removed (remove_slivers)
-    double seconds = 0.0; //!< tiles + surface + fit + slivers
+    double seconds = 0.0; //!< tiles + surface + slivers + fit + colours
 };
 
 //! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.

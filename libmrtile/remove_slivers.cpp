@@ -21,6 +21,13 @@ const double kPi = std::acos(-1.0);
 
 Vec3 point(const Mesh& mesh, Mesh::VertexHandle vh) { return to_vec3(mesh.point(vh)); }
 
+std::array<Vec3, 3> corners(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    auto fv = mesh.cfv_iter(f);
+    const Vec3 p = point(mesh, *fv), q = point(mesh, *++fv), r = point(mesh, *++fv);
+    return {p, q, r};
+}
+
 Vec3 triangle_normal(const Vec3& p, const Vec3& q, const Vec3& r) { return normalized(cross(q - p, r - p)); }
 
 // Whether triangle (p, q, r) has an angle whose cosine is below cos_limit (< 0): the law of cosines at
@@ -96,18 +103,11 @@ public:
     }
 
 private:
-    std::array<Vec3, 3> corners(Mesh::FaceHandle f) const
-    {
-        auto fv = mesh_.cfv_iter(f);
-        const Vec3 p = point(mesh_, *fv), q = point(mesh_, *++fv), r = point(mesh_, *++fv);
-        return {p, q, r};
-    }
-
     bool is_cap(Mesh::FaceHandle f) const
     {
         if (options_.cap_angle_degrees >= 180.0)
             return false;
-        const auto [p, q, r] = corners(f);
+        const auto [p, q, r] = corners(mesh_, f);
         return is_cap_triangle(p, q, r, cap_cos_);
     }
 
@@ -115,7 +115,7 @@ private:
     {
         if (!(options_.needle_ratio > 0.0))
             return false;
-        const auto [p, q, r] = corners(f);
+        const auto [p, q, r] = corners(mesh_, f);
         const double a = squared_distance(p, q), b = squared_distance(q, r), c = squared_distance(r, p);
         return std::min({a, b, c}) < options_.needle_ratio * options_.needle_ratio * std::max({a, b, c});
     }
@@ -214,7 +214,7 @@ private:
         for (const auto g : mesh_.vf_range(vu)) {
             if (g == gone0 || g == gone1)
                 continue;
-            const std::array<Vec3, 3> before = corners(g);
+            const std::array<Vec3, 3> before = corners(mesh_, g);
             std::array<Vec3, 3> after = before;
             int k = 0;
             for (const auto w : mesh_.fv_range(g)) {
@@ -249,8 +249,7 @@ std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees)
     const double cos_limit = std::cos(cap_angle_degrees * kPi / 180.0);
     std::size_t caps = 0;
     for (const auto f : mesh.faces()) {
-        auto fv = mesh.cfv_iter(f);
-        const Vec3 p = point(mesh, *fv), q = point(mesh, *++fv), r = point(mesh, *++fv);
+        const auto [p, q, r] = corners(mesh, f);
         caps += is_cap_triangle(p, q, r, cos_limit);
     }
     return caps;

@@ -314,19 +314,12 @@ std::vector<std::uint32_t> node_hull(const Hierarchy& h, const Node& n)
     return convex_hull(candidates, 0.0);
 }
 
-// Step between the points of a node used for its tile (TileOptions::max_points).
-std::uint32_t sample_stride(std::uint32_t count, std::size_t max_points)
-{
-    if (max_points == 0 || count <= max_points)
-        return 1;
-    return static_cast<std::uint32_t>((count + max_points - 1) / max_points);
-}
-
 // The points a node's tile is built from (TileOptions::max_points), ascending: every stride-th point of
 // its range and its hull points, or all of them.
 std::vector<std::uint32_t> node_sample(const Hierarchy& h, const Node& n, std::size_t max_points)
 {
-    const std::uint32_t stride = sample_stride(n.count(), max_points);
+    // Step between the points of a node used for its tile (TileOptions::max_points).
+    const auto stride = static_cast<std::uint32_t>(sample_stride(n.count(), max_points));
     std::vector<std::uint32_t> sample;
     for (std::uint32_t i = n.begin; i < n.end; i += stride)
         sample.push_back(i);

@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
+#include <vector>
 #include <sys/wait.h>
 
 namespace mrt {
@@ -43,14 +45,23 @@ Result mrtile(const std::string& args, const fs::path& dir)
 
 void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
-// A small sphere sample as an .xyz file.
+// A small sphere sample (a Fibonacci spiral on the unit sphere).
+std::vector<std::array<double, 3>> sphere_points(int n)
+{
+    std::vector<std::array<double, 3>> points;
+    for (int i = 0; i < n; ++i) {
+        const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = i * 2.399963229728653;
+        points.push_back({r * std::cos(phi), r * std::sin(phi), z});
+    }
+    return points;
+}
+
+// The same as an .xyz file.
 fs::path sphere_xyz(const fs::path& dir, int n = 3000)
 {
     std::string text;
-    for (int i = 0; i < n; ++i) {
-        const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = i * 2.399963229728653;
-        text += std::to_string(r * std::cos(phi)) + " " + std::to_string(r * std::sin(phi)) + " " + std::to_string(z) + "\n";
-    }
+    for (const auto& [x, y, z] : sphere_points(n))
+        text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
     const fs::path p = dir / "sphere.xyz";
     write_text(p, text);
     return p;
@@ -288,14 +299,10 @@ TEST(Cli, build_removes_outliers_on_request)
 TEST(Cli, tileset_placement_note)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    std::ifstream in(sphere_xyz(dir, 2000));
-    std::string line, utm;
-    while (std::getline(in, line)) {
-        std::istringstream fields(line);
-        double x = 0, y = 0, z = 0;
-        fields >> x >> y >> z;
+    sphere_xyz(dir, 2000);
+    std::string utm;
+    for (const auto& [x, y, z] : sphere_points(2000))
         utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
-    }
     write_text(dir / "utm.xyz", utm);
     const std::string note = "note: the tileset is placed at its input coordinates";
     const Result far = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "a").string() + " --format 3dtiles", dir);
@@ -315,17 +322,13 @@ TEST(Cli, tileset_placement_note)
 TEST(Cli, several_point_files_are_one_cloud)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    std::ifstream in(sphere_xyz(dir, 6000));
-    std::string line, north = "x,y,z,red,green,blue\n", south;
-    while (std::getline(in, line)) {
-        std::istringstream fields(line);
-        double x = 0, y = 0, z = 0;
-        fields >> x >> y >> z;
-        if (z >= 0) {
-            north += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + ",200,30,30\n";
-        } else {
-            south += line + "\n";
-        }
+    std::string north = "x,y,z,red,green,blue\n", south;
+    for (const auto& [x, y, z] : sphere_points(6000)) {
+        const std::string xyz[3] = {std::to_string(x), std::to_string(y), std::to_string(z)};
+        if (z >= 0)
+            north += xyz[0] + "," + xyz[1] + "," + xyz[2] + ",200,30,30\n";
+        else
+            south += xyz[0] + " " + xyz[1] + " " + xyz[2] + "\n";
     }
     write_text(dir / "north.csv", north);
     write_text(dir / "south.xyz", south);

@@ -339,19 +339,19 @@ TEST(ReadColumns, colours_from_named_columns_and_pts_convention)
                       (std::array<int, 4>{rgb[i][0], rgb[i][1], rgb[i][2], 255}));
     };
     const std::vector<std::array<int, 3>> rgb = {{255, 0, 0}, {0, 128, 0}, {1, 2, 3}, {9, 8, 7}};
-    const PointCloud named = read_points(write_file(dir / "c.txt", "//X,Y,Z,R,G,B\n0.5,-1.25,2,255,0,0\n"
-                                                                   "3,4.75,-5.5,0,128,0\n-0.125,0,8,1,2,3\n1,1,1,9,8,7\n"));
-    expect_points(named, kPoints);
-    expect_colors(named, rgb);
-    const PointCloud words = read_points(write_file(dir / "c.csv", "blue,green,red,x,y,z\n0,0,255,0.5,-1.25,2\n"
-                                                                   "0,128,0,3,4.75,-5.5\n3,2,1,-0.125,0,8\n7,8,9,1,1,1\n"));
-    expect_points(words, kPoints);
-    expect_colors(words, rgb);
-    // Leica PTS: x y z intensity r g b.
-    const PointCloud pts = read_points(write_file(dir / "c.pts", "4\n0.5 -1.25 2 -300 255 0 0\n3 4.75 -5.5 12 0 128 0\n"
-                                                                 "-0.125 0 8 0 1 2 3\n1 1 1 5 9 8 7\n"));
-    expect_points(pts, kPoints);
-    expect_colors(pts, rgb);
+    const std::vector<std::pair<std::string, std::string>> colored = {
+        // CloudCompare's header, then colour columns named in words and in any order.
+        {"c.txt", "//X,Y,Z,R,G,B\n0.5,-1.25,2,255,0,0\n3,4.75,-5.5,0,128,0\n-0.125,0,8,1,2,3\n1,1,1,9,8,7\n"},
+        {"c.csv", "blue,green,red,x,y,z\n0,0,255,0.5,-1.25,2\n0,128,0,3,4.75,-5.5\n3,2,1,-0.125,0,8\n7,8,9,1,1,1\n"},
+        // Leica PTS: x y z intensity r g b.
+        {"c.pts", "4\n0.5 -1.25 2 -300 255 0 0\n3 4.75 -5.5 12 0 128 0\n-0.125 0 8 0 1 2 3\n1 1 1 5 9 8 7\n"},
+    };
+    for (const auto& [name, body] : colored) {
+        SCOPED_TRACE(name);
+        const PointCloud c = read_points(write_file(dir / name, body));
+        expect_points(c, kPoints);
+        expect_colors(c, rgb);
+    }
     // Six columns that are not colours (normals): the points are read without colours.
     const PointCloud normals = read_points(write_file(dir / "n.pts", "0.5 -1.25 2 0 0 1\n3 4.75 -5.5 0 -1 0\n"
                                                                      "-0.125 0 8 1 0 0\n1 1 1 0 0 1\n"));

@@ -507,7 +507,6 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
                 dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
 
-
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
 void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out)
 {
@@ -609,7 +608,7 @@ std::string inputs_name(const std::vector<fs::path>& points)
 Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs& args, const Globals& g)
 {
     const auto start = Clock::now();
-    PointCloud cloud = points.size() == 1 ? read_points(points.front()) : read_points(points);
+    PointCloud cloud = read_points(points);
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
