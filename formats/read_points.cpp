@@ -1176,9 +1176,48 @@ PointCloud read_las(Input& in, const ReadOptions& options)
 }
 
 // ---------------------------------------------------------------------------------------------------
+// Stanford scan lists (.conf): the raw range scans of one object and how each was aligned.
+
+std::array<std::array<double, 3>, 3> placement_rotation(const ScanPlacement& placement)
+{
+    // The rotation of the conjugate quaternion (-x, -y, -z, w); see ScanPlacement.
+    const double x = -placement.rotation[0], y = -placement.rotation[1], z = -placement.rotation[2];
+    const double w = placement.rotation[3];
+    return {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+             {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+             {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
+}
+
+PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOptions& options)
+{
+    PointCloud cloud;
+    std::size_t read = 0;
+    for (const ScanPlacement& scan : read_scan_list(path)) {
+        std::error_code ec;
+        if (!fs::exists(scan.path, ec) && !ec) {
+            if (options.skip_missing_scans)
+                continue;
+            throw IoError(name + ": line " + std::to_string(scan.line) + ": " + scan.path.string() +
+                          ": no such file (to read the scans that exist, set skip_missing_scans; CLI: "
+                          "--skip-missing-scans)");
+        }
+        PointCloud part = read_points(scan.path, options);
+        place_scan(part, scan);
+        append(cloud, std::move(part));
+        ++read;
+        if (options.max_points > 0 && cloud.size() > options.max_points)
+            throw InvalidInput(name + ": its scans hold " + std::to_string(cloud.size()) +
+                               " points together so far, more than max_points " + std::to_string(options.max_points));
+    }
+    if (read == 0)
+        throw IoError(name + ": none of the scans it lists exists");
+    return cloud;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // The format by extension
 
-enum class Format { ply, columns, pts, ptx, obj, off, las };
+enum class Format { ply, columns, pts, ptx, obj, off, las, conf };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
@@ -1206,8 +1245,11 @@ Format format_of(const fs::path& path, const std::string& name)
         return Format::obj;
     if (ext == ".off")
         return Format::off;
+    if (ext == ".conf")
+        return Format::conf;
     throw InvalidInput(name + ": unknown point file extension " + (ext.empty() ? "(none)" : quote_token(ext)) +
-                       "; expected .ply, .las, .ptx, .xyz, .pts, .txt, .csv, .obj or .off (optionally .gz)");
+                       "; expected .ply, .las, .ptx, .xyz, .pts, .txt, .csv, .obj, .off (optionally .gz) or a .conf "
+                       "scan list");
 }
 
 } // namespace
@@ -1216,9 +1258,15 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
 {
     const std::string name = path.string();
     const Format format = format_of(path, name);
+    if (format == Format::conf) {
+        PointCloud cloud = read_conf(path, name, options);
+        recenter(cloud);
+        return cloud;
+    }
     Input in(path, name);
     PointCloud cloud;
     switch (format) {
+    case Format::conf: break; // read above: a list of files, not points
     case Format::ply: cloud = read_ply(in, options); break;
     case Format::columns: cloud = read_columns(in, options, false); break;
     case Format::pts: cloud = read_columns(in, options, true); break;
@@ -1230,6 +1278,74 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     validate(cloud, name);
     recenter(cloud);
     return cloud;
+}
+
+std::vector<ScanPlacement> read_scan_list(const std::filesystem::path& path)
+{
+    const std::string name = path.string();
+    Input in(path, name);
+    std::vector<ScanPlacement> scans;
+    std::string_view line;
+    while (in.next_line(line)) {
+        Tokens tokens(line, kBlanks);
+        std::string_view keyword;
+        if (!tokens.next(keyword) || keyword == "camera")
+            continue; // blank, comment, or the viewer's camera
+        if (keyword != "bmesh" && keyword != "mesh")
+            fail_line(in, quote_token(keyword) + " is not a scan list line (expected bmesh, mesh or camera)");
+        ScanPlacement scan;
+        scan.line = in.line_number();
+        std::string_view file;
+        if (!tokens.next(file))
+            fail_line(in, "expected FILE tx ty tz qx qy qz qw after " + std::string(keyword));
+        double values[7];
+        for (int k = 0; k < 7; ++k) {
+            std::string_view token;
+            if (!tokens.next(token))
+                fail_line(in, "expected 7 numbers after the file name (tx ty tz qx qy qz qw), found " + std::to_string(k));
+            values[k] = number_on_line(in, token);
+        }
+        std::string_view extra;
+        if (tokens.next(extra))
+            fail_line(in, "unexpected " + quote_token(extra) + " after the quaternion");
+        scan.path = path.parent_path() / fs::path(std::string(file));
+        Format kind = Format::ply;
+        try {
+            kind = format_of(scan.path, scan.path.string());
+        } catch (const InvalidInput& e) {
+            fail_line(in, e.what());
+        }
+        if (kind == Format::conf)
+            fail_line(in, "a scan list may not list another scan list");
+        scan.translation = {values[0], values[1], values[2]};
+        const double length = std::sqrt(values[3] * values[3] + values[4] * values[4] + values[5] * values[5] +
+                                        values[6] * values[6]);
+        // Six printed digits leave a length within 1e-5 of one; further off is not a rotation.
+        if (!(std::abs(length - 1) <= 1e-3))
+            fail_line(in, "the quaternion has length " + std::to_string(length) + ", not 1");
+        for (int k = 0; k < 4; ++k)
+            scan.rotation[k] = values[3 + k] / length;
+        scans.push_back(std::move(scan));
+    }
+    if (scans.empty())
+        throw InvalidInput(name + ": lists no scan (no bmesh or mesh line)");
+    return scans;
+}
+
+void place_scan(PointCloud& cloud, const ScanPlacement& placement)
+{
+    const auto r = placement_rotation(placement);
+    const auto rotate = [&r](const Vec3& p) {
+        return Vec3{r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z, r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z,
+                    r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z};
+    };
+    // R (origin + p) + t = R p + (R origin + t): the whole part of the last term stays the origin.
+    const Vec3 moved = rotate(cloud.origin) + placement.translation;
+    const Vec3 origin{std::round(moved.x), std::round(moved.y), std::round(moved.z)};
+    const Vec3 offset = moved - origin;
+    for (Vec3& p : cloud.positions)
+        p = rotate(p) + offset;
+    cloud.origin = origin;
 }
 
 PointCloud read_points(const std::vector<std::filesystem::path>& paths, const ReadOptions& options)

@@ -318,6 +318,32 @@ TEST(Cli, tileset_placement_note)
     EXPECT_EQ(local.out.find(note), std::string::npos) << local.out;
 }
 
+// The Stanford scan list of the repository names ten scans of which two are here: an error naming the
+// first missing one, or, on request, the two meshed as one surface with a note naming what was left out.
+TEST(Cli, stanford_scan_list)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const std::string conf = std::string(MRTILE_SHARED_DATA) + "/bun.conf";
+    const Result missing = mrtile("reconstruct " + conf + " -o " + (dir / "m.ply").string(), dir);
+    EXPECT_EQ(missing.code, 1);
+    EXPECT_NE(missing.err.find("bun.conf: line 4: "), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("bun090.ply: no such file"), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("--skip-missing-scans"), std::string::npos) << missing.err;
+    EXPECT_FALSE(fs::exists(dir / "m.ply"));
+    const Result r = mrtile("reconstruct " + conf + " --skip-missing-scans -o " + (dir / "m.ply").string() +
+                                " --stats-json " + (dir / "m.json").string(),
+                            dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("8 listed scans missing, left out: bun090.ply, bun180.ply"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("80353 points"), std::string::npos) << r.out;
+    const auto stats = nlohmann::json::parse(slurp(dir / "m.json"));
+    EXPECT_EQ(stats["nonmanifold_edges"], 0);
+    EXPECT_EQ(stats["nonmanifold_vertices"], 0);
+    EXPECT_EQ(stats["genus"], 0);
+    // (How well the scans are placed is checked point by point in test_read_points.)
+    EXPECT_LT(stats["mean_distance"].get<double>(), 1e-3);
+}
+
 // Several input files are one cloud: the two halves of a sphere, in two formats, mesh to a closed sphere.
 TEST(Cli, several_point_files_are_one_cloud)
 {

@@ -542,6 +542,38 @@ TEST(ReadRealScans, counts)
     EXPECT_EQ(read_points(shared("bun000.ply")).size(), 40256u);
 }
 
+// The two raw range scans placed by bun.conf overlap on the bunny's front: most points of bun045 lie
+// within a millimetre of some point of bun000 (brute force over a sample); unplaced, almost none do.
+TEST(ReadRealScans, stanford_scan_list_aligns_the_raw_scans)
+{
+    expect_error<IoError>([] { read_points(shared("bun.conf")); }, {"bun.conf", "line 4", "bun090.ply", "no such file"});
+    ReadOptions options;
+    options.skip_missing_scans = true;
+    const PointCloud both = read_points(shared("bun.conf"), options);
+    const PointCloud front = read_points(shared("bun000.ply"));
+    const PointCloud side = read_points(shared("bun045.ply"));
+    ASSERT_EQ(both.size(), front.size() + side.size());
+    const std::vector<Vec3> placed = absolute(both);
+    const std::vector<Vec3> front_points(placed.begin(), placed.begin() + static_cast<std::ptrdiff_t>(front.size()));
+    const std::vector<Vec3> expected_front = absolute(front);
+    for (std::size_t i = 0; i < front.size(); i += 997)
+        for (int a = 0; a < 3; ++a)
+            EXPECT_NEAR(front_points[i][a], expected_front[i][a], 1e-12) << "bun000 is placed by the identity";
+    const auto share_within_mm = [&](const std::vector<Vec3>& points) {
+        std::size_t near = 0, sampled = 0;
+        for (std::size_t i = 0; i < points.size(); i += 40, ++sampled) {
+            double best = std::numeric_limits<double>::infinity();
+            for (const Vec3& q : front_points)
+                best = std::min(best, squared_distance(points[i], q));
+            near += best < 1e-6;
+        }
+        return static_cast<double>(near) / static_cast<double>(sampled);
+    };
+    const std::vector<Vec3> side_placed(placed.begin() + static_cast<std::ptrdiff_t>(front.size()), placed.end());
+    EXPECT_GT(share_within_mm(side_placed), 0.85);
+    EXPECT_LT(share_within_mm(absolute(side)), 0.1);
+}
+
 // The binary igea file read as-is equals the same data re-encoded as ascii by the test.
 TEST(ReadRealScans, igea_binary_matches_ascii_reencoding)
 {
@@ -775,6 +807,56 @@ TEST(ReadLas, malformed_files_fail_cleanly)
     expect_error<IoError>([&] { read_points(cut_gz); }, {cut_gz.string(), "truncated", "3 of 4 points"});
     const fs::path laz_file = write_file(dir / "a.laz", good);
     expect_error<InvalidInput>([&] { read_points(laz_file); }, {laz_file.string(), "decompress first"});
+}
+
+// A scan list's placement, exactly: a quarter turn about z, listed as Stanford lists it (the
+// conjugate rotates the points), then the translation; relative paths, comments, camera lines.
+TEST(ReadScanList, placement_paths_and_malformed_lists)
+{
+    const fs::path dir = test_dir();
+    fs::create_directories(dir / "scans");
+    write_file(dir / "scans" / "a.xyz", "1 0 0\n0 2 0\n0 0 3\n");
+    write_file(dir / "scans" / "b.xyz", "1 0 0\n");
+    const std::string half = "0.7071067811865476";
+    const fs::path list = write_file(dir / "scene.conf", "# two scans\ncamera 0 0 1 0 0 0 1\n\nbmesh scans/a.xyz 10 20 30 0 0 " +
+                                                              half + " " + half + "\nmesh scans/b.xyz 0 0 0 0 0 0 1\n");
+    const std::vector<ScanPlacement> scans = read_scan_list(list);
+    ASSERT_EQ(scans.size(), 2u);
+    EXPECT_EQ(scans[0].path, dir / "scans" / "a.xyz");
+    EXPECT_EQ(scans[0].line, 4u);
+    const PointCloud c = read_points(list);
+    const std::vector<Vec3> got = absolute(c);
+    const std::vector<Vec3> expected = {{10, 19, 30}, {12, 20, 30}, {10, 20, 33}, {1, 0, 0}};
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i)
+        for (int a = 0; a < 3; ++a)
+            EXPECT_NEAR(got[i][a], expected[i][a], 1e-12) << "point " << i << " axis " << a;
+
+    const std::vector<ReadErrorCase> cases = {
+        {"empty.conf", "camera 0 0 1 0 0 0 1\n", "lists no scan", false},
+        {"word.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nscan b.xyz\n", "line 2: 'scan' is not a scan list line", false},
+        {"short.conf", "bmesh scans/a.xyz 0 0 0 0 0 1\n", "line 1: expected 7 numbers", false},
+        {"long.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1 5\n", "line 1: unexpected '5'", false},
+        {"nan.conf", "bmesh scans/a.xyz 0 nan 0 0 0 0 1\n", "line 1: 'nan' is not a finite number", false},
+        {"quat.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 2\n", "line 1: the quaternion has length 2", false},
+        {"zero.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 0\n", "line 1: the quaternion has length 0", false},
+        {"nested.conf", "bmesh scene.conf 0 0 0 0 0 0 1\n", "line 1: a scan list may not list another", false},
+        {"kind.conf", "bmesh scans/a.e57 0 0 0 0 0 0 1\n", "unknown point file extension", false},
+    };
+    expect_read_errors(dir, cases);
+    const fs::path gone = write_file(dir / "gone.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/c.xyz 0 0 0 0 0 0 1\n");
+    expect_error<IoError>([&] { read_points(gone); }, {gone.string(), "line 2", "c.xyz", "no such file", "skip_missing_scans"});
+    ReadOptions skip;
+    skip.skip_missing_scans = true;
+    EXPECT_EQ(read_points(gone, skip).size(), 3u);
+    const fs::path none = write_file(dir / "none.conf", "bmesh scans/c.xyz 0 0 0 0 0 0 1\n");
+    expect_error<IoError>([&] { read_points(none, skip); }, {none.string(), "none of the scans"});
+    const fs::path bad_scan = write_file(dir / "bad.conf", "bmesh scans/d.xyz 0 0 0 0 0 0 1\n");
+    write_file(dir / "scans" / "d.xyz", "1 2\n");
+    expect_error<InvalidInput>([&] { read_points(bad_scan); }, {(dir / "scans" / "d.xyz").string(), "line 1"});
+    skip.max_points = 3;
+    const fs::path twice = write_file(dir / "twice.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/b.xyz 0 0 0 0 0 0 1\n");
+    expect_error<InvalidInput>([&] { read_points(twice, skip); }, {twice.string(), "4 points", "max_points 3"});
 }
 
 TEST(ReadErrors, missing_file_directory_and_unknown_extension)

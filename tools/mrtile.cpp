@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -103,6 +104,7 @@ struct BuildArgs
     bool no_reclassify = false;
     bool remove_outliers = false;
     bool keep_duplicates = false;
+    bool skip_missing_scans = false;
 
     // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
     void add(CLI::App* cmd, const std::string& prefix)
@@ -120,6 +122,8 @@ struct BuildArgs
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
         cmd->add_flag("--keep-duplicates", keep_duplicates, "do not merge points at exactly the same position");
+        cmd->add_flag("--skip-missing-scans", skip_missing_scans,
+                      "scan lists (.conf): read the scans that exist, leave out the missing ones");
         const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
@@ -605,10 +609,36 @@ std::string inputs_name(const std::vector<fs::path>& points)
     return name;
 }
 
+// Scans a .conf lists but the folder lacks: named, since leaving them out changes the model.
+void note_missing_scans(const std::vector<fs::path>& points)
+{
+    for (const fs::path& path : points) {
+        std::string ext = path.extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+        if (ext != ".conf")
+            continue;
+        std::string missing;
+        std::size_t count = 0;
+        for (const ScanPlacement& scan : read_scan_list(path)) {
+            std::error_code ec;
+            if (!fs::exists(scan.path, ec) && !ec) {
+                missing += (count++ == 0 ? "" : ", ") + scan.path.filename().string();
+            }
+        }
+        if (count > 0)
+            std::printf("note: %s: %zu listed scan%s missing, left out: %s\n", path.string().c_str(), count,
+                        count > 1 ? "s" : "", missing.c_str());
+    }
+}
+
 Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs& args, const Globals& g)
 {
     const auto start = Clock::now();
-    PointCloud cloud = read_points(points);
+    ReadOptions read;
+    read.skip_missing_scans = args.skip_missing_scans;
+    if (args.skip_missing_scans)
+        note_missing_scans(points);
+    PointCloud cloud = read_points(points, read);
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
