@@ -1176,6 +1176,336 @@ PointCloud read_las(Input& in, const ReadOptions& options)
 }
 
 // ---------------------------------------------------------------------------------------------------
+// PCD (the Point Cloud Library's format; robotics and depth cameras): an ASCII header, then the points
+// as text, as packed binary records, or LZF-compressed field by field. Organized clouds (depth images)
+// mark pixels without a measurement with NaN coordinates: those points are left out, as PTX's "0 0 0".
+
+struct PcdField
+{
+    std::string name;
+    char type = 'F';             // F float, I signed, U unsigned
+    std::size_t size = 4;        // bytes of one element
+    std::uint64_t count = 1;     // elements
+    std::size_t offset = 0;      // in a binary record (padding fields "_" included)
+    std::uint64_t column = 0;    // first value of the field on an ASCII line
+};
+
+enum class PcdData { ascii, binary, compressed };
+
+struct PcdHeader
+{
+    std::vector<PcdField> fields;
+    std::uint64_t points = 0;
+    PcdData data = PcdData::ascii;
+    std::size_t record_size = 0;   // bytes per point, padding included
+    std::size_t packed_size = 0;   // bytes per point in compressed data (padding fields are not stored)
+    std::uint64_t values = 0;      // numbers per ASCII line
+    int x = -1, y = -1, z = -1, rgb = -1;
+};
+
+std::uint64_t pcd_number(const Input& in, std::string_view token, std::uint64_t largest)
+{
+    std::uint64_t value = 0;
+    if (!parse_count(token, value) || value > largest)
+        fail_line(in, quote_token(token) + " is not a count (0.." + std::to_string(largest) + ")");
+    return value;
+}
+
+PcdHeader read_pcd_header(Input& in)
+{
+    PcdHeader h;
+    std::vector<std::string_view> tokens;
+    std::vector<std::size_t> sizes;
+    std::string types;
+    std::vector<std::uint64_t> counts;
+    std::uint64_t width = 0, height = 1, points = 0;
+    bool have_width = false, have_points = false, have_data = false;
+    std::string_view line;
+    while (!have_data && in.next_line(line)) {
+        Tokens split(line, kBlanks);
+        std::string_view keyword, token;
+        if (!split.next(keyword))
+            continue; // blank or "# .PCD v0.7" comment
+        tokens.clear();
+        while (split.next(token))
+            tokens.push_back(token);
+        if (keyword == "VERSION" || keyword == "VIEWPOINT")
+            continue; // the sensor pose is metadata: PCL does not apply it to the points either
+        if (keyword == "FIELDS" || keyword == "COLUMNS") {
+            for (std::string_view name : tokens)
+                h.fields.push_back({std::string(name)});
+        } else if (keyword == "SIZE") {
+            for (std::string_view t : tokens) {
+                const std::uint64_t s = pcd_number(in, t, 8);
+                if (s != 1 && s != 2 && s != 4 && s != 8)
+                    fail_line(in, "field size " + std::string(t) + " is not 1, 2, 4 or 8");
+                sizes.push_back(static_cast<std::size_t>(s));
+            }
+        } else if (keyword == "TYPE") {
+            for (std::string_view t : tokens) {
+                if (t != "F" && t != "I" && t != "U")
+                    fail_line(in, "field type " + quote_token(t) + " is not F, I or U");
+                types.push_back(t[0]);
+            }
+        } else if (keyword == "COUNT") {
+            for (std::string_view t : tokens) {
+                counts.push_back(pcd_number(in, t, 1u << 20));
+                if (counts.back() == 0)
+                    fail_line(in, "a field count of 0");
+            }
+        } else if (keyword == "WIDTH" || keyword == "HEIGHT" || keyword == "POINTS") {
+            if (tokens.size() != 1)
+                fail_line(in, std::string(keyword) + " needs one number");
+            const std::uint64_t value = pcd_number(in, tokens[0], std::uint64_t{1} << 40);
+            if (keyword == "WIDTH") {
+                width = value;
+                have_width = true;
+            } else if (keyword == "HEIGHT") {
+                height = value;
+            } else {
+                points = value;
+                have_points = true;
+            }
+        } else if (keyword == "DATA") {
+            if (tokens.size() != 1 || (tokens[0] != "ascii" && tokens[0] != "binary" && tokens[0] != "binary_compressed"))
+                fail_line(in, "DATA must be ascii, binary or binary_compressed");
+            h.data = tokens[0] == "ascii" ? PcdData::ascii : tokens[0] == "binary" ? PcdData::binary : PcdData::compressed;
+            have_data = true;
+        } else {
+            fail_line(in, quote_token(keyword) + " is not a PCD header line");
+        }
+    }
+    if (!have_data)
+        throw IoError(in.name() + ": truncated: the PCD header ends without a DATA line");
+    const std::size_t n = h.fields.size();
+    if (n == 0 || sizes.size() != n || types.size() != n || (!counts.empty() && counts.size() != n))
+        throw InvalidInput(in.name() + ": malformed PCD header: FIELDS, SIZE, TYPE and COUNT must name the same " +
+                           "number of fields (" + std::to_string(n) + ", " + std::to_string(sizes.size()) + ", " +
+                           std::to_string(types.size()) + ", " + std::to_string(counts.empty() ? n : counts.size()) + ")");
+    if (!have_width && !have_points)
+        throw InvalidInput(in.name() + ": malformed PCD header: neither WIDTH nor POINTS");
+    const std::uint64_t grid = saturating_mul(width, height);
+    if (have_width && have_points && grid != points)
+        throw InvalidInput(in.name() + ": malformed PCD header: POINTS " + std::to_string(points) + " but WIDTH x HEIGHT = " +
+                           std::to_string(width) + " x " + std::to_string(height));
+    h.points = have_points ? points : grid;
+    std::uint64_t record = 0, packed = 0, values = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        PcdField& f = h.fields[i];
+        f.type = types[i];
+        f.size = sizes[i];
+        f.count = counts.empty() ? 1 : counts[i];
+        if (f.type == 'F' && f.size != 4 && f.size != 8)
+            throw InvalidInput(in.name() + ": malformed PCD header: float field " + f.name + " of size " + std::to_string(f.size));
+        f.offset = static_cast<std::size_t>(record);
+        f.column = values;
+        record += f.size * f.count;
+        if (f.name != "_")
+            packed += f.size * f.count;
+        values += f.count;
+        const int index = static_cast<int>(i);
+        if (f.name == "x") h.x = index;
+        if (f.name == "y") h.y = index;
+        if (f.name == "z") h.z = index;
+        if ((f.name == "rgb" || f.name == "rgba") && f.size == 4)
+            h.rgb = index;
+    }
+    if (h.x < 0 || h.y < 0 || h.z < 0)
+        throw InvalidInput(in.name() + ": the PCD fields have no x, y and z");
+    for (int axis : {h.x, h.y, h.z})
+        if (h.fields[static_cast<std::size_t>(axis)].size == 8 && h.fields[static_cast<std::size_t>(axis)].type != 'F')
+            throw InvalidInput(in.name() + ": 64-bit integer coordinates are not read");
+    h.record_size = static_cast<std::size_t>(record);
+    h.packed_size = static_cast<std::size_t>(packed);
+    h.values = values;
+    return h;
+}
+
+PlyType pcd_type(const PcdField& f)
+{
+    if (f.type == 'F')
+        return f.size == 4 ? PlyType::float32 : PlyType::float64;
+    const bool is_signed = f.type == 'I';
+    switch (f.size) {
+    case 1: return is_signed ? PlyType::int8 : PlyType::uint8;
+    case 2: return is_signed ? PlyType::int16 : PlyType::uint16;
+    default: return is_signed ? PlyType::int32 : PlyType::uint32;
+    }
+}
+
+// PCL packs a colour into 32 bits, 0xAARRGGBB, stored in a float ("rgb") or an unsigned ("rgba").
+Rgba pcd_color(std::uint32_t bits)
+{
+    return {static_cast<std::uint8_t>(bits >> 16), static_cast<std::uint8_t>(bits >> 8), static_cast<std::uint8_t>(bits), 255};
+}
+
+// Adds one point unless a coordinate is NaN (no measurement); other non-finite values are errors.
+void add_pcd_point(const Input& in, const Vec3& p, const Rgba* color, PointCloud& cloud, std::uint64_t index)
+{
+    if (std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z))
+        return;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw InvalidInput(in.name() + ": point " + std::to_string(index) + " has an infinite coordinate");
+    cloud.positions.push_back(p);
+    if (color)
+        cloud.colors.push_back(*color);
+}
+
+// LZF (Marc Lehmann's format, as PCL writes it): a control byte below 32 is a run of control + 1
+// literal bytes; above, a back-reference of length (control >> 5) + 2 (7 meaning "plus the next byte")
+// at distance ((control & 31) << 8 | next byte) + 1. False when the data is not valid LZF or does not
+// decompress to exactly out.size() bytes.
+bool lzf_decompress(const std::vector<unsigned char>& in, std::vector<unsigned char>& out)
+{
+    std::size_t ip = 0, op = 0;
+    while (ip < in.size()) {
+        const unsigned control = in[ip++];
+        if (control < 32) {
+            const std::size_t length = control + 1;
+            if (in.size() - ip < length || out.size() - op < length)
+                return false;
+            std::memcpy(out.data() + op, in.data() + ip, length);
+            ip += length;
+            op += length;
+            continue;
+        }
+        std::size_t length = control >> 5;
+        if (length == 7) {
+            if (ip >= in.size())
+                return false;
+            length += in[ip++];
+        }
+        if (ip >= in.size())
+            return false;
+        const std::size_t distance = ((static_cast<std::size_t>(control & 31) << 8) | in[ip++]) + 1;
+        length += 2;
+        if (distance > op || out.size() - op < length)
+            return false;
+        for (std::size_t k = 0; k < length; ++k, ++op) // may overlap: byte by byte
+            out[op] = out[op - distance];
+    }
+    return op == out.size();
+}
+
+PointCloud read_pcd(Input& in, const ReadOptions& options)
+{
+    const PcdHeader h = read_pcd_header(in);
+    check_max_points(in, h.points, options);
+    const bool colors = options.keep_colors && h.rgb >= 0;
+    const PcdField& fx = h.fields[static_cast<std::size_t>(h.x)];
+    const PcdField& fy = h.fields[static_cast<std::size_t>(h.y)];
+    const PcdField& fz = h.fields[static_cast<std::size_t>(h.z)];
+    PointCloud cloud;
+    if (h.data == PcdData::ascii) {
+        reserve_capped(cloud, h.points, kReserveCap, colors);
+        std::vector<std::string_view> values;
+        std::string_view line, token;
+        for (std::uint64_t i = 0; i < h.points;) {
+            if (!in.next_line(line))
+                throw IoError(in.name() + ": truncated: " + std::to_string(i) + " of " + std::to_string(h.points) + " points");
+            Tokens tokens(line, kBlanks);
+            values.clear();
+            while (values.size() < h.values && tokens.next(token))
+                values.push_back(token);
+            if (values.empty())
+                continue;
+            if (values.size() < h.values)
+                fail_line(in, "expected " + std::to_string(h.values) + " values, found " + std::to_string(values.size()));
+            const auto coordinate = [&](const PcdField& f) {
+                const std::string_view t = values[f.column];
+                double v = 0;
+                if (parse_number(t, v) == Parsed::not_a_number)
+                    fail_line(in, quote_token(t) + " is not a number");
+                return v; // NaN: no measurement; checked with the point
+            };
+            const Vec3 p{coordinate(fx), coordinate(fy), coordinate(fz)};
+            Rgba color{};
+            if (colors) {
+                // PCL writes the packed colour as an unsigned integer even in a float field (opaque
+                // colours are NaN as floats); older versions wrote the float, whose bits are the colour.
+                const PcdField& f = h.fields[static_cast<std::size_t>(h.rgb)];
+                std::uint64_t bits = 0;
+                if (!parse_count(values[f.column], bits) || bits > 0xFFFFFFFFu) {
+                    const float packed = static_cast<float>(coordinate(f));
+                    std::uint32_t float_bits = 0xFFFFFFFFu; // a NaN colour is lost: white
+                    if (!std::isnan(packed))
+                        std::memcpy(&float_bits, &packed, sizeof float_bits);
+                    bits = float_bits;
+                }
+                color = pcd_color(static_cast<std::uint32_t>(bits));
+            }
+            add_pcd_point(in, p, colors ? &color : nullptr, cloud, i);
+            ++i;
+        }
+        return cloud;
+    }
+    const bool swap = !host_is_little_endian();
+    const auto record_point = [&](const char* x, const char* y, const char* z, const char* rgb, std::uint64_t i) {
+        const Vec3 p{decode(x, pcd_type(fx), swap), decode(y, pcd_type(fy), swap), decode(z, pcd_type(fz), swap)};
+        Rgba color{};
+        if (colors)
+            color = pcd_color(load<std::uint32_t>(rgb, swap));
+        add_pcd_point(in, p, colors ? &color : nullptr, cloud, i);
+    };
+    if (h.data == PcdData::binary) {
+        const std::uint64_t bytes = saturating_mul(h.points, h.record_size);
+        if (in.file_size() > 0 && bytes > in.file_size() - std::min(in.file_size(), in.offset()))
+            throw IoError(in.name() + ": truncated: the header declares " + std::to_string(h.points) + " points of " +
+                          std::to_string(h.record_size) + " bytes, more than the file holds");
+        reserve_capped(cloud, h.points, kReserveCap, colors);
+        for (std::uint64_t i = 0; i < h.points; ++i) {
+            const char* r = in.take(h.record_size);
+            if (!r)
+                throw IoError(in.name() + ": truncated: " + std::to_string(i) + " of " + std::to_string(h.points) + " points");
+            record_point(r + fx.offset, r + fy.offset, r + fz.offset,
+                         colors ? r + h.fields[static_cast<std::size_t>(h.rgb)].offset : nullptr, i);
+        }
+        return cloud;
+    }
+    // binary_compressed: two 32-bit sizes, then the LZF data of every field's values in turn.
+    const char* sizes = in.take(8);
+    if (!sizes)
+        throw IoError(in.name() + ": truncated: the compressed PCD data has no sizes");
+    const std::uint32_t compressed = load<std::uint32_t>(sizes, swap), uncompressed = load<std::uint32_t>(sizes + 4, swap);
+    if (uncompressed != saturating_mul(h.points, h.packed_size))
+        throw InvalidInput(in.name() + ": the compressed PCD data unpacks to " + std::to_string(uncompressed) +
+                           " bytes, not the " + std::to_string(h.points) + " x " + std::to_string(h.packed_size) +
+                           " the header declares");
+    // One LZF byte unpacks to at most about 88 (a 3-byte reference copies up to 264): anything more is
+    // not LZF, and would otherwise size an allocation by a number the file made up.
+    if (uncompressed > 100 * std::uint64_t{compressed} + 64)
+        throw InvalidInput(in.name() + ": the compressed PCD data cannot unpack to " + std::to_string(uncompressed) + " bytes");
+    std::vector<unsigned char> packed;
+    for (std::uint64_t left = compressed; left > 0;) {
+        const std::size_t step = static_cast<std::size_t>(std::min<std::uint64_t>(left, kBufferSize));
+        const char* chunk = in.take(step);
+        if (!chunk)
+            throw IoError(in.name() + ": truncated: the compressed PCD data ends early");
+        packed.insert(packed.end(), chunk, chunk + step);
+        left -= step;
+    }
+    std::vector<unsigned char> data(uncompressed);
+    if (!lzf_decompress(packed, data))
+        throw InvalidInput(in.name() + ": corrupt compressed PCD data (not LZF, or not " + std::to_string(uncompressed) + " bytes)");
+    // Where each stored field's values start: fields follow one another, padding fields are not stored.
+    std::vector<std::size_t> start(h.fields.size(), 0);
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < h.fields.size(); ++k)
+        if (h.fields[k].name != "_") {
+            start[k] = at;
+            at += static_cast<std::size_t>(h.points) * h.fields[k].size * h.fields[k].count;
+        }
+    const auto element = [&](int field, std::uint64_t i) {
+        const PcdField& f = h.fields[static_cast<std::size_t>(field)];
+        return reinterpret_cast<const char*>(data.data()) + start[static_cast<std::size_t>(field)] + i * f.size * f.count;
+    };
+    cloud.positions.reserve(static_cast<std::size_t>(h.points));
+    for (std::uint64_t i = 0; i < h.points; ++i)
+        record_point(element(h.x, i), element(h.y, i), element(h.z, i), colors ? element(h.rgb, i) : nullptr, i);
+    return cloud;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // Stanford scan lists (.conf): the raw range scans of one object and how each was aligned.
 
 std::array<std::array<double, 3>, 3> placement_rotation(const ScanPlacement& placement)
@@ -1217,7 +1547,7 @@ PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOp
 // ---------------------------------------------------------------------------------------------------
 // The format by extension
 
-enum class Format { ply, columns, pts, ptx, obj, off, las, conf };
+enum class Format { ply, columns, pts, ptx, obj, off, las, pcd, conf };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
@@ -1236,6 +1566,8 @@ Format format_of(const fs::path& path, const std::string& name)
         return Format::las;
     if (ext == ".ptx")
         return Format::ptx;
+    if (ext == ".pcd")
+        return Format::pcd;
     if (ext == ".laz")
         throw InvalidInput(name + ": LAZ (compressed LAS) is not read; decompress first (laszip -i IN.laz -o "
                                   "OUT.las, or pdal translate)");
@@ -1248,7 +1580,7 @@ Format format_of(const fs::path& path, const std::string& name)
     if (ext == ".conf")
         return Format::conf;
     throw InvalidInput(name + ": unknown point file extension " + (ext.empty() ? "(none)" : quote_token(ext)) +
-                       "; expected .ply, .las, .ptx, .xyz, .pts, .txt, .csv, .obj, .off (optionally .gz) or a .conf "
+                       "; expected .ply, .las, .ptx, .pcd, .xyz, .pts, .txt, .csv, .obj, .off (optionally .gz) or a .conf "
                        "scan list");
 }
 
@@ -1272,6 +1604,7 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     case Format::pts: cloud = read_columns(in, options, true); break;
     case Format::las: cloud = read_las(in, options); break;
     case Format::ptx: cloud = read_ptx(in, options); break;
+    case Format::pcd: cloud = read_pcd(in, options); break;
     case Format::obj: cloud = read_obj(in, options); break;
     case Format::off: cloud = read_off(in, options); break;
     }

@@ -1,7 +1,7 @@
 #pragma once
 //! \file read_points.h
-//! \brief Point readers: PLY (ascii, binary little/big endian), LAS 1.0-1.4, PTX, XYZ/PTS/TXT/CSV, OBJ
-//! (v lines), OFF, Stanford scan lists (.conf), each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
+//! \brief Point readers: PLY (ascii, binary little/big endian), LAS 1.0-1.4, PTX, PCD, XYZ/PTS/TXT/CSV,
+//! OBJ (v lines), OFF, Stanford scan lists (.conf), each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
 //! \details What is read from each format:
 //!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
 //!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
@@ -13,6 +13,11 @@
 //!  - PTX (terrestrial scanners): every scan, each through its registration matrix (row vectors, the
 //!    translation in the last row); "0 0 0" points (no return) are left out; x y z intensity r g b
 //!    colours are kept when every point has them.
+//!  - PCD (the Point Cloud Library's format), DATA ascii, binary or binary_compressed (LZF, stored field
+//!    by field), any field layout with x, y, z (F, I or U of 1-8 bytes; padding fields "_"); PCL's
+//!    packed 32-bit colour ("rgb" or "rgba", as float bits or, in ASCII, an unsigned integer). Points of
+//!    an organized cloud without a measurement (a NaN coordinate) are left out; VIEWPOINT is metadata
+//!    (PCL does not apply it either). A binary_compressed block is one LZF stream, so it is held whole.
 //!  - XYZ/PTS/TXT/CSV: three columns of each line (separated by spaces, tabs, commas or semicolons).
 //!    Blank lines, lines starting with '#' or "//" and a UTF-8 byte order mark are skipped, so is a
 //!    first line holding a single integer (the point count of PTS files; in a .pts file every such line, as

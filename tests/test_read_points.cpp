@@ -618,6 +618,213 @@ void expect_read_errors(const fs::path& dir, const std::vector<ReadErrorCase>& c
     }
 }
 
+// --- PCD ---------------------------------------------------------------------------------------
+
+// A greedy LZF encoder (literal runs and back-references up to `window` bytes back, at most 8 KiB),
+// enough to write the compressed PCD files PCL writes.
+std::string lzf_compress(const std::string& data, std::size_t window = 8192)
+{
+    std::string out, literals;
+    const auto flush = [&] {
+        for (std::size_t k = 0; k < literals.size(); k += 32) {
+            const std::size_t n = std::min<std::size_t>(32, literals.size() - k);
+            out += static_cast<char>(n - 1);
+            out += literals.substr(k, n);
+        }
+        literals.clear();
+    };
+    for (std::size_t i = 0; i < data.size();) {
+        std::size_t best = 0, best_distance = 0;
+        for (std::size_t j = i >= window ? i - window : 0; j < i; ++j) {
+            std::size_t n = 0;
+            while (i + n < data.size() && n < 264 && data[j + n] == data[i + n])
+                ++n;
+            if (n > best) {
+                best = n;
+                best_distance = i - j;
+            }
+        }
+        if (best < 3) {
+            literals += data[i++];
+            continue;
+        }
+        flush();
+        const std::size_t length = best - 2, distance = best_distance - 1;
+        if (length < 7) {
+            out += static_cast<char>((length << 5) | (distance >> 8));
+        } else {
+            out += static_cast<char>((7 << 5) | (distance >> 8));
+            out += static_cast<char>(length - 7);
+        }
+        out += static_cast<char>(distance & 0xFF);
+        i += best;
+    }
+    flush();
+    return out;
+}
+
+template <typename T>
+std::string bytes_of(T value)
+{
+    std::string s(sizeof(T), '\0');
+    std::memcpy(s.data(), &value, sizeof(T));
+    return s;
+}
+
+// An organized 3 x 2 cloud (two pixels without a measurement, NaN) whose valid points are kPoints,
+// with a double z, a padding field, PCL's packed colour and an intensity.
+std::string pcd_file(const std::string& data)
+{
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<Vec3> points = kPoints;
+    points.insert(points.begin() + 1, Vec3{nan, nan, nan});
+    points.push_back(Vec3{nan, nan, nan});
+    std::vector<std::uint32_t> rgb;
+    for (std::size_t i = 0, k = 0; i < points.size(); ++i) {
+        if (std::isnan(points[i].x)) {
+            rgb.push_back(0);
+            continue;
+        }
+        const auto& c = kColors[k++];
+        rgb.push_back((0xFFu << 24) | (static_cast<std::uint32_t>(c[0]) << 16) | (static_cast<std::uint32_t>(c[1]) << 8) |
+                      static_cast<std::uint32_t>(c[2]));
+    }
+    std::string s = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z _ rgb intensity\n"
+                    "SIZE 4 4 8 1 4 2\nTYPE F F F U F U\nCOUNT 1 1 1 3 1 1\nWIDTH 3\nHEIGHT 2\n"
+                    "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 6\nDATA " + data + "\n";
+    if (data == "ascii") {
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            char line[160];
+            std::snprintf(line, sizeof line, "%.9g %.9g %.17g 0 0 0 %u 7\n", points[i].x, points[i].y, points[i].z, rgb[i]);
+            s += line;
+        }
+    } else if (data == "binary") {
+        for (std::size_t i = 0; i < points.size(); ++i)
+            s += bytes_of(static_cast<float>(points[i].x)) + bytes_of(static_cast<float>(points[i].y)) + bytes_of(points[i].z) +
+                 std::string(3, '\0') + bytes_of(rgb[i]) + bytes_of(std::uint16_t{7});
+    } else {
+        std::string columns;
+        for (const Vec3& p : points)
+            columns += bytes_of(static_cast<float>(p.x));
+        for (const Vec3& p : points)
+            columns += bytes_of(static_cast<float>(p.y));
+        for (const Vec3& p : points)
+            columns += bytes_of(p.z);
+        for (std::uint32_t c : rgb)
+            columns += bytes_of(c);
+        for (std::size_t i = 0; i < points.size(); ++i)
+            columns += bytes_of(std::uint16_t{7});
+        const std::string packed = lzf_compress(columns);
+        s += bytes_of(static_cast<std::uint32_t>(packed.size())) + bytes_of(static_cast<std::uint32_t>(columns.size())) + packed;
+    }
+    return s;
+}
+
+TEST(ReadPcd, ascii_binary_and_compressed_organized_clouds_with_colours)
+{
+    const fs::path dir = test_dir();
+    for (const std::string data : {"ascii", "binary", "binary_compressed"}) {
+        SCOPED_TRACE(data);
+        const PointCloud c = read_points(write_file(dir / (data + ".pcd"), pcd_file(data)));
+        expect_points(c, kPoints);
+        ASSERT_EQ(c.colors.size(), kPoints.size());
+        for (std::size_t i = 0; i < kPoints.size(); ++i)
+            for (int k = 0; k < 3; ++k)
+                EXPECT_EQ(c.colors[i][k], kColors[i][k]) << "point " << i;
+        ReadOptions plain;
+        plain.keep_colors = false;
+        EXPECT_FALSE(read_points(dir / (data + ".pcd"), plain).has_colors());
+    }
+    // A long regular cloud: long and overlapping back-references.
+    std::string columns;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int i = 0; i < 2000; ++i)
+            columns += bytes_of(static_cast<float>(axis == 0 ? i % 50 : axis == 1 ? i / 50 : 1));
+    const std::string packed = lzf_compress(columns);
+    EXPECT_LT(packed.size(), columns.size() / 4);
+    const PointCloud many = read_points(write_file(dir / "many.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2000\nHEIGHT 1\n"
+                                                                     "DATA binary_compressed\n" +
+                                                                         bytes_of(static_cast<std::uint32_t>(packed.size())) +
+                                                                         bytes_of(static_cast<std::uint32_t>(columns.size())) + packed));
+    ASSERT_EQ(many.size(), 2000u);
+    const std::vector<Vec3> got = absolute(many);
+    for (int i = 0; i < 2000; ++i)
+        ASSERT_EQ(got[static_cast<std::size_t>(i)], (Vec3{static_cast<double>(i % 50), static_cast<double>(i / 50), 1.0})) << i;
+    // Old PCL wrote the packed colour in ASCII as a float (its bit pattern); a minimal v0.5-style
+    // header without VERSION, COUNT, VIEWPOINT or POINTS.
+    const std::uint32_t red = 0x00FF0000u;
+    float as_float = 0;
+    std::memcpy(&as_float, &red, 4);
+    char line[64];
+    std::snprintf(line, sizeof line, "1 2 3 %.9g\n", static_cast<double>(as_float));
+    const PointCloud old = read_points(write_file(dir / "old.pcd", std::string("FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\n"
+                                                                                "WIDTH 1\nHEIGHT 1\nDATA ascii\n") + line));
+    expect_points(old, {{1, 2, 3}});
+    ASSERT_TRUE(old.has_colors());
+    EXPECT_EQ(old.colors[0][0], 255);
+    EXPECT_EQ(old.colors[0][1], 0);
+}
+
+// The bunny written as PCL would write it (float fields, compressed by field) reads back as the PLY.
+TEST(ReadPcd, bunny_as_compressed_pcd_equals_the_ply)
+{
+    const PointCloud ply = read_points(shared("bun_zipper.ply"));
+    const std::vector<Vec3> points = absolute(ply);
+    std::string columns;
+    for (int axis = 0; axis < 3; ++axis)
+        for (const Vec3& p : points)
+            columns += bytes_of(static_cast<float>(p[axis]));
+    const std::string packed = lzf_compress(columns, 64);
+    const std::string n = std::to_string(points.size());
+    const fs::path path = write_file(test_dir() / "bunny.pcd",
+                                     "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n"
+                                     "TYPE F F F\nCOUNT 1 1 1\nWIDTH " + n + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n +
+                                         "\nDATA binary_compressed\n" + bytes_of(static_cast<std::uint32_t>(packed.size())) +
+                                         bytes_of(static_cast<std::uint32_t>(columns.size())) + packed);
+    const PointCloud pcd = read_points(path);
+    ASSERT_EQ(pcd.size(), ply.size());
+    const std::vector<Vec3> got = absolute(pcd);
+    for (std::size_t i = 0; i < points.size(); ++i)
+        for (int a = 0; a < 3; ++a)
+            ASSERT_EQ(static_cast<float>(got[i][a]), static_cast<float>(points[i][a])) << i;
+}
+
+TEST(ReadPcd, malformed_files_fail_cleanly)
+{
+    const fs::path dir = test_dir();
+    const std::string head = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 1\n";
+    const std::string binary = pcd_file("binary"), compressed = pcd_file("binary_compressed");
+    const std::size_t binary_data = binary.find("DATA binary\n") + 12;
+    const std::size_t compressed_data = compressed.find("DATA binary_compressed\n") + 23;
+    std::string bad_lzf = compressed;
+    bad_lzf[compressed_data + 8] = static_cast<char>(0xE0); // a back-reference before any output
+    std::string big_sizes = compressed;
+    const std::uint32_t huge = 0xFFFFFFF0u;
+    std::memcpy(&big_sizes[compressed_data + 4], &huge, 4);
+    const std::vector<ReadErrorCase> cases = {
+        {"nodata.pcd", head, "without a DATA line", true},
+        {"word.pcd", "FIELDS x y z\nCOLOR red\n", "'COLOR' is not a PCD header line", false},
+        {"mismatch.pcd", "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n", "same number of fields", false},
+        {"noxyz.pcd", "FIELDS a b c\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 2 3\n", "no x, y and z", false},
+        {"size.pcd", "FIELDS x y z\nSIZE 4 4 3\nTYPE F F F\nWIDTH 1\nDATA ascii\n", "size 3", false},
+        {"type.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F D\nWIDTH 1\nDATA ascii\n", "'D' is not F, I or U", false},
+        {"points.pcd", head + "POINTS 3\nDATA ascii\n", "POINTS 3 but WIDTH x HEIGHT = 2 x 1", false},
+        {"encoding.pcd", head + "DATA zip\n", "DATA must be", false},
+        {"short.pcd", head + "DATA ascii\n1 2 3\n", "truncated: 1 of 2 points", true},
+        {"values.pcd", head + "DATA ascii\n1 2\n", "line 7: expected 3 values", false},
+        {"word_value.pcd", head + "DATA ascii\n1 2 x\n", "'x' is not a number", false},
+        {"inf.pcd", head + "DATA ascii\n1 2 inf\n3 4 5\n", "point 0 has an infinite coordinate", false},
+        {"allnan.pcd", head + "DATA ascii\nnan nan nan\nnan nan nan\n", "no points", false},
+        {"absurd.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000000000000\nDATA binary\n", "more than the file holds", true},
+        {"cut.pcd", binary.substr(0, binary_data + 30), "more than the file holds", true},
+        {"lzf.pcd", bad_lzf, "corrupt compressed PCD data", false},
+        {"lzf_sizes.pcd", big_sizes, "unpacks to 4294967280 bytes", false},
+        {"lzf_cut.pcd", compressed.substr(0, compressed.size() - 5), "ends early", true},
+        {"lzf_nosizes.pcd", compressed.substr(0, compressed_data + 3), "no sizes", true},
+    };
+    expect_read_errors(dir, cases);
+}
+
 // Two scans: the first in the registered frame already (identity), with a "no return" point; the second
 // rotated 90 degrees about z and moved by (10, 20, 30).
 std::string ptx_file(bool second_colored)
@@ -1021,6 +1228,9 @@ TEST(ReadErrors, truncations_and_corruptions_fail_cleanly)
         {"a.obj", "v 0.5 -1.25 2\nv 3 4.75 -5.5 1 0 0\nf 1 2 3\n"},
         {"a.off", "COFF\n3 1 0\n0.5 -1.25 2 1 1 1 1\n3 4.75 -5.5 1 1 1 1\n0 0 0 0 0 0 0\n3 0 1 2\n"},
         {"a.csv", "x,y,z\n1,2,3\n4,5,6\n"},
+        {"a.pcd", pcd_file("binary")},
+        {"c.pcd", pcd_file("binary_compressed")},
+        {"t.pcd", pcd_file("ascii")},
     };
     std::mt19937 rng(123);
     std::size_t reads = 0;
@@ -1054,7 +1264,7 @@ TEST(ReadErrors, truncations_and_corruptions_fail_cleanly)
     std::string noise(4096, '\0');
     for (char& c : noise)
         c = static_cast<char>(rng());
-    for (const char* name : {"n.ply", "n.xyz", "n.obj", "n.off", "n.csv"}) {
+    for (const char* name : {"n.ply", "n.xyz", "n.obj", "n.off", "n.csv", "n.pcd"}) {
         attempt(name, noise, false);
         attempt(name, noise, true);
         attempt(name, "ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty double x\n"

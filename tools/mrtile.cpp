@@ -757,8 +757,8 @@ int run(int argc, char** argv)
     BuildArgs build_args;
     bool record_time = false;
     build->add_option("POINTS", build_in,
-                      "point files (one or more, merged in absolute coordinates): .ply .las .ptx .xyz .pts .txt .csv "
-                      ".obj .off, optionally .gz")
+                      "point files (one or more, merged in absolute coordinates): .ply .las .ptx .pcd .xyz .pts .txt .csv "
+                      ".obj .off, optionally .gz, or a .conf scan list")
         ->required();
     build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
     build_args.add(build, "");
