@@ -34,6 +34,12 @@ struct MeshBufferOptions
     UpAxis up_axis = UpAxis::Z;    //!< default Z: rotate into glTF's y-up
     bool normals = true;           //!< fill `normals` (stored ones if usable, otherwise computed)
     bool colors = true;            //!< fill `colors` when the mesh has vertex colours
+    //! Reorder triangles for the GPU's post-transform vertex cache and vertices for fetch locality
+    //! (meshoptimizer's optimizeVertexCache and optimizeVertexFetch, what gltfpack does): renderers draw
+    //! the same triangles with fewer vertex shader runs (bunny at tolerance 0.002: 2.4 -> 0.65 per
+    //! triangle with a 16-entry cache; the surface stage emits faces in no useful order). Only the
+    //! order changes; false keeps the mesh's face order.
+    bool gpu_order = true;
     //! Subtracted (in the output frame) from every position. Default: the bounding-box centre of the
     //! used vertices in the output frame, rounded to whole units.
     std::optional<Vec3> offset;
@@ -53,7 +59,8 @@ struct MeshBuffers
     std::size_t face_count() const { return indices.size() / 3; }
 };
 
-//! \brief Flattens `mesh` (positions relative to some origin, in the input frame).
+//! \brief Flattens `mesh` (positions relative to some origin, in the input frame). Vertices are
+//! numbered in the order of their first use by the index buffer (after the GPU reordering, if on).
 //! Normals: a vertex's stored normal is used when it is finite and non-zero (normalized); otherwise
 //! the area-weighted normal of its faces, or the up axis if all its faces are degenerate.
 //! \throw InvalidInput if the mesh has no (non-deleted) face, a used position is not finite, or a

@@ -4,7 +4,10 @@
 #include "libmrtile/mesh.h"
 #include "libmrtile/vec3.h"
 
+#include <array>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -75,5 +78,79 @@ Mesh grid_mesh(int nx, int ny, double x0, double y0, double step, Height height)
 }
 
 inline double wave(double x, double y) { return 0.25 * std::sin(0.7 * x) * std::cos(0.5 * y); }
+
+//! Vertex shader runs per triangle of an index buffer on a GPU modelled as a FIFO cache of 16
+//! transformed vertices (the classic ACMR; 0.5 is the ideal of a large regular mesh, 3 the worst).
+template <typename Index>
+double vertex_cache_misses_per_triangle(const std::vector<Index>& indices, std::size_t vertex_count)
+{
+    constexpr std::size_t kCache = 16;
+    std::vector<std::size_t> stamp(vertex_count, 0); // when the vertex entered the cache, 0 = never
+    std::size_t clock = 0, misses = 0;
+    for (const Index i : indices)
+        if (stamp[i] == 0 || clock - stamp[i] >= kCache) {
+            stamp[i] = ++clock; // a miss pushes one entry in; entries older than kCache pushes are gone
+            ++misses;
+        }
+    return indices.empty() ? 0.0 : static_cast<double>(misses) / static_cast<double>(indices.size() / 3);
+}
+
+//! \brief How far the triangles of an index buffer are from the faces of `mesh`, whatever their order.
+//! \details Each face's corners, mapped by `expected`, are matched with the buffer triangle whose
+//! centroid is nearest (a hash grid of cells about a triangle wide) and compared corner by corner, in the face's
+//! winding (any rotation): the result is the largest corner distance, infinity when some face has no
+//! triangle near it, or when the counts differ.
+template <typename Expected>
+double worst_triangle_mismatch(const Mesh& mesh, Expected expected, const std::vector<Vec3>& positions,
+                               const std::vector<std::size_t>& indices)
+{
+    if (indices.size() != 3 * mesh.n_faces() || indices.empty())
+        return std::numeric_limits<double>::infinity();
+    Vec3 lo = positions.at(indices[0]), hi = lo;
+    for (const std::size_t i : indices)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], positions.at(i)[a]);
+            hi[a] = std::max(hi[a], positions.at(i)[a]);
+        }
+    const double cell = std::max(norm(hi - lo) / std::sqrt(static_cast<double>(mesh.n_faces())), 1e-12);
+    const auto key = [cell](const Vec3& p) {
+        return std::array<long long, 3>{static_cast<long long>(std::floor(p.x / cell)), static_cast<long long>(std::floor(p.y / cell)),
+                                        static_cast<long long>(std::floor(p.z / cell))};
+    };
+    std::map<std::array<long long, 3>, std::vector<std::size_t>> grid;
+    const auto centroid = [&](std::size_t t) {
+        return (positions[indices[3 * t]] + positions[indices[3 * t + 1]] + positions[indices[3 * t + 2]]) / 3.0;
+    };
+    for (std::size_t t = 0; t < indices.size() / 3; ++t)
+        grid[key(centroid(t))].push_back(t);
+    double worst = 0;
+    for (const auto f : mesh.faces()) {
+        std::array<Vec3, 3> corner;
+        int k = 0;
+        for (const auto v : mesh.fv_range(f)) {
+            const auto& p = mesh.point(v);
+            corner[static_cast<std::size_t>(k++)] = expected(Vec3{p[0], p[1], p[2]});
+        }
+        const Vec3 c = (corner[0] + corner[1] + corner[2]) / 3.0;
+        const auto home = key(c);
+        double best = std::numeric_limits<double>::infinity();
+        for (long long dx = -1; dx <= 1; ++dx)
+            for (long long dy = -1; dy <= 1; ++dy)
+                for (long long dz = -1; dz <= 1; ++dz) {
+                    const auto it = grid.find({home[0] + dx, home[1] + dy, home[2] + dz});
+                    if (it == grid.end())
+                        continue;
+                    for (const std::size_t t : it->second)
+                        for (std::size_t r = 0; r < 3; ++r) {
+                            double d = 0;
+                            for (std::size_t j = 0; j < 3; ++j)
+                                d = std::max(d, norm(positions[indices[3 * t + (j + r) % 3]] - corner[j]));
+                            best = std::min(best, d);
+                        }
+                }
+        worst = std::max(worst, best);
+    }
+    return worst;
+}
 
 } // namespace mrt::testing

@@ -30,7 +30,9 @@ TEST(MeshBuffers, z_up_rotates_into_y_up_and_back)
 TEST(MeshBuffers, positions_relative_to_rounded_centre)
 {
     const Mesh mesh = uv_sphere(8, 12, 2.0, {10.4, -3.6, 7.0});
-    const MeshBuffers b = make_mesh_buffers(mesh);
+    MeshBufferOptions in_face_order;
+    in_face_order.gpu_order = false; // so that buffer triangle f is mesh face f
+    const MeshBuffers b = make_mesh_buffers(mesh, in_face_order);
     EXPECT_EQ(b.offset, (Vec3{10, 7, 4})); // centre (10.4, -3.6, 7) in y-up is (10.4, 7, 3.6)
     ASSERT_EQ(b.vertex_count(), mesh.n_vertices());
     ASSERT_EQ(b.face_count(), mesh.n_faces());
@@ -52,6 +54,57 @@ TEST(MeshBuffers, positions_relative_to_rounded_centre)
     }
     EXPECT_EQ(b.min, lo);
     EXPECT_EQ(b.max, hi);
+}
+
+// The GPU order: the same triangles in the same winding, vertices numbered by first use, and fewer
+// vertex shader runs per triangle than a scattered face order (a FIFO cache model of our own).
+TEST(MeshBuffers, gpu_order_keeps_the_triangles_and_improves_the_vertex_cache)
+{
+    Mesh mesh = grid_mesh(60, 60, 0.0, 0.0, 1.0, testing::wave);
+    // A face order without locality: face k * 7919 mod n (7919 is a prime that does not divide n).
+    std::vector<std::array<Mesh::VertexHandle, 3>> faces;
+    for (const auto f : mesh.faces()) {
+        std::array<Mesh::VertexHandle, 3> corners;
+        int k = 0;
+        for (const auto v : mesh.fv_range(f))
+            corners[static_cast<std::size_t>(k++)] = v;
+        faces.push_back(corners);
+    }
+    Mesh shuffled;
+    for (const auto v : mesh.vertices()) {
+        shuffled.add_vertex(mesh.point(v));
+        shuffled.set_normal(shuffled.vertex_handle(static_cast<unsigned>(v.idx())), Mesh::Normal(0, 0, 0));
+    }
+    std::vector<std::size_t> order;
+    for (std::size_t k = 0; k < faces.size(); ++k)
+        order.push_back(k * 7919 % faces.size());
+    for (const std::size_t f : order) {
+        std::array<Mesh::VertexHandle, 3> c;
+        for (std::size_t k = 0; k < 3; ++k)
+            c[k] = shuffled.vertex_handle(static_cast<unsigned>(faces[f][k].idx()));
+        testing::add_checked_face(shuffled, c[0], c[1], c[2]);
+    }
+    ASSERT_EQ(shuffled.n_faces(), mesh.n_faces());
+    MeshBufferOptions plain;
+    plain.gpu_order = false;
+    const MeshBuffers before = make_mesh_buffers(shuffled, plain);
+    const MeshBuffers after = make_mesh_buffers(shuffled);
+    ASSERT_EQ(after.vertex_count(), before.vertex_count());
+    std::vector<Vec3> positions(after.vertex_count());
+    for (std::size_t i = 0; i < positions.size(); ++i)
+        positions[i] = Vec3{after.positions[3 * i], after.positions[3 * i + 1], after.positions[3 * i + 2]} + after.offset;
+    const std::vector<std::size_t> corners(after.indices.begin(), after.indices.end());
+    EXPECT_LT(testing::worst_triangle_mismatch(shuffled, [](const Vec3& p) { return to_output_frame(p, UpAxis::Z); }, positions, corners),
+              1e-6); // float positions of a 60-unit grid
+    std::uint32_t next = 0;
+    for (const std::uint32_t i : after.indices) {
+        ASSERT_LE(i, next) << "vertices are numbered by first use";
+        next = std::max(next, i + 1);
+    }
+    const double before_acmr = testing::vertex_cache_misses_per_triangle(before.indices, before.vertex_count());
+    const double after_acmr = testing::vertex_cache_misses_per_triangle(after.indices, after.vertex_count());
+    EXPECT_GT(before_acmr, 2.5);
+    EXPECT_LT(after_acmr, 0.8);
 }
 
 TEST(MeshBuffers, computes_missing_normals_and_keeps_stored_ones)
