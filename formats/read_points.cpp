@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -1010,7 +1011,9 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
     std::vector<Rgba> colors;
     bool all_colored = options.keep_colors;
     std::vector<double> v;
+    int scans = 0;
     for (int scan = 1; next_numbers(in, v); ++scan) {
+        scans = scan;
         const std::string where = "scan " + std::to_string(scan);
         std::uint64_t size[2] = {0, 0};
         for (int k = 0; k < 2; ++k) {
@@ -1031,6 +1034,8 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
             if (row >= 4)
                 std::copy(v.begin(), v.end(), m[row - 4]);
         }
+        // The scanner stands at the registration's translation (the scan's own origin).
+        cloud.viewpoint = Vec3{m[3][0], m[3][1], m[3][2]};
         const std::uint64_t count = size[0] * size[1];
         for (std::uint64_t i = 0; i < count; ++i) {
             if (!next_numbers(in, v))
@@ -1058,6 +1063,8 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
     }
     if (all_colored)
         cloud.colors = std::move(colors);
+    if (scans > 1)
+        cloud.viewpoint.reset(); // several scanner positions: none stands for all points
     return cloud;
 }
 
@@ -1201,6 +1208,7 @@ struct PcdHeader
     std::size_t packed_size = 0;   // bytes per point in compressed data (padding fields are not stored)
     std::uint64_t values = 0;      // numbers per ASCII line
     int x = -1, y = -1, z = -1, rgb = -1;
+    std::optional<Vec3> viewpoint; // the sensor's position, when the file tells it
 };
 
 std::uint64_t pcd_number(const Input& in, std::string_view token, std::uint64_t largest)
@@ -1220,6 +1228,7 @@ PcdHeader read_pcd_header(Input& in)
     std::vector<std::uint64_t> counts;
     std::uint64_t width = 0, height = 1, points = 0;
     bool have_width = false, have_points = false, have_data = false;
+    std::optional<Vec3> viewpoint;
     std::string_view line;
     while (!have_data && in.next_line(line)) {
         Tokens split(line, kBlanks);
@@ -1229,8 +1238,18 @@ PcdHeader read_pcd_header(Input& in)
         tokens.clear();
         while (split.next(token))
             tokens.push_back(token);
-        if (keyword == "VERSION" || keyword == "VIEWPOINT")
-            continue; // the sensor pose is metadata: PCL does not apply it to the points either
+        if (keyword == "VERSION")
+            continue;
+        if (keyword == "VIEWPOINT") {
+            // tx ty tz qw qx qy qz: where the sensor stood. PCL does not move the points by it.
+            if (tokens.size() != 7)
+                fail_line(in, "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz)");
+            Vec3 t;
+            for (int k = 0; k < 3; ++k)
+                t[k] = number_on_line(in, tokens[static_cast<std::size_t>(k)]);
+            viewpoint = t;
+            continue;
+        }
         if (keyword == "FIELDS" || keyword == "COLUMNS") {
             for (std::string_view name : tokens)
                 h.fields.push_back({std::string(name)});
@@ -1289,6 +1308,10 @@ PcdHeader read_pcd_header(Input& in)
         throw InvalidInput(in.name() + ": malformed PCD header: POINTS " + std::to_string(points) + " but WIDTH x HEIGHT = " +
                            std::to_string(width) + " x " + std::to_string(height));
     h.points = have_points ? points : grid;
+    // Every PCL writer puts a VIEWPOINT line, the origin by default: it means the sensor only for an
+    // organized cloud (a depth image, taken from the camera's origin) or when it was set.
+    if (viewpoint && (height > 1 || *viewpoint != Vec3{0, 0, 0}))
+        h.viewpoint = viewpoint;
     std::uint64_t record = 0, packed = 0, values = 0;
     for (std::size_t i = 0; i < n; ++i) {
         PcdField& f = h.fields[i];
@@ -1396,6 +1419,7 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
     const PcdField& fy = h.fields[static_cast<std::size_t>(h.y)];
     const PcdField& fz = h.fields[static_cast<std::size_t>(h.z)];
     PointCloud cloud;
+    cloud.viewpoint = h.viewpoint;
     if (h.data == PcdData::ascii) {
         reserve_capped(cloud, h.points, kReserveCap, colors);
         std::vector<std::string_view> values;
@@ -1678,6 +1702,8 @@ void place_scan(PointCloud& cloud, const ScanPlacement& placement)
     const Vec3 offset = moved - origin;
     for (Vec3& p : cloud.positions)
         p = rotate(p) + offset;
+    if (cloud.viewpoint)
+        *cloud.viewpoint = rotate(*cloud.viewpoint) + offset;
     cloud.origin = origin;
 }
 

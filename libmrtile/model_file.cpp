@@ -22,7 +22,8 @@ constexpr std::uint32_t kEndianMarker = 0x01020304u;
 constexpr std::size_t kHeaderSize = 104;
 constexpr std::size_t kNodeSize = 168;
 constexpr std::size_t kTrailerSize = 8;
-constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2;
+constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4;
+constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint;
 
 // Little-endian writer over a string (byte by byte through shifts: correct on any host).
 class Writer
@@ -178,7 +179,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(kEndianMarker);
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
-    w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u));
+    w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
+          (h.cloud.viewpoint ? kFlagViewpoint : 0u));
     w.u64(n);
     w.u64(h.nodes.size());
     w.f64(h.cloud.origin.x);
@@ -223,6 +225,11 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
             w.f64(v->z);
         }
     }
+    if (h.cloud.viewpoint) {
+        w.f64(h.cloud.viewpoint->x);
+        w.f64(h.cloud.viewpoint->y);
+        w.f64(h.cloud.viewpoint->z);
+    }
     const std::uint64_t payload = out.size() - kHeaderSize;
     std::string patch;
     Writer(patch).u64(payload);
@@ -250,12 +257,15 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
     if (r.u32() != kHeaderSize)
         r.fail("unexpected header size");
     const std::uint32_t flags = r.u32();
+    if ((flags & ~kKnownFlags) != 0)
+        r.fail("unknown flags " + std::to_string(flags) + " (written by a newer version?)");
     const std::uint64_t n = r.u64();
     const std::uint64_t node_count = r.u64();
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
-        kHeaderSize + n * per_point + node_count * kNodeSize + kTrailerSize > bytes.size())
+        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + kTrailerSize >
+            bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
     const std::size_t end = bytes.size() - kTrailerSize;
@@ -318,6 +328,15 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
             v->y = r.f64();
             v->z = r.f64();
         }
+    }
+    if (flags & kFlagViewpoint) {
+        Vec3 v;
+        v.x = r.f64();
+        v.y = r.f64();
+        v.z = r.f64();
+        if (!is_finite(v))
+            r.fail("non-finite viewpoint");
+        h.cloud.viewpoint = v;
     }
     if (r.position() != end)
         r.fail("unexpected extra sections (written by a newer version?)");

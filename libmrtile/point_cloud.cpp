@@ -48,6 +48,8 @@ void recenter(PointCloud& cloud)
         return;
     for (Vec3& p : cloud.positions)
         p -= shift;
+    if (cloud.viewpoint)
+        *cloud.viewpoint -= shift;
     cloud.origin += shift;
 }
 
@@ -58,6 +60,8 @@ void append(PointCloud& into, PointCloud from)
         return;
     }
     const Vec3 shift = from.origin - into.origin;
+    if (!into.viewpoint || !from.viewpoint || *into.viewpoint != *from.viewpoint + shift)
+        into.viewpoint.reset();
     const std::size_t old_size = into.positions.size();
     into.positions.reserve(old_size + from.positions.size());
     for (const Vec3& p : from.positions)
@@ -81,6 +85,8 @@ void validate(const PointCloud& cloud, const std::string& what)
                            std::to_string(cloud.positions.size()) + " points");
     if (!is_finite(cloud.origin))
         throw InvalidInput(what + ": origin is not finite");
+    if (cloud.viewpoint && !is_finite(*cloud.viewpoint))
+        throw InvalidInput(what + ": the viewpoint is not finite");
     for (std::size_t i = 0; i < cloud.positions.size(); ++i)
         if (!is_finite(cloud.positions[i]))
             throw InvalidInput(what + ": point " + std::to_string(i) + " has a NaN or infinite coordinate");

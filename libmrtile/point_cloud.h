@@ -11,6 +11,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,10 @@ struct PointCloud
     std::vector<Vec3> positions;
     //! Optional per-point RGBA colour: empty, or one entry per position.
     std::vector<std::array<std::uint8_t, 4>> colors;
+    //! Where the sensor stood (relative to origin), when the input says so (a depth camera's PCD, a
+    //! single-scan PTX). Open surfaces are oriented to face it: a scan's mesh faces its scanner. Empty:
+    //! open surfaces face the way their shape suggests (see build_surface).
+    std::optional<Vec3> viewpoint;
 
     std::size_t size() const { return positions.size(); }
     bool empty() const { return positions.empty(); }
@@ -51,7 +56,8 @@ void recenter(PointCloud& cloud);
 //! \brief Appends `from` to `into` in absolute coordinates (positions rebased onto `into`'s origin; call
 //! recenter afterwards; into an empty cloud, `from` is moved as it is). Colours are kept when either
 //! cloud has them; the points of a cloud without colours are white (glTF multiplies vertex colours into
-//! the material, and white leaves it as it is).
+//! the material, and white leaves it as it is). The viewpoint is kept only when both clouds have the
+//! same one (scans from different places have none in common).
 void append(PointCloud& into, PointCloud from);
 
 //! \brief Step k for using every k-th of `count` points so that at most about `max_points` are used

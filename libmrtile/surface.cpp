@@ -38,8 +38,9 @@
 //     tiles again and growing the front into the widened holes (no handles); the way that leaves fewer
 //     tiles out is kept. Vertices still pinched (two fans touching) are duplicated per fan.
 //  5. The faces go into OpenMesh component by component in breadth-first order, so add_face always
-//     attaches to an existing boundary; components are flipped to positive volume (height fields: to
-//     face up the axis). A lone fan whose neighbours' surface closed over it is left out.
+//     attaches to an existing boundary; closed components are flipped to positive volume, open ones to
+//     face the cloud's viewpoint when it has one (where the scanner stood), else up the axis (height
+//     fields) or to positive volume. A lone fan whose neighbours' surface closed over it is left out.
 //  6. The ε-split points that carry no shape are collapsed into their loop neighbours (they lie on the
 //     fans' straight edges, so the fans do not change): a third to a half fewer faces, same error. Then
 //     near-collinear rim points, then rim points across the one-spacing strips of gap faces between
@@ -264,6 +265,14 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
             big = i;
     if (p.axis[big] < 0)
         p.axis = -p.axis;
+    // A scan's height field faces its scanner: "up" is the side the viewpoint is on.
+    if (h.cloud.viewpoint) {
+        double toward = 0.0;
+        for (const Tile& t : tiles)
+            toward += dot(p.axis, *h.cloud.viewpoint - t.centre) * static_cast<double>(t.points);
+        if (toward < 0.0)
+            p.axis = -p.axis;
+    }
     const Vec3 helper = std::abs(p.axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
     p.u = normalized(cross(helper, p.axis));
     p.v = cross(p.axis, p.u);
@@ -2603,8 +2612,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         i = j;
     }
     std::vector<std::uint32_t> roots;
-    std::vector<double> volume(faces.size(), 0.0), up(faces.size(), 0.0);
+    std::vector<double> volume(faces.size(), 0.0), up(faces.size(), 0.0), facing(faces.size(), 0.0);
     std::vector<bool> closed(faces.size(), true);
+    const std::optional<Vec3>& viewpoint = h.cloud.viewpoint;
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
         if (r == f)
@@ -2612,6 +2622,8 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         const Vec3 a = pos(faces[f][0]), b = pos(faces[f][1]), c = pos(faces[f][2]);
         volume[r] += dot(a, cross(b, c));
         up[r] += dot(triangle_cross(a, b, c), projection.axis);
+        if (viewpoint)
+            facing[r] += dot(triangle_cross(a, b, c), *viewpoint - (a + b + c) / 3.0);
         if (open_face[f])
             closed[r] = false;
     }
@@ -2636,8 +2648,14 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             }
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
-        // Closed surfaces face outward; open ones in 3D too as far as their volume tells, height fields up.
-        const bool flip = projection.used && !closed[r] ? up[r] < 0.0 : volume[r] < 0.0;
+        // Closed surfaces face outward. Open ones face the sensor where the input tells where it stood
+        // (a scan is seen from there; a height field's up axis was chosen to point to it, since the fit
+        // and the sliver pass keep height-field faces facing up); otherwise height fields face up, and
+        // other open surfaces outward as far as their volume tells.
+        const bool flip = closed[r]          ? volume[r] < 0.0
+                          : projection.used   ? up[r] < 0.0 // the axis points to the viewpoint, if any
+                          : viewpoint         ? facing[r] < 0.0
+                                              : volume[r] < 0.0;
         if (flip)
             std::swap(faces[f][1], faces[f][2]);
     }

@@ -122,7 +122,9 @@ struct SurfaceStats
 
 //! \brief Meshes the tiles of a cut (from make_tiles) into an oriented 2-manifold.
 //! \details Deterministic. Closed components are oriented outward (positive signed volume); open ones
-//! in height-field mode face along the axis.
+//! face h.cloud.viewpoint when it is set (the scanner's position: a scan's mesh faces its scanner,
+//! summed over the component's area), otherwise along the axis in height-field mode, otherwise to
+//! positive signed volume.
 //! \throw InvalidInput if there are no tiles, a tile does not belong to `h`, or an option is out of range.
 Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options = {},
                    SurfaceStats* stats = nullptr);

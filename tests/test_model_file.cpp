@@ -54,6 +54,28 @@ TEST(ModelFile, round_trip_is_byte_identical)
     }
 }
 
+// The sensor's viewpoint (relative to the origin) is kept; an unknown flag is refused.
+TEST(ModelFile, viewpoint_round_trip_and_unknown_flags)
+{
+    PointCloud c = shapes::torus(1500);
+    c.viewpoint = Vec3{0.25, -3.5, 7.125};
+    const Hierarchy h = build_hierarchy(c);
+    const std::string bytes = serialize_model(h);
+    const Hierarchy back = deserialize_model(bytes, "memory");
+    ASSERT_TRUE(back.cloud.viewpoint.has_value());
+    EXPECT_EQ(*back.cloud.viewpoint, *h.cloud.viewpoint);
+    EXPECT_EQ(serialize_model(back), bytes);
+    EXPECT_FALSE(deserialize_model(serialize_model(sample()), "memory").cloud.viewpoint.has_value());
+    std::string unknown = bytes;
+    unknown[20] = static_cast<char>(unknown[20] | 8); // flags: the u32 after magic, version, marker, header size
+    try {
+        deserialize_model(unknown, "m.mrt");
+        ADD_FAILURE() << "an unknown flag was accepted";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("unknown flags"), std::string::npos) << e.what();
+    }
+}
+
 // A model built with merged duplicates (input indices beyond the stored point count) loads back.
 TEST(ModelFile, merged_duplicates_round_trip)
 {

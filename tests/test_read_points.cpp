@@ -836,6 +836,39 @@ std::string ptx_file(bool second_colored)
     return s;
 }
 
+// Where the sensor stood: a single-scan PTX's scanner position, an organized PCD's camera origin or a
+// set VIEWPOINT; not a PCD's default line on an unorganized cloud, not several scanners, and it
+// follows the cloud through recentring and appending (kept only when the same).
+TEST(ReadPoints, sensor_viewpoint)
+{
+    const fs::path dir = test_dir();
+    const std::string one_scan = "1\n2\n10 20 30\n0 1 0\n-1 0 0\n0 0 1\n0 1 0 0\n-1 0 0 0\n0 0 1 0\n10 20 30 1\n"
+                                 "-20 10.125 -22 0.1\n-19 9 -29 0.9\n";
+    const PointCloud ptx = read_points(write_file(dir / "one.ptx", one_scan));
+    ASSERT_TRUE(ptx.viewpoint.has_value());
+    EXPECT_EQ(ptx.origin + *ptx.viewpoint, (Vec3{10, 20, 30}));
+    EXPECT_FALSE(read_points(write_file(dir / "two.ptx", ptx_file(false))).viewpoint.has_value());
+    const PointCloud organized = read_points(write_file(dir / "o.pcd", pcd_file("binary")));
+    ASSERT_TRUE(organized.viewpoint.has_value());
+    EXPECT_EQ(organized.origin + *organized.viewpoint, (Vec3{0, 0, 0}));
+    const std::string head = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 1\n";
+    EXPECT_FALSE(read_points(write_file(dir / "u.pcd", head + "VIEWPOINT 0 0 0 1 0 0 0\nDATA ascii\n1 2 3\n4 5 6\n"))
+                     .viewpoint.has_value());
+    const PointCloud set = read_points(write_file(dir / "s.pcd", head + "VIEWPOINT 100 0 -2 1 0 0 0\nDATA ascii\n1 2 3\n4 5 6\n"));
+    ASSERT_TRUE(set.viewpoint.has_value());
+    EXPECT_EQ(set.origin + *set.viewpoint, (Vec3{100, 0, -2}));
+    expect_error<InvalidInput>([&] { read_points(write_file(dir / "v.pcd", head + "VIEWPOINT 0 0 0\nDATA ascii\n1 2 3\n")); },
+                               {"VIEWPOINT needs 7 numbers"});
+    // Appending: the same viewpoint (in absolute coordinates) stays, another one goes.
+    PointCloud both = read_points(dir / "s.pcd");
+    append(both, read_points(dir / "s.pcd"));
+    recenter(both);
+    ASSERT_TRUE(both.viewpoint.has_value());
+    EXPECT_EQ(both.origin + *both.viewpoint, (Vec3{100, 0, -2}));
+    append(both, read_points(dir / "one.ptx"));
+    EXPECT_FALSE(both.viewpoint.has_value());
+}
+
 TEST(ReadPtx, scans_registered_no_returns_dropped_and_colours)
 {
     const fs::path dir = test_dir();

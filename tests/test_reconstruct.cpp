@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 namespace mrt {
@@ -59,6 +60,63 @@ TEST(Reconstruct, repeated_points_mesh_as_their_distinct_positions)
         expect_closed(r.mesh, 0);
         EXPECT_EQ(r.mesh.n_faces(), mesh_cut(reference, cut_by_tolerance(reference, tolerance)).mesh.n_faces()) << tolerance;
     }
+}
+
+// Where the sensor stood, open surfaces face it: a half sphere (the view of a scanner) faces its centre
+// or the far side as the viewpoint says, and a height field faces down when seen from below (the fit
+// and the cap flips keep a height field facing its "up", so the axis itself turns). Closed surfaces
+// keep facing outward. Facing: the area-weighted normals point to the viewpoint.
+double facing(const Mesh& mesh, const Vec3& viewpoint)
+{
+    double sum = 0.0;
+    for (const auto f : mesh.faces()) {
+        std::array<Vec3, 3> p;
+        int k = 0;
+        for (const auto v : mesh.fv_range(f)) {
+            const auto& q = mesh.point(v);
+            p[static_cast<std::size_t>(k++)] = Vec3{q[0], q[1], q[2]};
+        }
+        sum += dot(cross(p[1] - p[0], p[2] - p[0]), viewpoint - (p[0] + p[1] + p[2]) / 3.0);
+    }
+    return sum;
+}
+
+TEST(Reconstruct, open_surfaces_face_the_viewpoint)
+{
+    const PointCloud sphere = shapes::sphere(8000);
+    PointCloud half;
+    for (const Vec3& p : sphere.positions)
+        if (p.z > 0.0)
+            half.positions.push_back(p);
+    for (const Vec3& viewpoint : {Vec3{0, 0, 0}, Vec3{0, 0, 5}, Vec3{0.3, -0.2, 0.1}}) {
+        PointCloud seen = half;
+        seen.viewpoint = viewpoint;
+        const Hierarchy h = build_hierarchy(seen);
+        for (double tolerance : {0.01, 0.002}) {
+            const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+            const TopologyStats t = topology_stats(r.mesh);
+            EXPECT_EQ(t.boundary_loops, 1u);
+            EXPECT_TRUE(t.consistently_oriented);
+            EXPECT_GT(facing(r.mesh, viewpoint), 0.0) << viewpoint.z << " " << tolerance;
+        }
+    }
+    const PointCloud field = shapes::smooth_height_field(8000);
+    for (const double side : {-1.0, 1.0}) {
+        PointCloud seen = field;
+        seen.viewpoint = Vec3{0.5, 0.5, 10.0 * side};
+        const Hierarchy h = build_hierarchy(seen);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+        ASSERT_TRUE(r.surface.height_field_used);
+        EXPECT_GT(r.surface.height_field_axis.z * side, 0.9);
+        EXPECT_GT(facing(r.mesh, *seen.viewpoint), 0.0) << side;
+        EXPECT_GT(r.fit.flips, 0u); // the vertical fit still flips (its faces face its axis)
+    }
+    PointCloud closed = shapes::sphere(8000);
+    closed.viewpoint = Vec3{0, 0, 0}; // inside: a closed surface faces outward all the same
+    const Hierarchy h = build_hierarchy(closed);
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.005));
+    expect_closed(r.mesh, 0);
+    EXPECT_LT(facing(r.mesh, Vec3{0, 0, 0}), 0.0);
 }
 
 // One stray point 50 radii away does not coarsen the default tolerances: the sphere is meshed as

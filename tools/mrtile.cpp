@@ -26,6 +26,7 @@
 #include <cstdio>
 #include <iostream>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -105,6 +106,7 @@ struct BuildArgs
     bool remove_outliers = false;
     bool keep_duplicates = false;
     bool skip_missing_scans = false;
+    std::string viewpoint;
 
     // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
     void add(CLI::App* cmd, const std::string& prefix)
@@ -124,6 +126,9 @@ struct BuildArgs
         cmd->add_flag("--keep-duplicates", keep_duplicates, "do not merge points at exactly the same position");
         cmd->add_flag("--skip-missing-scans", skip_missing_scans,
                       "scan lists (.conf): read the scans that exist, leave out the missing ones");
+        cmd->add_option("--viewpoint", viewpoint,
+                        "X,Y,Z where the scanner stood (input coordinates): open surfaces face it (default: from "
+                        "the file, as a PTX scan or an organized PCD tells it)");
         const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
@@ -638,7 +643,16 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     read.skip_missing_scans = args.skip_missing_scans;
     if (args.skip_missing_scans)
         note_missing_scans(points);
+    std::optional<Vec3> viewpoint; // checked before the (possibly long) read
+    if (!args.viewpoint.empty()) {
+        const auto v = parse_numbers(args.viewpoint, ',', "--viewpoint");
+        if (v.size() != 3)
+            throw UsageError("--viewpoint: expected X,Y,Z, got '" + args.viewpoint + "'");
+        viewpoint = Vec3{v[0], v[1], v[2]};
+    }
     PointCloud cloud = read_points(points, read);
+    if (viewpoint)
+        cloud.viewpoint = *viewpoint - cloud.origin;
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
@@ -708,6 +722,7 @@ int run_info(const fs::path& model, bool json)
         j["min_cluster"] = h.info.min_cluster;
         j["reclassify"] = h.info.reclassify;
         j["colors"] = h.cloud.has_colors();
+        j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
         j["build_seconds"] = timed ? nlohmann::json(h.info.build_seconds) : nlohmann::json(nullptr);
         j["scale"] = h.scale;
         j["noise_floor_max"] = floor_max;
@@ -722,6 +737,10 @@ int run_info(const fs::path& model, bool json)
     std::printf("criterion   %s %g, pca limit %u, min cluster %u, reclassify %s\n", criterion.c_str(), h.info.criterion_value,
                 h.info.pca_limit, h.info.min_cluster, h.info.reclassify ? "on" : "off");
     std::printf("scale       %.17g (tolerances are relative to it)\n", h.scale);
+    if (h.cloud.viewpoint) {
+        const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
+        std::printf("viewpoint   %.17g %.17g %.17g (open surfaces face it)\n", v.x, v.y, v.z);
+    }
     if (noisy_points > 0)
         std::printf("noise       %.0f%% of the points are noisy: cuts by tolerance stop at floors up to %.3g of the scale\n",
                     100.0 * noisy_share, floor_max);
