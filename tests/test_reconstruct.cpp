@@ -4,6 +4,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
+#include "mesh_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -70,12 +71,7 @@ double facing(const Mesh& mesh, const Vec3& viewpoint)
 {
     double sum = 0.0;
     for (const auto f : mesh.faces()) {
-        std::array<Vec3, 3> p;
-        int k = 0;
-        for (const auto v : mesh.fv_range(f)) {
-            const auto& q = mesh.point(v);
-            p[static_cast<std::size_t>(k++)] = Vec3{q[0], q[1], q[2]};
-        }
+        const std::array<Vec3, 3> p = testing::face_points(mesh, f);
         sum += dot(cross(p[1] - p[0], p[2] - p[0]), viewpoint - (p[0] + p[1] + p[2]) / 3.0);
     }
     return sum;
