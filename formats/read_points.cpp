@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -1438,8 +1439,11 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
             const auto coordinate = [&](const PcdField& f) {
                 const std::string_view t = values[f.column];
                 double v = 0;
-                if (parse_number(t, v) == Parsed::not_a_number)
+                const Parsed parsed = parse_number(t, v);
+                if (parsed == Parsed::not_a_number)
                     fail_line(in, quote_token(t) + " is not a number");
+                if (parsed == Parsed::not_finite && !std::isnan(v))
+                    v = std::numeric_limits<double>::infinity(); // out of range (v untouched): refused with the point
                 return v; // NaN: no measurement; checked with the point
             };
             const Vec3 p{coordinate(fx), coordinate(fy), coordinate(fz)};
@@ -1452,7 +1456,7 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
                 if (!parse_count(values[f.column], bits) || bits > 0xFFFFFFFFu) {
                     const float packed = static_cast<float>(coordinate(f));
                     std::uint32_t float_bits = 0xFFFFFFFFu; // a NaN colour is lost: white
-                    if (!std::isnan(packed))
+                    if (std::isfinite(packed))
                         std::memcpy(&float_bits, &packed, sizeof float_bits);
                     bits = float_bits;
                 }

@@ -814,6 +814,7 @@ TEST(ReadPcd, malformed_files_fail_cleanly)
         {"values.pcd", head + "DATA ascii\n1 2\n", "line 7: expected 3 values", false},
         {"word_value.pcd", head + "DATA ascii\n1 2 x\n", "'x' is not a number", false},
         {"inf.pcd", head + "DATA ascii\n1 2 inf\n3 4 5\n", "point 0 has an infinite coordinate", false},
+        {"huge.pcd", head + "DATA ascii\n1 2 3\n1e999 4 5\n", "point 1 has an infinite coordinate", false},
         {"allnan.pcd", head + "DATA ascii\nnan nan nan\nnan nan nan\n", "no points", false},
         {"absurd.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000000000000\nDATA binary\n", "more than the file holds", true},
         {"cut.pcd", binary.substr(0, binary_data + 30), "more than the file holds", true},
