@@ -469,9 +469,20 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     for (const auto vh : mesh.vertices())
         start_position[static_cast<std::size_t>(vh.idx())] = mesh.point(vh);
     std::vector<ClosestPoint> closest;
+    // A vertical fit keeps a height field a graph: so does its relaxation.
+    RelaxOptions relax = options.relax;
+    if (options.vertical) {
+        relax.vertical = true;
+        relax.axis = options.axis;
+    }
     for (int round = 0; round < options.rounds; ++round) {
+        const RelaxStats relaxed = relax_vertices(mesh, relax);
+        stats.relax.moves += relaxed.moves;
+        stats.relax.creases = relaxed.creases;
+        stats.relax.refused += relaxed.refused;
         // The first round asks the AABB tree; later ones walk from the previous face, since vertices
-        // moved by a fraction of an edge and flips keep their faces' handles.
+        // moved by a fraction of an edge (relaxed by less than half of one) and flips keep their faces'
+        // handles.
         closest = round == 0 ? closest_points(used, mesh, options.threads) : nearby_closest_points(mesh, used, closest, options.threads);
         const std::vector<Vec3> direction = move_directions(mesh, options.vertical, normalized(options.axis));
         Csr system;

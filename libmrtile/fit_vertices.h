@@ -20,6 +20,7 @@
 //! \endcode
 
 #include "libmrtile/mesh.h"
+#include "libmrtile/relax_vertices.h"
 #include "libmrtile/vec3.h"
 
 #include <cstddef>
@@ -62,6 +63,11 @@ struct FitOptions
     //! Threads for the closest-face queries (0 = one per hardware thread). The result does not depend
     //! on it.
     std::size_t threads = 0;
+    //! Before each round, the vertices slide within the surface towards the middle of their neighbours
+    //! (relax_vertices.h; `iterations` sweeps per round, 0 = never; vertical when the fit is), so every
+    //! round fits evenly spread vertices: shape matrix −7.7% mean and −5.4% maximum distance against no
+    //! relaxation (two sweeps before the first round only: −5.7% / −4.7%).
+    RelaxOptions relax;
 };
 
 struct FitStats
@@ -72,6 +78,7 @@ struct FitStats
     std::size_t clamped = 0;    //!< vertex moves cut to max_move (summed over rounds)
     std::size_t flips = 0;      //!< edges flipped (summed over rounds)
     std::size_t reverted = 0;   //!< vertices put back to undo self-intersections
+    RelaxStats relax;           //!< the relaxation's moves, creases and refusals (summed over rounds)
     double seconds = 0.0;       //!< wall time
 };
 

@@ -71,16 +71,13 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     // A height field stays a graph through both: every face they change faces up its axis.
     FitOptions fit = options.fit;
     SliverOptions slivers = options.slivers;
-    RelaxOptions relax = options.relax;
     if (result.surface.height_field_used) {
-        fit.vertical = slivers.vertical = relax.vertical = true;
-        fit.axis = slivers.axis = relax.axis = result.surface.height_field_axis;
+        fit.vertical = slivers.vertical = true;
+        fit.axis = slivers.axis = result.surface.height_field_axis;
     }
     // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
     // no new caps: FitOptions::max_flip_angle_degrees).
     result.slivers = remove_slivers(result.mesh, slivers);
-    // Evenly spread vertices first: the fit then places them on the points.
-    result.relax = relax_vertices(result.mesh, relax);
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
     color_vertices(result.mesh, h.cloud, options.colors);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

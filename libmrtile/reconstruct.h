@@ -15,7 +15,6 @@
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/refine_fans.h"
-#include "libmrtile/relax_vertices.h"
 #include "libmrtile/remove_slivers.h"
 #include "libmrtile/surface.h"
 #include "libmrtile/tiles.h"
@@ -27,13 +26,11 @@ struct MeshOptions
     TileOptions tiles;       //!< tile generation (§4.2)
     SurfaceOptions surface;  //!< gap triangulation and manifold assembly (§4.3)
     FanRefineOptions refine; //!< interior vertices where a fan deviates from its tile (refine_fans.h)
-    //! vertex positions fitted to the points (fit_vertices.h); vertical in height-field mode
+    //! vertex positions fitted to the points, each round after a relaxation (fit_vertices.h); vertical
+    //! in height-field mode
     FitOptions fit;
     //! caps flipped away before the fit (remove_slivers.h); vertical in height-field mode
     SliverOptions slivers;
-    //! vertices slid within the surface after the caps, before the fit (relax_vertices.h); vertical in
-    //! height-field mode
-    RelaxOptions relax;
     //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
     ColorOptions colors;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
@@ -55,8 +52,7 @@ struct MeshResult
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     FitStats fit;                   //!< the vertex fit (fit_vertices)
     SliverStats slivers;            //!< caps and needles removed (remove_slivers)
-    RelaxStats relax;               //!< vertices slid within the surface (relax_vertices)
-    double seconds = 0.0; //!< tiles + surface + slivers + relaxation + fit + colours
+    double seconds = 0.0; //!< tiles + surface + slivers + fit (with its relaxation) + colours
 };
 
 //! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.

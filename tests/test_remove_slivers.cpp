@@ -155,7 +155,7 @@ TEST(RemoveSlivers, cuts_of_a_sphere_and_the_bunny_lose_their_caps)
         const Cut cut = cut_by_tolerance(h, 0.002);
         // Without the relaxation, which evens out the rims and so removes caps of its own.
         MeshOptions on;
-        on.relax.iterations = 0;
+        on.fit.relax.iterations = 0;
         MeshOptions off = on;
         off.slivers.cap_angle_degrees = 180.0;
         off.fit.max_flip_angle_degrees = 180.0;

@@ -330,7 +330,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["fit_flips"] = r.fit.flips;
     j["fit_reverted"] = r.fit.reverted;
     j["sliver_flips"] = r.slivers.flips;
-    j["relaxed_moves"] = r.relax.moves;
+    j["relaxed_moves"] = r.fit.relax.moves;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
     if (q) {
