@@ -11,6 +11,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
 #include <vector>
 #include <sys/wait.h>
 
@@ -342,6 +345,69 @@ TEST(Cli, stanford_scan_list)
     EXPECT_EQ(stats["genus"], 0);
     // (How well the scans are placed is checked point by point in test_read_points.)
     EXPECT_LT(stats["mean_distance"].get<double>(), 1e-3);
+}
+
+// A depth camera's organized PCD (the camera at the origin looking down +z at a tilted wall, with
+// pixels without a measurement): the mesh faces the camera, seen from where the camera was, and
+// --viewpoint behind the wall turns it round.
+TEST(Cli, a_depth_image_faces_its_camera)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const int width = 80, height = 60;
+    std::string pcd = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " +
+                      std::to_string(width) + "\nHEIGHT " + std::to_string(height) +
+                      "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(width * height) + "\nDATA binary\n";
+    for (int v = 0; v < height; ++v)
+        for (int u = 0; u < width; ++u) {
+            const float dx = (u - width / 2) / 100.0f, dy = (v - height / 2) / 100.0f;
+            const float depth = 2.0f + 0.3f * dx; // a wall turned a little about y
+            float xyz[3] = {dx * depth, dy * depth, depth};
+            if ((u * 7 + v * 3) % 31 == 0)
+                xyz[0] = xyz[1] = xyz[2] = std::numeric_limits<float>::quiet_NaN();
+            pcd.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+        }
+    write_text(dir / "depth.pcd", pcd);
+    // Area-weighted facing of an OBJ toward a point.
+    const auto facing = [](const fs::path& obj, const std::array<double, 3>& eye) {
+        std::vector<std::array<double, 3>> v;
+        double sum = 0.0;
+        std::ifstream in(obj);
+        std::string line;
+        while (std::getline(in, line)) {
+            std::istringstream ss(line);
+            std::string tag;
+            ss >> tag;
+            if (tag == "v") {
+                std::array<double, 3> p{};
+                ss >> p[0] >> p[1] >> p[2];
+                v.push_back(p);
+            } else if (tag == "f") {
+                std::array<std::array<double, 3>, 3> c{};
+                for (auto& corner : c) {
+                    std::string token;
+                    ss >> token;
+                    corner = v.at(static_cast<std::size_t>(std::stol(token.substr(0, token.find('/'))) - 1));
+                }
+                const std::array<double, 3> e1{c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]};
+                const std::array<double, 3> e2{c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
+                const std::array<double, 3> n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+                for (int k = 0; k < 3; ++k)
+                    sum += n[static_cast<std::size_t>(k)] * (eye[static_cast<std::size_t>(k)] - (c[0][static_cast<std::size_t>(k)] + c[1][static_cast<std::size_t>(k)] + c[2][static_cast<std::size_t>(k)]) / 3.0);
+            }
+        }
+        EXPECT_GE(v.size(), 4u) << obj;
+        return sum;
+    };
+    const Result r = mrtile("reconstruct " + (dir / "depth.pcd").string() + " -o " + (dir / "d.obj").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_GT(facing(dir / "d.obj", {0, 0, 0}), 0.0);
+    const Result back = mrtile("reconstruct " + (dir / "depth.pcd").string() + " --viewpoint 0,0,10 -o " + (dir / "b.obj").string(), dir);
+    ASSERT_EQ(back.code, 0) << back.err;
+    EXPECT_LT(facing(dir / "b.obj", {0, 0, 0}), 0.0);
+    ASSERT_EQ(mrtile("build " + (dir / "depth.pcd").string() + " -o " + (dir / "d.mrt").string(), dir).code, 0);
+    const Result info = mrtile("info " + (dir / "d.mrt").string(), dir);
+    EXPECT_NE(info.out.find("viewpoint   0 0 0"), std::string::npos) << info.out;
+    EXPECT_EQ(mrtile("build " + (dir / "depth.pcd").string() + " --viewpoint 1,2 -o " + (dir / "e.mrt").string(), dir).code, 2);
 }
 
 // Several input files are one cloud: the two halves of a sphere, in two formats, mesh to a closed sphere.
