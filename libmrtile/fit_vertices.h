@@ -78,7 +78,7 @@ struct FitStats
     std::size_t clamped = 0;    //!< vertex moves cut to max_move (summed over rounds)
     std::size_t flips = 0;      //!< edges flipped (summed over rounds)
     std::size_t reverted = 0;   //!< vertices put back to undo self-intersections
-    RelaxStats relax;           //!< the relaxation's moves, creases and refusals (summed over rounds)
+    RelaxStats relax;           //!< the relaxation: moves and refusals summed over rounds, creases of the last
     double seconds = 0.0;       //!< wall time
 };
 
