@@ -1546,13 +1546,23 @@ std::array<std::array<double, 3>, 3> placement_rotation(const ScanPlacement& pla
              {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
 }
 
+// Appends the points of one more file to those read so far, refusing more than max_points together.
+// `what` names the file or list at fault, `together` says whose points they are.
+void append_within_limit(PointCloud& cloud, PointCloud part, const ReadOptions& options, const std::string& what,
+                         const std::string& together)
+{
+    append(cloud, std::move(part));
+    if (options.max_points > 0 && cloud.size() > options.max_points)
+        throw InvalidInput(what + ": " + together + " hold " + std::to_string(cloud.size()) +
+                           " points together so far, more than max_points " + std::to_string(options.max_points));
+}
+
 PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOptions& options)
 {
     PointCloud cloud;
     std::size_t read = 0;
     for (const ScanPlacement& scan : read_scan_list(path)) {
-        std::error_code ec;
-        if (!fs::exists(scan.path, ec) && !ec) {
+        if (scan.missing) {
             if (options.skip_missing_scans)
                 continue;
             throw IoError(name + ": line " + std::to_string(scan.line) + ": " + scan.path.string() +
@@ -1561,11 +1571,8 @@ PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOp
         }
         PointCloud part = read_points(scan.path, options);
         place_scan(part, scan);
-        append(cloud, std::move(part));
+        append_within_limit(cloud, std::move(part), options, name, "its scans");
         ++read;
-        if (options.max_points > 0 && cloud.size() > options.max_points)
-            throw InvalidInput(name + ": its scans hold " + std::to_string(cloud.size()) +
-                               " points together so far, more than max_points " + std::to_string(options.max_points));
     }
     if (read == 0)
         throw IoError(name + ": none of the scans it lists exists");
@@ -1641,6 +1648,15 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     return cloud;
 }
 
+bool is_scan_list(const std::filesystem::path& path)
+{
+    try {
+        return format_of(path, path.string()) == Format::conf;
+    } catch (const InvalidInput&) {
+        return false; // no point file either: read_points says so
+    }
+}
+
 std::vector<ScanPlacement> read_scan_list(const std::filesystem::path& path)
 {
     const std::string name = path.string();
@@ -1686,6 +1702,8 @@ std::vector<ScanPlacement> read_scan_list(const std::filesystem::path& path)
             fail_line(in, "the quaternion has length " + std::to_string(length) + ", not 1");
         for (int k = 0; k < 4; ++k)
             scan.rotation[k] = values[3 + k] / length;
+        std::error_code ec;
+        scan.missing = !fs::exists(scan.path, ec) && !ec; // an access error is reported by the read itself
         scans.push_back(std::move(scan));
     }
     if (scans.empty())
@@ -1716,12 +1734,8 @@ PointCloud read_points(const std::vector<std::filesystem::path>& paths, const Re
     if (paths.empty())
         throw InvalidInput("read_points: no point file given");
     PointCloud cloud;
-    for (const std::filesystem::path& path : paths) {
-        append(cloud, read_points(path, options));
-        if (options.max_points > 0 && cloud.size() > options.max_points)
-            throw InvalidInput(path.string() + ": the files hold " + std::to_string(cloud.size()) +
-                               " points together so far, more than max_points " + std::to_string(options.max_points));
-    }
+    for (const std::filesystem::path& path : paths)
+        append_within_limit(cloud, read_points(path, options), options, path.string(), "the files");
     recenter(cloud);
     return cloud;
 }

@@ -67,7 +67,11 @@ struct ScanPlacement
     Vec3 translation{0, 0, 0};
     std::array<double, 4> rotation{0, 0, 0, 1};  //!< unit quaternion x, y, z, w as listed (normalised)
     std::size_t line = 0;                        //!< line of the list, for messages
+    bool missing = false;                        //!< the file did not exist when the list was read
 };
+
+//! Whether `path` names a scan list (.conf, optionally .gz), which read_points reads as its scans.
+bool is_scan_list(const std::filesystem::path& path);
 
 //! \brief Reads a Stanford scan list (.conf) without reading the scans.
 //! \throw IoError if the list cannot be read, InvalidInput for a malformed line (named with its number),

@@ -113,15 +113,6 @@ std::vector<double> solve(const Csr& m, const std::vector<double>& b)
     return x;
 }
 
-std::array<Vec3, 3> face_corners(const Mesh& mesh, Mesh::FaceHandle f)
-{
-    std::array<Vec3, 3> p;
-    std::size_t k = 0;
-    for (const auto v : mesh.fv_range(f))
-        p[k++] = to_vec3(mesh.point(v));
-    return p;
-}
-
 // Each vertex's shortest incident edge (infinity for a vertex without edges).
 std::vector<double> shortest_edges(const Mesh& mesh)
 {
@@ -494,7 +485,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         if (options.flip_edges) {
             const Vec3 up = normalized(options.axis);
             stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr, start_position,
-                                      options.max_flip_angle_degrees * std::acos(-1.0) / 180.0);
+                                      radians(options.max_flip_angle_degrees));
         }
         ++stats.rounds;
     }

@@ -15,6 +15,9 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include <array>
+#include <cstddef>
+
 namespace mrt {
 
 struct MeshTraits : public OpenMesh::DefaultTraits
@@ -33,6 +36,16 @@ using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
 
 //! A mesh point or normal as the library's Vec3.
 inline Vec3 to_vec3(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
+
+//! The corners of triangle f, in its winding.
+inline std::array<Vec3, 3> face_corners(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    std::array<Vec3, 3> p;
+    std::size_t k = 0;
+    for (const auto v : mesh.fv_range(f))
+        p[k++] = to_vec3(mesh.point(v));
+    return p;
+}
 
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";

@@ -13,17 +13,15 @@
 namespace mrt {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-// The unit normal of face f with vertex `moved` at `at` instead of where it is (zero for a degenerate face).
-Vec3 face_normal(const Mesh& mesh, Mesh::FaceHandle f, Mesh::VertexHandle moved, const Vec3& at)
+// Twice the area vector of face f (its unnormalized normal) with vertex `moved` at `at` instead of
+// where it is.
+Vec3 area_vector(const Mesh& mesh, Mesh::FaceHandle f, Mesh::VertexHandle moved, const Vec3& at)
 {
     std::array<Vec3, 3> p;
     std::size_t k = 0;
     for (const auto v : mesh.fv_range(f))
         p[k++] = v == moved ? at : to_vec3(mesh.point(v));
-    const Vec3 n = cross(p[1] - p[0], p[2] - p[0]);
-    return squared_norm(n) > 0.0 ? normalized(n) : Vec3{};
+    return cross(p[1] - p[0], p[2] - p[0]);
 }
 
 } // namespace
@@ -37,8 +35,8 @@ RelaxStats relax_vertices(Mesh& mesh, const RelaxOptions& options)
         throw InvalidInput("relax_vertices: iterations must be >= 0, step in (0, 1], crease_degrees in [0, 180], "
                            "max_turn_degrees in (0, 180], and a vertical relaxation needs a non-zero axis");
     RelaxStats stats;
-    const double crease_cos = std::cos(options.crease_degrees * kPi / 180.0);
-    const double turn_cos = std::cos(options.max_turn_degrees * kPi / 180.0);
+    const double crease_cos = std::cos(radians(options.crease_degrees));
+    const double turn_cos = std::cos(radians(options.max_turn_degrees));
     const Vec3 up = options.vertical ? normalized(options.axis) : Vec3{};
     std::vector<Vec3> before;
     for (int sweep = 0; sweep < options.iterations; ++sweep) {
@@ -51,13 +49,9 @@ RelaxStats relax_vertices(Mesh& mesh, const RelaxOptions& options)
             Vec3 area_normal{};
             before.clear();
             for (const auto f : mesh.vf_range(v)) {
-                const Vec3 n = face_normal(mesh, f, v, x);
-                before.push_back(n);
-                std::array<Vec3, 3> p;
-                std::size_t k = 0;
-                for (const auto u : mesh.fv_range(f))
-                    p[k++] = to_vec3(mesh.point(u));
-                area_normal += cross(p[1] - p[0], p[2] - p[0]);
+                const Vec3 n = area_vector(mesh, f, v, x);
+                area_normal += n;
+                before.push_back(normalized(n));
             }
             if (!(squared_norm(area_normal) > 0.0))
                 continue;
@@ -81,7 +75,7 @@ RelaxStats relax_vertices(Mesh& mesh, const RelaxOptions& options)
             bool ok = true;
             std::size_t k = 0;
             for (const auto f : mesh.vf_range(v)) {
-                const Vec3 n = face_normal(mesh, f, v, target);
+                const Vec3 n = normalized(area_vector(mesh, f, v, target));
                 ok = ok && squared_norm(n) > 0.0 && dot(n, before[k]) >= turn_cos && (!options.vertical || dot(n, up) > 0.0);
                 ++k;
             }

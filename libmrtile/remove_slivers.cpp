@@ -17,16 +17,8 @@
 namespace mrt {
 namespace {
 
-const double kPi = std::acos(-1.0);
 
 Vec3 point(const Mesh& mesh, Mesh::VertexHandle vh) { return to_vec3(mesh.point(vh)); }
-
-std::array<Vec3, 3> corners(const Mesh& mesh, Mesh::FaceHandle f)
-{
-    auto fv = mesh.cfv_iter(f);
-    const Vec3 p = point(mesh, *fv), q = point(mesh, *++fv), r = point(mesh, *++fv);
-    return {p, q, r};
-}
 
 Vec3 triangle_normal(const Vec3& p, const Vec3& q, const Vec3& r) { return normalized(cross(q - p, r - p)); }
 
@@ -45,8 +37,8 @@ class SliverRemover
 {
 public:
     SliverRemover(Mesh& mesh, const SliverOptions& options)
-        : mesh_(mesh), options_(options), cap_cos_(std::cos(options.cap_angle_degrees * kPi / 180.0)),
-          min_cos_(std::cos(options.max_turn_degrees * kPi / 180.0)), up_(normalized(options.axis))
+        : mesh_(mesh), options_(options), cap_cos_(std::cos(radians(options.cap_angle_degrees))),
+          min_cos_(std::cos(radians(options.max_turn_degrees))), up_(normalized(options.axis))
     {
         has_tiles_ = mesh_.get_property_handle(tile_, kFaceTile) && mesh_.get_property_handle(gap_, kFaceGap);
     }
@@ -107,7 +99,7 @@ private:
     {
         if (options_.cap_angle_degrees >= 180.0)
             return false;
-        const auto [p, q, r] = corners(mesh_, f);
+        const auto [p, q, r] = face_corners(mesh_, f);
         return is_cap_triangle(p, q, r, cap_cos_);
     }
 
@@ -115,7 +107,7 @@ private:
     {
         if (!(options_.needle_ratio > 0.0))
             return false;
-        const auto [p, q, r] = corners(mesh_, f);
+        const auto [p, q, r] = face_corners(mesh_, f);
         const double a = squared_distance(p, q), b = squared_distance(q, r), c = squared_distance(r, p);
         return std::min({a, b, c}) < options_.needle_ratio * options_.needle_ratio * std::max({a, b, c});
     }
@@ -214,7 +206,7 @@ private:
         for (const auto g : mesh_.vf_range(vu)) {
             if (g == gone0 || g == gone1)
                 continue;
-            const std::array<Vec3, 3> before = corners(mesh_, g);
+            const std::array<Vec3, 3> before = face_corners(mesh_, g);
             std::array<Vec3, 3> after = before;
             int k = 0;
             for (const auto w : mesh_.fv_range(g)) {
@@ -246,10 +238,10 @@ private:
 
 std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees)
 {
-    const double cos_limit = std::cos(cap_angle_degrees * kPi / 180.0);
+    const double cos_limit = std::cos(radians(cap_angle_degrees));
     std::size_t caps = 0;
     for (const auto f : mesh.faces()) {
-        const auto [p, q, r] = corners(mesh, f);
+        const auto [p, q, r] = face_corners(mesh, f);
         caps += is_cap_triangle(p, q, r, cos_limit);
     }
     return caps;

@@ -9,7 +9,6 @@
 namespace mrt::shapes {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Uniform double in [0,1) from mt19937 bits; std::uniform_real_distribution is not specified
 // exactly and differs between libraries.

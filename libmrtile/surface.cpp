@@ -80,7 +80,6 @@ namespace mrt {
 namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-constexpr double kPi = 3.14159265358979323846;
 // Largest angle between a gap face and its tiles' oriented normals (a 90-degree edge bends a gap face by
 // about 45 degrees from either tile).
 constexpr double kMaxTileDeviationDegrees = 80.0;
@@ -280,7 +279,7 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
         p.used = true;
         return p;
     }
-    const double min_cos = std::cos(options.max_tilt_degrees * kPi / 180.0);
+    const double min_cos = std::cos(radians(options.max_tilt_degrees));
     for (const Tile& t : tiles)
         if (t.has_fan() && std::abs(dot(t.normal, p.axis)) < min_cos)
             return p;
@@ -885,7 +884,7 @@ public:
           const std::vector<int>& orientation)
         : layout_(layout), tiles_(tiles), surface_(surface), projection_(projection), positions_(positions),
           orientation_(orientation), candidates_(candidates.triangles), relative_radius_(candidates.relative_radius),
-          fallback_(candidates.fallback), min_cos_(std::cos(max_turn_degrees * kPi / 180.0)),
+          fallback_(candidates.fallback), min_cos_(std::cos(radians(max_turn_degrees))),
           placed_(layout.tiles.size(), false), oriented_normal_(layout.tiles.size()),
           banned_(candidates.triangles.size(), false),
           held_(candidates.triangles.size(), false), rescuing_(candidates.triangles.size(), false),
@@ -1120,7 +1119,7 @@ private:
         }
         if (squared_norm(ref) == 0.0)
             return true;
-        return dot(nt, normalized(ref)) >= std::cos(kMaxTileDeviationDegrees * kPi / 180.0);
+        return dot(nt, normalized(ref)) >= std::cos(radians(kMaxTileDeviationDegrees));
     }
 
     // The new face adds link edge x -> y at v. When that joins the end of one fan of v to the start of
@@ -2129,7 +2128,7 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
         };
         double gap = empty_sector(tiles[t]);
         // The neighbours' planes only matter where the tile's own plane sees a wide empty sector.
-        if (gap > max_gap_degrees * kPi / 180.0)
+        if (gap > radians(max_gap_degrees))
             for (std::uint32_t n : tiles[t].neighbours)
                 gap = std::min(gap, empty_sector(tiles[n]));
         if (gap >= 2.0 * kPi)
@@ -2144,7 +2143,7 @@ std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_
                 inside += std::binary_search(around.begin(), around.end(), m) ? 1 : 0;
             ring_closed = ring_closed && inside >= 2;
         }
-        out[t] = gap <= max_gap_degrees * kPi / 180.0 || ring_closed;
+        out[t] = gap <= radians(max_gap_degrees) || ring_closed;
         widest[t] = gap;
     }
     // A tile on a sharp edge, its plane tilted between the two faces, can see both faces' tiles on one
@@ -2334,7 +2333,7 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
 // Largest turn of a fan face when a loop point is collapsed away; a gap face (thin, its normal is noise)
 // only has to stay within 75 degrees of the surface around the point.
 constexpr double kMaxCollapseTurnDegrees = 20.0;
-const double kMinGapFaceCos = std::cos(75.0 * kPi / 180.0);
+const double kMinGapFaceCos = std::cos(radians(75.0));
 
 
 // The ε-splitting of step 1 puts points on long hull edges so that the gap triangles are well shaped
@@ -2356,7 +2355,7 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
                                  bool across_strips = false)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
-    const double min_cos = std::cos(kMaxCollapseTurnDegrees * kPi / 180.0);
+    const double min_cos = std::cos(radians(kMaxCollapseTurnDegrees));
     auto point = [&](Mesh::VertexHandle v) { return to_vec3(mesh.point(v)); };
     std::size_t removed = 0;
     const std::size_t n = mesh.n_vertices();

@@ -9,6 +9,11 @@
 
 namespace mrt {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
+//! Degrees (as options are given) to radians.
+inline constexpr double radians(double degrees) { return degrees * kPi / 180.0; }
+
 struct Vec3
 {
     double x = 0.0, y = 0.0, z = 0.0;

@@ -79,18 +79,6 @@ Mesh grid_mesh(int nx, int ny, double x0, double y0, double step, Height height)
 
 inline double wave(double x, double y) { return 0.25 * std::sin(0.7 * x) * std::cos(0.5 * y); }
 
-//! The corners of a triangle, in its winding.
-inline std::array<Vec3, 3> face_points(const Mesh& mesh, Mesh::FaceHandle f)
-{
-    std::array<Vec3, 3> p;
-    std::size_t k = 0;
-    for (const auto v : mesh.fv_range(f)) {
-        const auto& q = mesh.point(v);
-        p[k++] = Vec3{q[0], q[1], q[2]};
-    }
-    return p;
-}
-
 //! Vertex shader runs per triangle of an index buffer on a GPU modelled as a FIFO cache of 16
 //! transformed vertices (the classic ACMR; 0.5 is the ideal of a large regular mesh, 3 the worst).
 template <typename Index>
@@ -137,7 +125,7 @@ double worst_triangle_mismatch(const Mesh& mesh, Expected expected, const std::v
         grid[key(centroid(t))].push_back(t);
     double worst = 0;
     for (const auto f : mesh.faces()) {
-        std::array<Vec3, 3> corner = face_points(mesh, f);
+        std::array<Vec3, 3> corner = face_corners(mesh, f);
         for (Vec3& p : corner)
             p = expected(p);
         const Vec3 c = (corner[0] + corner[1] + corner[2]) / 3.0;

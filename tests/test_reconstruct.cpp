@@ -71,7 +71,7 @@ double facing(const Mesh& mesh, const Vec3& viewpoint)
 {
     double sum = 0.0;
     for (const auto f : mesh.faces()) {
-        const std::array<Vec3, 3> p = testing::face_points(mesh, f);
+        const std::array<Vec3, 3> p = face_corners(mesh, f);
         sum += dot(cross(p[1] - p[0], p[2] - p[0]), viewpoint - (p[0] + p[1] + p[2]) / 3.0);
     }
     return sum;

@@ -29,7 +29,7 @@ double smallest_angle_degrees(const Mesh& mesh)
 {
     double smallest = 180.0;
     for (const auto f : mesh.faces()) {
-        const std::array<Vec3, 3> p = testing::face_points(mesh, f);
+        const std::array<Vec3, 3> p = face_corners(mesh, f);
         for (std::size_t k = 0; k < 3; ++k) {
             const Vec3 u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
             smallest = std::min(smallest, std::atan2(norm(cross(u, v)), dot(u, v)) * 180.0 / M_PI);

@@ -619,18 +619,13 @@ std::string inputs_name(const std::vector<fs::path>& points)
 void note_missing_scans(const std::vector<fs::path>& points)
 {
     for (const fs::path& path : points) {
-        std::string ext = path.extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-        if (ext != ".conf")
+        if (!is_scan_list(path))
             continue;
         std::string missing;
         std::size_t count = 0;
-        for (const ScanPlacement& scan : read_scan_list(path)) {
-            std::error_code ec;
-            if (!fs::exists(scan.path, ec) && !ec) {
+        for (const ScanPlacement& scan : read_scan_list(path))
+            if (scan.missing)
                 missing += (count++ == 0 ? "" : ", ") + scan.path.filename().string();
-            }
-        }
         if (count > 0)
             std::printf("note: %s: %zu listed scan%s missing, left out: %s\n", path.string().c_str(), count,
                         count > 1 ? "s" : "", missing.c_str());
