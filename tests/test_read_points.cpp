@@ -1087,6 +1087,14 @@ TEST(ReadScanList, placement_paths_and_malformed_lists)
     expect_read_errors(dir, cases);
     const fs::path gone = write_file(dir / "gone.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/c.xyz 0 0 0 0 0 0 1\n");
     expect_error<IoError>([&] { read_points(gone); }, {gone.string(), "line 2", "c.xyz", "no such file", "skip_missing_scans"});
+    const std::vector<ScanPlacement> listed = read_scan_list(gone);
+    ASSERT_EQ(listed.size(), 2u);
+    EXPECT_FALSE(listed[0].missing);
+    EXPECT_TRUE(listed[1].missing);
+    EXPECT_TRUE(is_scan_list("a/b.conf"));
+    EXPECT_TRUE(is_scan_list("B.CONF.gz"));
+    EXPECT_FALSE(is_scan_list("b.ply"));
+    EXPECT_FALSE(is_scan_list("b.e57")); // not a point file either, but no exception from the question
     ReadOptions skip;
     skip.skip_missing_scans = true;
     EXPECT_EQ(read_points(gone, skip).size(), 3u);
