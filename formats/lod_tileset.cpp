@@ -3,8 +3,10 @@
 #include "formats/lod_tileset.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/parallel.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace mrt {
 
@@ -39,6 +41,78 @@ QuantizationGrid tileset_grid(const LodSet& set)
     grid.min = box.min - Vec3{1, 1, 1} * (1e-6 * side);
     grid.range = side * (1.0 + 2e-6);
     return grid;
+}
+
+GeoPlacement georeference(LodSet& set, const Vec3& origin, const BoundingBox& model_box, const ProjectedCrs& crs,
+                          double height_offset)
+{
+    if (!std::isfinite(height_offset))
+        throw InvalidInput("georeference: height offset is not finite");
+    const TransverseMercator& tm = crs.projection;
+    const Vec3 centre = origin + model_box.centre();
+    GeoPlacement placement;
+    const auto geodetic = [&](const Vec3& q) {
+        Geodetic g = projected_to_geodetic(tm, q.x, q.y, q.z);
+        g.height += height_offset;
+        return g;
+    };
+    placement.anchor = geodetic(centre);
+    placement.root_transform = enu_to_ecef_transform(placement.anchor.longitude_deg, placement.anchor.latitude_deg,
+                                                     placement.anchor.height);
+    const EnuFrame frame(tm.ellipsoid, placement.anchor);
+    const auto to_enu = [&](const Vec3& p) {
+        const Vec3 q = origin + p;
+        return frame.ecef_to_enu(geodetic_to_ecef(tm.ellipsoid, geodetic(q)));
+    };
+    // A box's image is curved (the Earth drops away from the anchor's tangent plane): its corners'
+    // box is padded by the largest sag across it, side^2 / (2 R), R a lower bound of the Earth's radius.
+    const auto corner_box = [&](const BoundingBox& b) {
+        BoundingBox out;
+        for (int c = 0; c < 8; ++c) {
+            const Vec3 corner{(c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y, (c & 4) ? b.max.z : b.min.z};
+            const Vec3 e = to_enu(corner);
+            out.min = c == 0 ? e : min(out.min, e);
+            out.max = c == 0 ? e : max(out.max, e);
+        }
+        const double side = b.diagonal() * tm.unit_to_metre;
+        const double pad = side * side / (2.0 * 6.3e6) + 1e-6 * side;
+        out.min = out.min - Vec3{pad, pad, pad};
+        out.max = out.max + Vec3{pad, pad, pad};
+        return out;
+    };
+    run_parallel(set.tiles.size(), 0, [&](std::size_t k) {
+        LodTile& tile = set.tiles[k];
+        BoundingBox box = corner_box(tile.box);
+        // Normals: through the map's Jacobian at the tile's centre (a tile spans far less than the
+        // distance over which the grid's convergence changes noticeably).
+        const Vec3 c = tile.box.centre();
+        const Vec3 fc = to_enu(c);
+        const double step = std::max(tile.box.diagonal(), 1e-3);
+        const Vec3 jx = (to_enu(c + Vec3{step, 0, 0}) - fc) / step;
+        const Vec3 jy = (to_enu(c + Vec3{0, step, 0}) - fc) / step;
+        const Vec3 jz = (to_enu(c + Vec3{0, 0, step}) - fc) / step;
+        Mesh& mesh = tile.mesh;
+        for (const auto v : mesh.vertices()) {
+            const Vec3 p = to_enu(to_vec3(mesh.point(v)));
+            mesh.set_point(v, to_point(p));
+            box.min = min(box.min, p);
+            box.max = max(box.max, p);
+            if (mesh.has_vertex_normals()) {
+                const Vec3 n = to_vec3(mesh.normal(v));
+                mesh.set_normal(v, to_point(normalized(jx * n.x + jy * n.y + jz * n.z)));
+            }
+        }
+        mesh.update_face_normals();
+        tile.box = box;
+        tile.geometric_error *= tm.unit_to_metre;
+    });
+    // A parent's box must contain its children's: grow bottom-up (children come after their parent).
+    for (std::size_t k = set.tiles.size(); k-- > 0;)
+        for (std::size_t c : set.tiles[k].children) {
+            set.tiles[k].box.min = min(set.tiles[k].box.min, set.tiles[c].box.min);
+            set.tiles[k].box.max = max(set.tiles[k].box.max, set.tiles[c].box.max);
+        }
+    return placement;
 }
 
 void write_lod_tileset(const LodSet& set, const Vec3& origin, const std::filesystem::path& dir, TilesetOptions options)

@@ -5,6 +5,7 @@
 //! grid (the root box's cube), so border vertices shared by neighbouring tiles decode identically.
 
 #include "formats/write_3d_tiles.h"
+#include "libmrtile/georef.h"
 #include "libmrtile/lod_set.h"
 
 #include <filesystem>
@@ -19,6 +20,29 @@ std::vector<TilesetTile> tileset_tiles(const LodSet& set);
 //! leaves out far away would stretch the grid and coarsen every position as much. The root's box
 //! when no tile has vertices.
 QuantizationGrid tileset_grid(const LodSet& set);
+
+//! Where georeference() put a LOD set on the globe.
+struct GeoPlacement
+{
+    Geodetic anchor;                        //!< the local frame's origin: below the model's box centre
+    std::array<double, 16> root_transform;  //!< ENU at the anchor → ECEF (TilesetOptions::root_transform)
+};
+
+//! \brief Places a LOD set of input in projected coordinates (UTM and other Transverse Mercator
+//! grids) on the globe: every tile vertex (origin + position, a point of `crs`, heights taken as
+//! ellipsoidal) is mapped exactly to local east-north-up metres at the anchor, the geodetic point under
+//! the centre of `model_box` (relative to origin) at its mid height; normals turn with the grid's
+//! convergence; boxes are recomputed (each still contains its content and its children's) and
+//! geometric errors converted to metres (a CRS in feet). Pass the
+//! returned root transform to write_lod_tileset with origin 0. Why not just a root transform: a
+//! projected grid is not a rigid frame (it is rotated from true north by up to a few degrees, scaled by
+//! up to 1.0004 and flat where the Earth curves, 8 m over 10 km), so an ENU frame at one point puts
+//! the far side of a large survey visibly off; the exact per-vertex map puts every vertex where the
+//! CRS says it is (to the datum, see georef.h). Costs two map evaluations per vertex.
+//! `height_offset` (metres) is added to every height: the geoid's height above the ellipsoid for input
+//! with orthometric heights.
+GeoPlacement georeference(LodSet& set, const Vec3& origin, const BoundingBox& model_box, const ProjectedCrs& crs,
+                          double height_offset = 0.0);
 
 //! With Draco and no grid in `options`, tiles are quantized on tileset_grid(set).
 //! \throw IoError naming the path that cannot be written; InvalidInput for an empty set.

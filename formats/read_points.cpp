@@ -1081,6 +1081,58 @@ constexpr std::uint16_t kLasRecordSize[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38
 // Where red/green/blue start in the formats that have them, else 0.
 constexpr std::uint16_t kLasColorOffset[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
 
+constexpr std::uint64_t kLasMaxRecordBytes = 16u << 20;
+
+// The CRS of the LASF_Projection records: the OGC WKT record (2112) when the header says WKT is
+// authoritative or no EPSG code is given, else the EPSG code of the GeoTIFF keys (record 34735:
+// ProjectedCSTypeGeoKey 3072, else GeographicTypeGeoKey 2048). Malformed records are ignored: the CRS
+// only places the result on the globe, and the points themselves are still readable.
+std::string las_crs(const char* records, std::size_t size, std::uint32_t count, bool swap, bool wkt_flag)
+{
+    constexpr std::size_t kRecordHeader = 54;
+    std::string wkt;
+    unsigned projected = 0, geographic = 0;
+    std::size_t at = 0;
+    for (std::uint32_t k = 0; k < count && at + kRecordHeader <= size; ++k) {
+        const std::string user(records + at + 2, strnlen(records + at + 2, 16));
+        const std::uint16_t id = load<std::uint16_t>(records + at + 18, swap);
+        const std::uint16_t length = load<std::uint16_t>(records + at + 20, swap);
+        const char* data = records + at + kRecordHeader;
+        at += kRecordHeader + length;
+        if (at > size)
+            break;
+        if (user != "LASF_Projection")
+            continue;
+        if (id == 2112) {
+            wkt.assign(data, strnlen(data, length));
+        } else if (id == 34735 && length >= 8) {
+            // GeoKeyDirectoryTag: a 4-short header whose last short is the key count, then 4 shorts per
+            // key (id, location, count, value); location 0 means the value is the short itself.
+            const std::size_t keys = std::min<std::size_t>(load<std::uint16_t>(data + 6, swap), (length - 8) / 8);
+            for (std::size_t i = 0; i < keys; ++i) {
+                const char* key = data + 8 + 8 * i;
+                if (load<std::uint16_t>(key + 2, swap) != 0)
+                    continue;
+                const unsigned key_id = load<std::uint16_t>(key, swap);
+                const unsigned value = load<std::uint16_t>(key + 6, swap);
+                if (key_id == 3072)
+                    projected = value;
+                else if (key_id == 2048)
+                    geographic = value;
+            }
+        }
+    }
+    // 32767 is GeoTIFF's "user-defined": the parameters are spread over further keys we do not read.
+    const auto known = [](unsigned code) { return code > 0 && code < 32767; };
+    if (!wkt.empty() && (wkt_flag || !known(projected)))
+        return wkt;
+    if (known(projected))
+        return "EPSG:" + std::to_string(projected);
+    if (known(geographic))
+        return "EPSG:" + std::to_string(geographic);
+    return {};
+}
+
 PointCloud read_las(Input& in, const ReadOptions& options)
 {
     const char* header = in.take(kLasHeaderMin);
@@ -1140,10 +1192,23 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     if (in.file_size() > 0 && needed > in.file_size())
         throw IoError(in.name() + ": truncated: the header declares " + std::to_string(count) + " points (" +
                       std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) + " bytes");
+    // The variable-length records between the header and the points may say where the points are
+    // on the Earth; a region beyond kLasMaxRecordBytes (waveform tables and the like) is not searched.
+    std::string crs;
+    const std::uint64_t record_bytes = point_offset - header_size;
+    if (in.offset() <= header_size && in.skip(header_size - in.offset()) && record_bytes <= kLasMaxRecordBytes) {
+        const char* records = in.take(static_cast<std::size_t>(record_bytes));
+        if (!records)
+            throw IoError(in.name() + ": truncated: the file ends before its point data");
+        const std::uint32_t record_count = load<std::uint32_t>(header + 100, swap);
+        const bool wkt_flag = (load<std::uint16_t>(header + 6, swap) & 0x10) != 0;
+        crs = las_crs(records, static_cast<std::size_t>(record_bytes), record_count, swap, wkt_flag);
+    }
     if (!in.skip(point_offset - in.offset()))
         throw IoError(in.name() + ": truncated: the file ends before its point data");
 
     PointCloud cloud;
+    cloud.crs = std::move(crs);
     reserve_capped(cloud, count, in.file_size() > 0 ? SIZE_MAX : kReserveCap, false);
     const std::uint16_t color_offset = options.keep_colors ? kLasColorOffset[format] : 0;
     std::vector<std::array<std::uint16_t, 3>> colors16;
@@ -1727,6 +1792,8 @@ void place_scan(PointCloud& cloud, const ScanPlacement& placement)
     if (cloud.viewpoint)
         *cloud.viewpoint = rotate(*cloud.viewpoint) + offset;
     cloud.origin = origin;
+    if (placement.translation != Vec3{0, 0, 0} || placement.rotation != std::array<double, 4>{0, 0, 0, 1})
+        cloud.crs.clear(); // moved: the file's coordinates, which its CRS describes, are gone
 }
 
 PointCloud read_points(const std::vector<std::filesystem::path>& paths, const ReadOptions& options)

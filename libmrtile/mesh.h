@@ -36,6 +36,8 @@ using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
 
 //! A mesh point or normal as the library's Vec3.
 inline Vec3 to_vec3(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
+//! A Vec3 as a mesh point or normal.
+inline OpenMesh::Vec3d to_point(const Vec3& p) { return {p.x, p.y, p.z}; }
 
 //! The corners of triangle f, in its winding.
 inline std::array<Vec3, 3> face_corners(const Mesh& mesh, Mesh::FaceHandle f)

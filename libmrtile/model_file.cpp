@@ -22,8 +22,10 @@ constexpr std::uint32_t kEndianMarker = 0x01020304u;
 constexpr std::size_t kHeaderSize = 104;
 constexpr std::size_t kNodeSize = 168;
 constexpr std::size_t kTrailerSize = 8;
-constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4;
-constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint;
+constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8;
+constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs;
+// A WKT CRS is a few kilobytes; anything near this is not one.
+constexpr std::uint32_t kMaxCrsBytes = 1u << 20;
 
 // Little-endian writer over a string (byte by byte through shifts: correct on any host).
 class Writer
@@ -180,7 +182,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
-          (h.cloud.viewpoint ? kFlagViewpoint : 0u));
+          (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs));
     w.u64(n);
     w.u64(h.nodes.size());
     w.f64(h.cloud.origin.x);
@@ -230,6 +232,12 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         w.f64(h.cloud.viewpoint->y);
         w.f64(h.cloud.viewpoint->z);
     }
+    if (!h.cloud.crs.empty()) {
+        if (h.cloud.crs.size() > kMaxCrsBytes)
+            throw InvalidInput("save_model: the CRS text is longer than " + std::to_string(kMaxCrsBytes) + " bytes");
+        w.u32(static_cast<std::uint32_t>(h.cloud.crs.size()));
+        w.bytes(h.cloud.crs.data(), h.cloud.crs.size());
+    }
     const std::uint64_t payload = out.size() - kHeaderSize;
     std::string patch;
     Writer(patch).u64(payload);
@@ -264,7 +272,7 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
-        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + kTrailerSize >
+        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -337,6 +345,13 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
         if (!is_finite(v))
             r.fail("non-finite viewpoint");
         h.cloud.viewpoint = v;
+    }
+    if (flags & kFlagCrs) {
+        const std::uint32_t length = r.u32();
+        if (length == 0 || length > kMaxCrsBytes || length > end - r.position())
+            r.fail("CRS of " + std::to_string(length) + " bytes does not fit");
+        h.cloud.crs.resize(length);
+        r.bytes(h.cloud.crs.data(), length);
     }
     if (r.position() != end)
         r.fail("unexpected extra sections (written by a newer version?)");

@@ -4,13 +4,14 @@
 //! \details Layout (version 1, every number little-endian whatever the host):
 //! \code
 //!   header   104 bytes: magic "MRTILE\r\n", u32 version, u32 endian marker 0x01020304, u32 header size,
-//!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint), u64 points, u64 nodes, f64 origin[3],
+//!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint, 8 = CRS), u64 points, u64 nodes, f64 origin[3],
 //!            u32 criterion, u32 pca_limit, u32 min_cluster, u32 reclassify, f64 criterion value,
 //!            f64 build seconds, u64 payload size
 //!   payload  positions (points × 3 f64, relative to origin, tree order), colours (points × 4 u8, if
 //!            flagged), input index (points × u32), nodes (nodes × 168 bytes: begin, end, parent, left,
 //!            right, depth as 32-bit, count u64, mean 3 f64, M 6 f64, eq. 1 error f64, max plane
-//!            distance f64, box min 3 f64, box max 3 f64), viewpoint (3 f64 relative to origin, if flagged)
+//!            distance f64, box min 3 f64, box max 3 f64), viewpoint (3 f64 relative to origin, if flagged),
+//!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged)
 //!   trailer  u32 CRC-32 of everything before it, magic "MEND"
 //! \endcode
 //! The file holds only exact statistics; PCA frames are recomputed on load, so load → save is

@@ -62,6 +62,8 @@ void append(PointCloud& into, PointCloud from)
     const Vec3 shift = from.origin - into.origin;
     if (!into.viewpoint || !from.viewpoint || *into.viewpoint != *from.viewpoint + shift)
         into.viewpoint.reset();
+    if (into.crs != from.crs)
+        into.crs.clear(); // coordinates in different systems have none in common
     const std::size_t old_size = into.positions.size();
     into.positions.reserve(old_size + from.positions.size());
     for (const Vec3& p : from.positions)

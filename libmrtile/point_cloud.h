@@ -40,6 +40,11 @@ struct PointCloud
     //! single-scan PTX). Open surfaces are oriented to face it: a scan's mesh faces its scanner. Empty:
     //! open surfaces face the way their shape suggests (see build_surface).
     std::optional<Vec3> viewpoint;
+    //! The coordinate reference system the input declares for its coordinates, as it declares it:
+    //! "EPSG:N" or OGC WKT (a LAS file's GeoTIFF keys or WKT record, or the CLI's --crs). Empty: unknown.
+    //! Only placement on the globe uses it (3D Tiles export, see formats/lod_tileset.h); the hierarchy
+    //! and meshes stay in the input's coordinates.
+    std::string crs;
 
     std::size_t size() const { return positions.size(); }
     bool empty() const { return positions.empty(); }
@@ -57,7 +62,7 @@ void recenter(PointCloud& cloud);
 //! recenter afterwards; into an empty cloud, `from` is moved as it is). Colours are kept when either
 //! cloud has them; the points of a cloud without colours are white (glTF multiplies vertex colours into
 //! the material, and white leaves it as it is). The viewpoint is kept only when both clouds have the
-//! same one (scans from different places have none in common).
+//! same one (scans from different places have none in common); so is the CRS.
 void append(PointCloud& into, PointCloud from);
 
 //! \brief Step k for using every k-th of `count` points so that at most about `max_points` are used

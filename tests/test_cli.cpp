@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -319,6 +320,46 @@ TEST(Cli, tileset_placement_note)
     const Result local = mrtile("reconstruct " + (dir / "sphere.xyz").string() + " -o " + (dir / "c").string() + " --format 3dtiles", dir);
     ASSERT_EQ(local.code, 0) << local.err;
     EXPECT_EQ(local.out.find(note), std::string::npos) << local.out;
+}
+
+// Input in UTM coordinates with its CRS (--crs here; a LAS file's own records the same way): the
+// tileset lands on the globe at the right place, info names the CRS, and a CRS we cannot place by is
+// refused as a usage error before anything is read.
+TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string utm;
+    for (const auto& [x, y, z] : sphere_points(2000))
+        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+    write_text(dir / "utm.xyz", utm);
+    const Result r = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "t").string() +
+                                " --format 3dtiles --crs epsg:32633",
+                            dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("placed on the globe by WGS 84 / UTM zone 33N (EPSG:32633)"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("note: the tileset is placed at its input coordinates"), std::string::npos) << r.out;
+    const auto tileset = nlohmann::json::parse(slurp(dir / "t" / "tileset.json"));
+    const auto& m = tileset["root"]["transform"];
+    const double x = m[12], y = m[13], z = m[14];
+    // Easting 500,000 is the zone's central meridian, 15 E; northing 4,100,000 m is about 37.0 N
+    // (111.0 km per degree); height 100 m above the ellipsoid.
+    EXPECT_NEAR(std::atan2(y, x) * 180 / M_PI, 15.0, 1e-6);
+    EXPECT_NEAR(std::atan2(z, std::hypot(x, y)) * 180 / M_PI, 37.0, 0.2);
+    EXPECT_NEAR(std::sqrt(x * x + y * y + z * z), 6370394.0 + 100.0, 2000.0); // a (1 - f sin^2 lat) + h
+    // The model keeps it.
+    ASSERT_EQ(mrtile("build " + (dir / "utm.xyz").string() + " -o " + (dir / "m.mrt").string() + " --crs EPSG:32633", dir).code, 0);
+    const Result info = mrtile("info " + (dir / "m.mrt").string(), dir);
+    EXPECT_NE(info.out.find("crs         WGS 84 / UTM zone 33N (EPSG:32633): 3D Tiles are placed on the globe by it"),
+              std::string::npos)
+        << info.out;
+    // Unsupported: exit 2, one line naming the option, nothing written.
+    const Result bad = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "u").string() +
+                                  " --format 3dtiles --crs EPSG:2264",
+                              dir);
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.err.find("--crs: "), std::string::npos) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_FALSE(fs::exists(dir / "u"));
 }
 
 // The Stanford scan list of the repository names ten scans of which two are here: an error naming the

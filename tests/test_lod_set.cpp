@@ -3,6 +3,7 @@
 #include "formats/lod_tileset.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/georef.h"
 #include "libmrtile/lod_set.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/shapes.h"
@@ -190,6 +191,68 @@ TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
         if (t.level == set.levels.size() - 1)
             faces += t.mesh.n_faces() - t.skirt_faces;
     EXPECT_EQ(faces, set.levels.back().mesh.n_faces());
+}
+
+// A hill in UTM coordinates (a sphere of radius 400 m, 3 degrees west of its zone's central meridian
+// at 47 N) placed on the globe: every vertex lands where the CRS puts it, through the root transform
+// (formats' enu_to_ecef_transform) and the content (georef's EnuFrame), two separate derivations; the
+// boxes still nest; normals turn with the grid (convergence about 2.2 degrees here).
+TEST(LodSet, georeference_puts_every_vertex_where_the_crs_says)
+{
+    PointCloud c = shapes::sphere(8000, 400.0);
+    shapes::translate(c, {272000.0, 5206000.0, 300.0});
+    recenter(c);
+    const Hierarchy h = build_hierarchy(c);
+    LodSetOptions o;
+    o.max_tile_triangles = 600;
+    const LodSet original = make_lod_set(h, o);
+    ASSERT_GT(original.tiles.size(), 3u);
+    LodSet set = original;
+    const std::optional<ProjectedCrs> crs = crs_from_epsg(32633);
+    ASSERT_TRUE(crs.has_value());
+    const GeoPlacement placed = georeference(set, h.cloud.origin, h.nodes.front().box, *crs);
+    EXPECT_NEAR(placed.anchor.latitude_deg, 47.0, 0.1);
+    EXPECT_NEAR(placed.anchor.longitude_deg, 12.0, 0.1);
+    const auto& m = placed.root_transform; // column-major
+    std::size_t checked = 0;
+    double largest_turn = 0, smallest_turn = 180;
+    for (std::size_t t = 0; t < set.tiles.size(); ++t) {
+        const Mesh& before = original.tiles[t].mesh;
+        const Mesh& after = set.tiles[t].mesh;
+        ASSERT_EQ(before.n_vertices(), after.n_vertices());
+        EXPECT_EQ(set.tiles[t].geometric_error, original.tiles[t].geometric_error); // metres already
+        for (const auto v : after.vertices()) {
+            const Vec3 q = h.cloud.origin + to_vec3(before.point(v));
+            const Vec3 want = geodetic_to_ecef(crs->projection.ellipsoid, projected_to_geodetic(crs->projection, q.x, q.y, q.z));
+            const Vec3 e = to_vec3(after.point(v));
+            const Vec3 got{m[0] * e.x + m[4] * e.y + m[8] * e.z + m[12], m[1] * e.x + m[5] * e.y + m[9] * e.z + m[13],
+                           m[2] * e.x + m[6] * e.y + m[10] * e.z + m[14]};
+            ASSERT_LT(norm(got - want), 1e-3) << "tile " << t;
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_GE(e[k], set.tiles[t].box.min[k]);
+                EXPECT_LE(e[k], set.tiles[t].box.max[k]);
+            }
+            // The turn of a normal seen from above: grid north rotated to true north.
+            const Vec3 n0 = to_vec3(before.normal(v)), n1 = to_vec3(after.normal(v));
+            if (std::hypot(n0.x, n0.y) > 0.5) { // steep: the Earth's curvature tilts the up part too
+                const double turn = std::remainder(std::atan2(n1.y, n1.x) - std::atan2(n0.y, n0.x), 2 * kPi) * 180.0 / kPi;
+                largest_turn = std::max(largest_turn, turn);
+                smallest_turn = std::min(smallest_turn, turn);
+            }
+            EXPECT_NEAR(norm(n1), 1.0, 1e-9);
+            ++checked;
+        }
+        for (std::size_t child : set.tiles[t].children)
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_GE(set.tiles[child].box.min[k], set.tiles[t].box.min[k]);
+                EXPECT_LE(set.tiles[child].box.max[k], set.tiles[t].box.max[k]);
+            }
+    }
+    EXPECT_GT(checked, 500u);
+    // West of the central meridian in the northern hemisphere grid north points east of true north:
+    // every direction turns by the same angle, atan(tan(dlon) sin(lat)): about 2.2 degrees here.
+    EXPECT_NEAR(smallest_turn, largest_turn, 0.05);
+    EXPECT_NEAR(std::abs(largest_turn), 2.2, 0.15);
 }
 
 // The acceptance command, through the CLI, checked by the Khronos validator, draco3d and the

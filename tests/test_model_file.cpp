@@ -5,6 +5,7 @@
 #include "libmrtile/shapes.h"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -67,12 +68,44 @@ TEST(ModelFile, viewpoint_round_trip_and_unknown_flags)
     EXPECT_EQ(serialize_model(back), bytes);
     EXPECT_FALSE(deserialize_model(serialize_model(sample()), "memory").cloud.viewpoint.has_value());
     std::string unknown = bytes;
-    unknown[20] = static_cast<char>(unknown[20] | 8); // flags: the u32 after magic, version, marker, header size
+    unknown[20] = static_cast<char>(unknown[20] | 16); // flags: the u32 after magic, version, marker, header size
     try {
         deserialize_model(unknown, "m.mrt");
         ADD_FAILURE() << "an unknown flag was accepted";
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("unknown flags"), std::string::npos) << e.what();
+    }
+}
+
+// The input's coordinate system is kept as text; a damaged length is refused, not trusted.
+TEST(ModelFile, crs_round_trip_and_damaged_length)
+{
+    PointCloud c = shapes::torus(1500);
+    c.crs = "PROJCS[\"WGS 84 / UTM zone 33N\",AUTHORITY[\"EPSG\",\"32633\"]]";
+    const Hierarchy h = build_hierarchy(c);
+    EXPECT_EQ(h.cloud.crs, c.crs);
+    const std::string bytes = serialize_model(h);
+    const Hierarchy back = deserialize_model(bytes, "memory");
+    EXPECT_EQ(back.cloud.crs, c.crs);
+    EXPECT_EQ(serialize_model(back), bytes);
+    EXPECT_TRUE(deserialize_model(serialize_model(sample()), "memory").cloud.crs.empty());
+    // The length is the u32 before the text, which ends at the trailer (CRC + "MEND").
+    const std::size_t length_at = bytes.size() - 8 - c.crs.size() - 4;
+    for (const std::uint32_t bad : {0u, 0xffffffffu, static_cast<std::uint32_t>(c.crs.size() + 1)}) {
+        std::string damaged = bytes;
+        for (int k = 0; k < 4; ++k)
+            damaged[length_at + static_cast<std::size_t>(k)] = static_cast<char>((bad >> (8 * k)) & 0xff);
+        // A valid checksum, so that the length check itself is what refuses it.
+        const std::size_t trailer = damaged.size() - 8;
+        const uLong sum = crc32(0L, reinterpret_cast<const Bytef*>(damaged.data()), static_cast<uInt>(trailer));
+        for (int k = 0; k < 4; ++k)
+            damaged[trailer + static_cast<std::size_t>(k)] = static_cast<char>((sum >> (8 * k)) & 0xff);
+        try {
+            deserialize_model(damaged, "m.mrt");
+            ADD_FAILURE() << "CRS length " << bad << " accepted";
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("CRS"), std::string::npos) << e.what();
+        }
     }
 }
 

@@ -910,6 +910,9 @@ struct LasFile
     std::vector<unsigned char> classification; // per point, 0 if empty
     std::vector<bool> withheld;
     std::uint64_t declared = 0; // point count in the header, 0 = the real count
+    std::string records;        // variable-length records (replace the gap's filler when not empty)
+    std::uint32_t record_count = 0;
+    std::uint16_t global_encoding = 0;
 
     std::string bytes() const
     {
@@ -918,16 +921,19 @@ struct LasFile
         const double scale[3] = {1.0 / 1024, 1.0 / 64, 1.0 / 256};
         const double offset[3] = {500000, 4100000, 100};
         const int header_size = minor >= 4 ? 375 : minor == 3 ? 235 : 227;
+        const int gap = records.empty() ? this->gap : static_cast<int>(records.size());
         const int record = kSize[format] + extra;
         const std::uint64_t count = declared ? declared : points.size();
         Bytes h;
-        h.data = "LASF" + std::string(20, '\0');
+        h.data = "LASF" + std::string(2, '\0');
+        h.put(global_encoding);
+        h.data += std::string(16, '\0');
         h.put(static_cast<std::uint8_t>(1));
         h.put(static_cast<std::uint8_t>(minor));
         h.data += std::string(64, ' ') + std::string(4, '\0'); // system, software, day, year
         h.put(static_cast<std::uint16_t>(header_size));
         h.put(static_cast<std::uint32_t>(header_size + gap));
-        h.put(static_cast<std::uint32_t>(gap > 0 ? 1 : 0));
+        h.put(static_cast<std::uint32_t>(records.empty() ? (gap > 0 ? 1 : 0) : record_count));
         h.put(static_cast<std::uint8_t>(format));
         h.put(static_cast<std::uint16_t>(record));
         h.put(static_cast<std::uint32_t>(format >= 6 ? 0 : count));
@@ -945,7 +951,7 @@ struct LasFile
             h.data += std::string(120, '\0');
         }
         EXPECT_EQ(h.data.size(), static_cast<std::size_t>(header_size));
-        h.data += std::string(static_cast<std::size_t>(gap), 'v');
+        h.data += records.empty() ? std::string(static_cast<std::size_t>(gap), 'v') : records;
         for (std::size_t i = 0; i < points.size(); ++i) {
             Bytes r;
             for (int a = 0; a < 3; ++a)
@@ -1009,6 +1015,69 @@ TEST(ReadLas, versions_formats_scales_and_colours)
     EXPECT_EQ(b.colors[1][1], 128);
     EXPECT_EQ((std::array<int, 3>{b.colors[2][0], b.colors[2][1], b.colors[2][2]}), (std::array<int, 3>{1, 2, 3}));
     EXPECT_EQ(b.colors[3][0], 9);
+}
+
+// One variable-length record: the 54-byte record header, then its data.
+std::string las_record(const std::string& user, std::uint16_t id, const std::string& data)
+{
+    Bytes r;
+    r.put(static_cast<std::uint16_t>(0));
+    r.data += user + std::string(16 - user.size(), '\0');
+    r.put(id);
+    r.put(static_cast<std::uint16_t>(data.size()));
+    r.data += std::string(32, '\0');
+    return r.data + data;
+}
+
+// A GeoKeyDirectoryTag record's data: the header (version 1.1.0, key count), then (id, 0, 1, value).
+std::string geo_keys(const std::vector<std::pair<std::uint16_t, std::uint16_t>>& keys)
+{
+    Bytes d;
+    for (std::uint16_t v : {1, 1, 0})
+        d.put(v);
+    d.put(static_cast<std::uint16_t>(keys.size()));
+    for (const auto& [id, value] : keys)
+        for (std::uint16_t v : {id, std::uint16_t{0}, std::uint16_t{1}, value})
+            d.put(v);
+    return d.data;
+}
+
+TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
+{
+    const fs::path dir = test_dir();
+    const std::string wkt = "PROJCS[\"ETRS89 / UTM zone 32N\",GEOGCS[\"ETRS89\"],AUTHORITY[\"EPSG\",\"25832\"]]";
+    const std::string keys = las_record("LASF_Projection", 34735, geo_keys({{1024, 1}, {3072, 32633}, {3076, 9001}}));
+    const auto crs_of = [&](const std::string& records, std::uint32_t count, std::uint16_t encoding = 0) {
+        LasFile f;
+        f.records = records;
+        f.record_count = count;
+        f.global_encoding = encoding;
+        const PointCloud c = read_points(write_file(dir / "crs.las", f.bytes()));
+        expect_points(c, kPoints); // the records never disturb the points
+        return c.crs;
+    };
+    // GeoTIFF keys behind a record of another kind.
+    const std::string other = las_record("LASF_Spec", 4, std::string(192, 'x'));
+    EXPECT_EQ(crs_of(other + keys, 2), "EPSG:32633");
+    // WKT: used when the header flags it as the authority (LAS 1.4) or when no EPSG code is given.
+    const std::string wkt_record = las_record("LASF_Projection", 2112, wkt + std::string(1, '\0'));
+    EXPECT_EQ(crs_of(keys + wkt_record, 2), "EPSG:32633");
+    EXPECT_EQ(crs_of(keys + wkt_record, 2, 0x10), wkt);
+    EXPECT_EQ(crs_of(wkt_record, 1), wkt);
+    // Geographic coordinates only; user-defined (32767) codes say nothing we read; no records at all.
+    EXPECT_EQ(crs_of(las_record("LASF_Projection", 34735, geo_keys({{2048, 4326}})), 1), "EPSG:4326");
+    EXPECT_EQ(crs_of(las_record("LASF_Projection", 34735, geo_keys({{3072, 32767}})), 1), "");
+    EXPECT_EQ(crs_of(other, 1), "");
+    // Malformed records are ignored, never read past: a key count beyond the record, a record longer
+    // than the space before the points, more records declared than there are.
+    std::string many = geo_keys({{3072, 32633}});
+    many[6] = static_cast<char>(0xff);
+    EXPECT_EQ(crs_of(las_record("LASF_Projection", 34735, many), 1), "EPSG:32633");
+    std::string long_record = keys;
+    long_record[20] = static_cast<char>(0xff);
+    long_record[21] = static_cast<char>(0xff);
+    EXPECT_EQ(crs_of(long_record, 1), "");
+    EXPECT_EQ(crs_of(keys, 1000), "EPSG:32633");
 }
 
 TEST(ReadLas, malformed_files_fail_cleanly)

@@ -8,6 +8,7 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/georef.h"
 #include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/outliers.h"
@@ -24,7 +25,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <new>
 #include <optional>
 #include <sstream>
@@ -107,6 +110,7 @@ struct BuildArgs
     bool keep_duplicates = false;
     bool skip_missing_scans = false;
     std::string viewpoint;
+    std::string crs;
 
     // `build` names them --tolerance/--tau; `reconstruct` prefixes them (its --tolerance is the cut's).
     void add(CLI::App* cmd, const std::string& prefix)
@@ -129,6 +133,9 @@ struct BuildArgs
         cmd->add_option("--viewpoint", viewpoint,
                         "X,Y,Z where the scanner stood (input coordinates): open surfaces face it (default: from "
                         "the file, as a PTX scan or an organized PCD tells it)");
+        cmd->add_option("--crs", crs,
+                        "coordinate system of the input: EPSG:N, WKT, or a .prj/.wkt file holding WKT (default: "
+                        "from the file, as a LAS file tells it); 3D Tiles are placed on the globe by it");
         const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
@@ -422,6 +429,7 @@ struct ExportArgs
     std::vector<double> tolerances;
     std::size_t levels = 0;
     std::string enu;
+    double geoid_height = 0.0;
 
     void add(CLI::App* cmd)
     {
@@ -431,6 +439,9 @@ struct ExportArgs
         cmd->add_option("--enu", enu,
                         "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); the root "
                         "transform maps it to ECEF");
+        cmd->add_option("--geoid-height", geoid_height,
+                        "3D Tiles placed by the model's CRS: metres added to every height (the geoid's height above "
+                        "the ellipsoid, for orthometric heights)");
         cmd->add_option("--max-tile-triangles", max_tile_triangles, "largest number of triangles in one 3D Tiles tile")
             ->check(kPositive)
             ->capture_default_str();
@@ -477,9 +488,9 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
 // A tileset without --enu is placed at its input coordinates, taken as ECEF metres. Input far from the
 // origin but not on the Earth's surface in ECEF (projected coordinates such as UTM, or a local survey
 // grid) would then float inside the globe of a web viewer: say how to place it.
-void note_placement(const Hierarchy& h, const ExportArgs& e)
+void note_placement(const Hierarchy& h, const ExportArgs& e, bool georeferenced)
 {
-    if (!e.enu.empty())
+    if (!e.enu.empty() || georeferenced)
         return;
     const double r = norm(h.bbox().centre() + h.cloud.origin);
     const double earth = 6371000.0;
@@ -490,23 +501,71 @@ void note_placement(const Hierarchy& h, const ExportArgs& e)
                     r / 1000.0);
 }
 
+// One line for `info`: the CRS's name and whether 3D Tiles can be placed by it.
+std::string crs_summary(const std::string& crs)
+{
+    try {
+        const ProjectedCrs c = parse_crs(crs);
+        return c.name + (c.epsg > 0 ? " (EPSG:" + std::to_string(c.epsg) + ")" : std::string()) +
+               ": 3D Tiles are placed on the globe by it";
+    } catch (const InvalidInput& e) {
+        std::string shown = crs.size() > 60 ? crs.substr(0, 57) + "..." : crs;
+        std::replace_if(shown.begin(), shown.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
+        return shown + " (not used: " + e.what() + ")";
+    }
+}
+
+// The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
+// tileset stays in the input's coordinates.
+std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
+{
+    if (h.cloud.crs.empty())
+        return std::nullopt;
+    try {
+        return parse_crs(h.cloud.crs);
+    } catch (const InvalidInput& e) {
+        std::printf("note: the input's coordinate system cannot place the tileset on the globe (%s)\n", e.what());
+        return std::nullopt;
+    }
+}
+
 void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
-    LodSetOptions options = e.options(m);
-    show_level_progress(options, g);
-    const LodSet set = make_lod_set(h, options);
-    note_noise_floor(h, set);
     TilesetOptions t;
     t.gltf = o.gltf();
+    // Placement is settled before the (long) meshing, so that a usage error comes at once.
+    std::optional<ProjectedCrs> crs;
     if (!e.enu.empty()) {
         const auto v = parse_numbers(e.enu, ',', "--enu");
         if (v.size() != 3 || std::abs(v[1]) > 90)
             throw UsageError("--enu: expected LON,LAT,HEIGHT with |LAT| <= 90");
         t.root_transform = enu_to_ecef_transform(v[0], v[1], v[2]);
+    } else {
+        crs = placement_crs(h);
     }
-    write_lod_tileset(set, h.cloud.origin, dir, t);
-    note_placement(h, e);
+    if (crs && t.gltf.up_axis != UpAxis::Z)
+        throw UsageError("--up y: the model's CRS (" + crs->name + ") has z up; leave --up out");
+    if (e.geoid_height != 0.0 && (!crs || !std::isfinite(e.geoid_height)))
+        throw UsageError("--geoid-height: needs a finite value and a tileset placed by the model's CRS (not --enu)");
+    LodSetOptions options = e.options(m);
+    show_level_progress(options, g);
+    LodSet set = make_lod_set(h, options);
+    note_noise_floor(h, set);
+    Vec3 origin = h.cloud.origin;
+    std::optional<GeoPlacement> placed;
+    if (crs) {
+        placed = georeference(set, h.cloud.origin, h.nodes.front().box, *crs, e.geoid_height);
+        t.root_transform = placed->root_transform;
+        origin = Vec3{0, 0, 0};
+    }
+    write_lod_tileset(set, origin, dir, t);
+    if (placed)
+        std::printf("placed on the globe by %s%s: local east-north-up metres at longitude %.7f, latitude %.7f, "
+                    "height %.2f m (WGS 84)\n",
+                    crs->name.c_str(), crs->epsg > 0 ? (" (EPSG:" + std::to_string(crs->epsg) + ")").c_str() : "",
+                    placed->anchor.longitude_deg, placed->anchor.latitude_deg, placed->anchor.height);
+    note_placement(h, e, placed.has_value());
     std::size_t contents = 0, triangles = 0;
     for (const LodTile& tile : set.tiles)
         if (tile.mesh.n_faces() > 0) {
@@ -632,6 +691,28 @@ void note_missing_scans(const std::vector<fs::path>& points)
     }
 }
 
+// --crs: "EPSG:N", WKT, or a file holding WKT (the .prj beside a shapefile, a .wkt); refused unless
+// it is a CRS we can place on the globe (asked for explicitly, it should do what it says).
+std::string crs_argument(const std::string& arg)
+{
+    std::string text = arg;
+    std::error_code ec;
+    if (fs::is_regular_file(arg, ec)) {
+        std::ifstream in(arg, std::ios::binary);
+        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (!in && !in.eof())
+            throw IoError(arg + ": cannot read the CRS file");
+        while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
+            text.pop_back();
+    }
+    try {
+        parse_crs(text);
+    } catch (const InvalidInput& e) {
+        throw UsageError(std::string("--crs: ") + e.what());
+    }
+    return text;
+}
+
 Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs& args, const Globals& g)
 {
     const auto start = Clock::now();
@@ -640,6 +721,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     if (args.skip_missing_scans)
         note_missing_scans(points);
     std::optional<Vec3> viewpoint; // checked before the (possibly long) read
+    const std::string crs = args.crs.empty() ? std::string() : crs_argument(args.crs);
     if (!args.viewpoint.empty()) {
         const auto v = parse_numbers(args.viewpoint, ',', "--viewpoint");
         if (v.size() != 3)
@@ -649,6 +731,8 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     PointCloud cloud = read_points(points, read);
     if (viewpoint)
         cloud.viewpoint = *viewpoint - cloud.origin;
+    if (!crs.empty())
+        cloud.crs = crs;
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
@@ -719,6 +803,7 @@ int run_info(const fs::path& model, bool json)
         j["reclassify"] = h.info.reclassify;
         j["colors"] = h.cloud.has_colors();
         j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
+        j["crs"] = h.cloud.crs.empty() ? nlohmann::json(nullptr) : nlohmann::json(h.cloud.crs);
         j["build_seconds"] = timed ? nlohmann::json(h.info.build_seconds) : nlohmann::json(nullptr);
         j["scale"] = h.scale;
         j["noise_floor_max"] = floor_max;
@@ -737,6 +822,8 @@ int run_info(const fs::path& model, bool json)
         const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
         std::printf("viewpoint   %.17g %.17g %.17g (open surfaces face it)\n", v.x, v.y, v.z);
     }
+    if (!h.cloud.crs.empty())
+        std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
     if (noisy_points > 0)
         std::printf("noise       %.0f%% of the points are noisy: cuts by tolerance stop at floors up to %.3g of the scale\n",
                     100.0 * noisy_share, floor_max);
