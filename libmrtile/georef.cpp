@@ -628,6 +628,12 @@ ProjectedCrs parse_crs(const std::string& text)
             throw InvalidInput("CRS \"" + t + "\": the EPSG code must be a number, e.g. EPSG:32633");
         if (std::optional<ProjectedCrs> crs = crs_from_epsg(code))
             return *crs;
+        // Lidar files in longitude/latitude are common enough to deserve their own hint: meshing
+        // degrees against metres of height distorts the surface, whatever the placement.
+        for (const int geographic : {4326, 4979, 4269, 4258, 4283, 7844, 4617, 4167})
+            if (code == geographic)
+                throw InvalidInput("EPSG:" + digits + " is geographic (longitude/latitude in degrees): reproject "
+                                   "the points to a projected CRS such as UTM first (pdal translate, las2las)");
         throw InvalidInput("EPSG:" + digits + " is not a supported projected CRS (supported: WGS 84 / UTM "
                            "32601-32660 and 32701-32760, NAD83 / UTM 26901-26923, ETRS89 / UTM 25828-25838, "
                            "GDA94 / MGA 28348-28358, GDA2020 / MGA 7846-7859); give a Transverse Mercator CRS "

@@ -362,6 +362,66 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     EXPECT_FALSE(fs::exists(dir / "u"));
 }
 
+// A LAS 1.2 file (point format 0) of `points` whose GeoTIFF keys name EPSG code `epsg`.
+std::string las_with_crs(const std::vector<std::array<double, 3>>& points, std::uint16_t epsg, std::uint16_t key)
+{
+    std::string d;
+    const auto put = [&d](auto v) { d.append(reinterpret_cast<const char*>(&v), sizeof v); };
+    const std::size_t keys_size = 16;
+    const std::uint32_t point_offset = 227 + 54 + keys_size;
+    d = "LASF" + std::string(20, '\0');
+    d += std::string{1, 2};
+    d += std::string(68, '\0');
+    put(std::uint16_t{227});
+    put(point_offset);
+    put(std::uint32_t{1});                   // one variable-length record
+    put(std::uint8_t{0});                    // point format 0
+    put(std::uint16_t{20});                  // record size
+    put(static_cast<std::uint32_t>(points.size()));
+    d += std::string(20, '\0');
+    for (int k = 0; k < 3; ++k)
+        put(0.001); // scale
+    for (int k = 0; k < 3; ++k)
+        put(0.0);   // offset
+    d += std::string(48, '\0');
+    put(std::uint16_t{0});
+    d += "LASF_Projection" + std::string(1, '\0');
+    put(std::uint16_t{34735});
+    put(static_cast<std::uint16_t>(keys_size));
+    d += std::string(32, '\0');
+    for (std::uint16_t v : {1, 1, 0, 1, static_cast<int>(key), 0, 1, static_cast<int>(epsg)})
+        put(v);
+    for (const auto& p : points) {
+        for (double c : p)
+            put(static_cast<std::int32_t>(std::lround(c / 0.001)));
+        d += std::string(8, '\0');
+    }
+    return d;
+}
+
+// A LAS file's own CRS reaches the tileset; one that cannot place it (longitude/latitude) is named
+// when the file is read, and the tileset stays in the input's coordinates.
+TEST(Cli, las_crs_places_or_is_named)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::vector<std::array<double, 3>> utm, degrees;
+    for (const auto& [x, y, z] : sphere_points(2000)) {
+        utm.push_back({500000 + 10 * x, 4100000 + 10 * y, 100 + 10 * z});
+        degrees.push_back({15 + 0.1 * x, 37 + 0.1 * y, 10 * z});
+    }
+    write_text(dir / "utm.las", las_with_crs(utm, 32633, 3072));
+    write_text(dir / "deg.las", las_with_crs(degrees, 4326, 2048));
+    const Result placed = mrtile("reconstruct " + (dir / "utm.las").string() + " -o " + (dir / "a").string() + " --format 3dtiles", dir);
+    ASSERT_EQ(placed.code, 0) << placed.err;
+    EXPECT_NE(placed.out.find("placed on the globe by WGS 84 / UTM zone 33N (EPSG:32633)"), std::string::npos) << placed.out;
+    const Result named = mrtile("reconstruct " + (dir / "deg.las").string() + " -o " + (dir / "b").string() + " --format 3dtiles", dir);
+    ASSERT_EQ(named.code, 0) << named.err;
+    EXPECT_NE(named.out.find("deg.las: its coordinate system cannot place 3D Tiles on the globe (EPSG:4326 is geographic"),
+              std::string::npos)
+        << named.out;
+    EXPECT_EQ(named.out.find("placed on the globe by"), std::string::npos) << named.out;
+}
+
 // The Stanford scan list of the repository names ten scans of which two are here: an error naming the
 // first missing one, or, on request, the two meshed as one surface with a note naming what was left out.
 TEST(Cli, stanford_scan_list)

@@ -691,6 +691,16 @@ void note_missing_scans(const std::vector<fs::path>& points)
     }
 }
 
+// A file's own CRS that cannot place a tileset: said at once, not only when exporting.
+void note_unusable_crs(const std::string& crs, const std::string& name)
+{
+    try {
+        parse_crs(crs);
+    } catch (const InvalidInput& e) {
+        std::printf("note: %s: its coordinate system cannot place 3D Tiles on the globe (%s)\n", name.c_str(), e.what());
+    }
+}
+
 // --crs: "EPSG:N", WKT, or a file holding WKT (the .prj beside a shapefile, a .wkt); refused unless
 // it is a CRS we can place on the globe (asked for explicitly, it should do what it says).
 std::string crs_argument(const std::string& arg)
@@ -733,6 +743,8 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
         cloud.viewpoint = *viewpoint - cloud.origin;
     if (!crs.empty())
         cloud.crs = crs;
+    else if (!cloud.crs.empty())
+        note_unusable_crs(cloud.crs, inputs_name(points));
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
