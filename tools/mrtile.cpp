@@ -496,8 +496,9 @@ void note_placement(const Hierarchy& h, const ExportArgs& e, bool georeferenced)
     const double earth = 6371000.0;
     if (r > 100000.0 && std::abs(r - earth) > 30000.0)
         std::printf("note: the tileset is placed at its input coordinates as ECEF metres, %.0f km from the "
-                    "Earth's centre (projected coordinates such as UTM?); to put it on the globe give --enu "
-                    "LON,LAT,HEIGHT of its origin and coordinates relative to it\n",
+                    "Earth's centre (projected coordinates such as UTM?); to put it on the globe give the input's "
+                    "CRS (--crs EPSG:N on build or reconstruct), or --enu LON,LAT,HEIGHT for local east-north-up "
+                    "metres\n",
                     r / 1000.0);
 }
 
