@@ -83,6 +83,10 @@ struct QualityReport
     double e_rms = 0.0;
     //! Distances from every input point to the mesh, as fractions of the bounding-box diagonal.
     DistanceStats point_to_mesh;
+    //! The other way: from the mesh (its vertices and face centroids) to the closest input point, as
+    //! fractions of the same diagonal. The point-to-mesh distance cannot see a spike or a flap that
+    //! sticks out where there are no points; this can (its max is the mesh's half of the Hausdorff distance).
+    DistanceStats mesh_to_points;
     //! Pairs of faces that intersect geometrically (self_intersecting_faces); 0 for a clean surface.
     std::size_t self_intersections = 0;
     //! Faces with an angle above 150 degrees (count_caps): their normals are noise, which shading shows.

@@ -1839,6 +1839,38 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::
 // away). Returns the number of islands put back; `restored_tiles` is set for each of their fans.
 constexpr std::size_t kMinRestoredTiles = 3;
 constexpr double kMinRestoredShare = 0.01;
+
+// The fans of an island: their centres, each with `reach` × its tile's spacing, their tiles, and the
+// fraction of the cloud's points the tiles hold.
+struct IslandFans
+{
+    std::vector<std::pair<Vec3, double>> centres; // position, reach distance
+    std::vector<std::int32_t> tiles;
+    double share = 0.0;
+
+    bool restorable() const { return !centres.empty() && (centres.size() >= kMinRestoredTiles || share >= kMinRestoredShare); }
+};
+
+IslandFans island_fans(const Surface& s, const std::vector<std::uint32_t>& island, const std::vector<Vec3>& positions,
+                       const std::vector<TileLoop>& loops, double reach)
+{
+    IslandFans out;
+    std::vector<bool> seen_tile(loops.size(), false);
+    for (std::uint32_t f : island) {
+        const std::int32_t t = s.face_tile()[f];
+        if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
+            continue;
+        seen_tile[static_cast<std::size_t>(t)] = true;
+        const TileLoop& tl = loops[static_cast<std::size_t>(t)];
+        if (tl.centre != kNone) {
+            out.centres.push_back({positions[tl.centre], reach * tl.spacing});
+            out.tiles.push_back(t);
+            out.share += tl.share;
+        }
+    }
+    return out;
+}
+
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
                                       std::vector<bool>& restored_tiles, double reach = 2.0)
@@ -1846,24 +1878,11 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
     std::size_t restored = 0;
     for (const std::vector<std::uint32_t>& island : removed) {
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
-        std::vector<std::pair<Vec3, double>> centres; // position, reach distance
-        std::vector<std::int32_t> island_tiles;
-        double share = 0.0;
-        std::vector<bool> seen_tile(loops.size(), false);
-        for (std::uint32_t f : island) {
-            const std::int32_t t = s.face_tile()[f];
-            if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
-                continue;
-            seen_tile[static_cast<std::size_t>(t)] = true;
-            const TileLoop& tl = loops[static_cast<std::size_t>(t)];
-            if (tl.centre != kNone) {
-                centres.push_back({positions[tl.centre], reach * tl.spacing});
-                island_tiles.push_back(t);
-                share += tl.share;
-            }
-        }
-        if (centres.empty() || (centres.size() < kMinRestoredTiles && share < kMinRestoredShare))
+        const IslandFans fans = island_fans(s, island, positions, loops, reach);
+        if (!fans.restorable())
             continue;
+        const std::vector<std::pair<Vec3, double>>& centres = fans.centres;
+        const std::vector<std::int32_t>& island_tiles = fans.tiles;
         // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
         // the surface): put back, it would float beside the surface as a component of its own.
         std::vector<std::uint64_t> edges;
@@ -2213,13 +2232,73 @@ bool adds_handle(const LocalTopology& before, const LocalTopology& after, std::s
     return -d_chi - d_b > 0;
 }
 
+// Whether input points lie inside a hole: within `spacing` of its fill patch and more than 1.5
+// spacings from its loop, at least a tenth as many as the patch's area holds at the sample's density
+// (and 3). A hole in the sample (the bunny's base) has points only along its rim; a hole the tiles
+// left in a sampled surface has them all over: a tile's sample of at most TileOptions::max_points of
+// its node's points can leave a wider gap than a point spacing (a uniformly sampled fandisk kept a
+// hole 8 spacings wide in its flat top).
+bool points_inside_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& loop,
+                        const std::vector<Tri>& patch, double spacing, double area)
+{
+    if (patch.empty() || !(spacing > 0.0))
+        return false;
+    const double needed = std::max(3.0, 0.1 * area / (spacing * spacing));
+    BoundingBox box{positions[patch[0][0]], positions[patch[0][0]]};
+    for (const Tri& t : patch)
+        for (std::uint32_t v : t) {
+            box.min = min(box.min, positions[v]);
+            box.max = max(box.max, positions[v]);
+        }
+    box.min = box.min - Vec3{spacing, spacing, spacing};
+    box.max = box.max + Vec3{spacing, spacing, spacing};
+    const auto overlaps = [&box](const BoundingBox& b) {
+        return b.min.x <= box.max.x && b.max.x >= box.min.x && b.min.y <= box.max.y && b.max.y >= box.min.y &&
+               b.min.z <= box.max.z && b.max.z >= box.min.z;
+    };
+    const double rim = 1.5 * spacing;
+    double found = 0.0;
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty() && found < needed) {
+        const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
+        stack.pop_back();
+        if (!overlaps(node.box))
+            continue;
+        if (!node.is_leaf()) {
+            stack.push_back(node.right);
+            stack.push_back(node.left);
+            continue;
+        }
+        for (std::uint32_t i = node.begin; i < node.end && found < needed; ++i) {
+            const Vec3& p = h.cloud.positions[i];
+            if (p.x < box.min.x || p.y < box.min.y || p.z < box.min.z || p.x > box.max.x || p.y > box.max.y || p.z > box.max.z)
+                continue;
+            bool over = false;
+            for (const Tri& t : patch)
+                if (point_triangle_distance(p, positions[t[0]], positions[t[1]], positions[t[2]]) <= spacing) {
+                    over = true;
+                    break;
+                }
+            if (!over)
+                continue;
+            bool off_rim = true;
+            for (std::size_t k = 0; k < loop.size() && off_rim; ++k)
+                off_rim = point_segment_distance(p, positions[loop[k]], positions[loop[(k + 1) % loop.size()]]) > rim;
+            if (off_rim)
+                found += 1.0;
+        }
+    }
+    return found >= needed;
+}
+
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
 // max_gap_width), widening those that cannot be triangulated as they are. `before_handles`: the front
 // has not yet been allowed to close handles, and a loop around a tube it still has to close looks like
 // a hole among interior tiles; only holes small by perimeter, or among interior tiles with fewer edges
 // than a handle closes around, are filled then.
-FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>& positions, const Projection& projection,
-                      const std::vector<bool>& interior, const SurfaceOptions& options, bool before_handles)
+FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
+                      const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
+                      bool before_handles)
 {
     FillResult result;
     // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
@@ -2274,7 +2353,8 @@ FillResult fill_holes(Surface& s, const Layout& layout, const std::vector<Vec3>&
                 const Vec3 c = triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
                 area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
             }
-            if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter)
+            if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter &&
+                !points_inside_hole(h, positions, loop, patch, spacing, area))
                 continue;
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
             const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};
@@ -2517,7 +2597,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     std::vector<bool> restored_tiles(tiles.size(), false); // fans of islands put back (kept in step 5)
     const std::vector<bool> interior = options.fill_holes ? interior_tiles(tiles, options.interior_gap_degrees) : std::vector<bool>{};
     auto fill = [&](bool before_handles) {
-        const FillResult more = fill_holes(surface, layout, positions, projection, interior, options, before_handles);
+        const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, before_handles);
         filled.holes += more.holes;
         filled.faces += more.faces;
     };

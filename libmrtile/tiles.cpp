@@ -207,8 +207,21 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             hull_heights.push_back(dot(d, t.normal));
         }
         double height = 0.0;
-        if (fitted_apex_height(pts, heights, hull, hull_heights, height))
-            t.apex = t.centre + t.normal * height;
+        if (fitted_apex_height(pts, heights, hull, hull_heights, height)) {
+            // Few points near the centre leave the fit barely determined (its denominator is the sum of
+            // their squared apex weights), and it can throw the apex far off the tile: on a uniformly
+            // sampled CAD part a tile of 11 points, 8 of them on its hull, put its apex 0.39 diagonals
+            // out, a spike. A cap's best apex lies 0.4 of the height range above its highest point, so
+            // half the range beyond the points either way keeps every sound fit; the tile's radius
+            // bounds it where the range is no cap's (a tile folded over a corner). Tighter bounds (a
+            // quarter of the radius) changed the 3-hole solid's topology at coarse cuts.
+            const auto [low, high] = std::minmax_element(heights.begin(), heights.end());
+            double radius2 = 0.0;
+            for (const Projected& q : hull)
+                radius2 = std::max(radius2, q.x * q.x + q.y * q.y);
+            const double margin = std::min(0.5 * (*high - *low), std::sqrt(radius2));
+            t.apex = t.centre + t.normal * std::clamp(height, *low - margin, *high + margin);
+        }
     }
     if (t.has_fan()) {
         const std::size_t n = t.boundary.size();

@@ -354,6 +354,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["max_distance"] = q->point_to_mesh.max;
         j["median_distance"] = q->point_to_mesh.median;
         j["p99_distance"] = q->point_to_mesh.p99;
+        j["mesh_to_points_mean"] = q->mesh_to_points.mean;
+        j["mesh_to_points_max"] = q->mesh_to_points.max;
     }
     j["seconds"] = seconds;
     return j;
@@ -365,10 +367,10 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
                 j["vertices"].get<std::size_t>(), j["faces"].get<std::size_t>());
     if (j.contains("genus"))
         std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices, E_RMS %.3g, "
-                    "mean/max distance %.3g/%.3g of the diagonal",
+                    "mean/max distance %.3g/%.3g of the diagonal (mesh to points: max %.3g)",
                     j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
                     j["nonmanifold_vertices"].get<std::size_t>(), j["e_rms"].get<double>(), j["mean_distance"].get<double>(),
-                    j["max_distance"].get<double>());
+                    j["max_distance"].get<double>(), j["mesh_to_points_max"].get<double>());
     std::printf(" (%.2f s)\n", j["seconds"].get<double>());
 }
 
