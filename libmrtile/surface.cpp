@@ -2232,34 +2232,48 @@ bool adds_handle(const LocalTopology& before, const LocalTopology& after, std::s
     return -d_chi - d_b > 0;
 }
 
-// Whether input points lie inside a hole: within `spacing` of its fill patch and more than 1.5
-// spacings from its loop, at least a tenth as many as the patch's area holds at the sample's density
-// (and 3). A hole in the sample (the bunny's base) has points only along its rim; a hole the tiles
-// left in a sampled surface has them all over: a tile's sample of at most TileOptions::max_points of
-// its node's points can leave a wider gap than a point spacing (a uniformly sampled fandisk kept a
-// hole 8 spacings wide in its flat top).
-bool points_inside_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& loop,
-                        const std::vector<Tri>& patch, double spacing, double area)
+// Whether the input points cover a hole: every spot of its fill patch (sampled about a spacing apart)
+// has an input point within 1.5 spacings. A hole in the sample (the bunny's base) has an empty middle;
+// a hole the tiles left in a sampled surface has points all over it: a tile built from a sample of
+// at most TileOptions::max_points of its node's points can leave a gap wider than a point spacing (a
+// uniformly sampled fandisk kept one 8 spacings wide in its flat top). Counting points inside instead
+// also filled real scan holes whose loops took in some sampled surface beside them, and a tunnel of
+// the 3-hole solid.
+bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing)
 {
     if (patch.empty() || !(spacing > 0.0))
         return false;
-    const double needed = std::max(3.0, 0.1 * area / (spacing * spacing));
-    BoundingBox box{positions[patch[0][0]], positions[patch[0][0]]};
-    for (const Tri& t : patch)
-        for (std::uint32_t v : t) {
-            box.min = min(box.min, positions[v]);
-            box.max = max(box.max, positions[v]);
-        }
-    box.min = box.min - Vec3{spacing, spacing, spacing};
-    box.max = box.max + Vec3{spacing, spacing, spacing};
+    const double reach = 1.5 * spacing;
+    // Spots: a barycentric grid on each patch triangle, its step at most a spacing along every edge.
+    std::vector<Vec3> spots;
+    for (const Tri& t : patch) {
+        const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
+        const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
+        const int steps = std::clamp(static_cast<int>(std::ceil(longest / spacing)), 1, 64);
+        for (int i = 0; i <= steps; ++i)
+            for (int j = 0; i + j <= steps; ++j) {
+                const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps;
+                spots.push_back(a + (b - a) * u + (c - a) * v);
+            }
+    }
+    BoundingBox box{spots.front(), spots.front()};
+    for (const Vec3& p : spots) {
+        box.min = min(box.min, p);
+        box.max = max(box.max, p);
+    }
+    box.min = box.min - Vec3{reach, reach, reach};
+    box.max = box.max + Vec3{reach, reach, reach};
+    const auto in_box = [&box](const Vec3& p) {
+        return p.x >= box.min.x && p.y >= box.min.y && p.z >= box.min.z && p.x <= box.max.x && p.y <= box.max.y &&
+               p.z <= box.max.z;
+    };
     const auto overlaps = [&box](const BoundingBox& b) {
         return b.min.x <= box.max.x && b.max.x >= box.min.x && b.min.y <= box.max.y && b.max.y >= box.min.y &&
                b.min.z <= box.max.z && b.max.z >= box.min.z;
     };
-    const double rim = 1.5 * spacing;
-    double found = 0.0;
+    std::vector<Vec3> near;
     std::vector<std::int32_t> stack{0};
-    while (!stack.empty() && found < needed) {
+    while (!stack.empty()) {
         const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
         stack.pop_back();
         if (!overlaps(node.box))
@@ -2269,26 +2283,14 @@ bool points_inside_hole(const Hierarchy& h, const std::vector<Vec3>& positions, 
             stack.push_back(node.left);
             continue;
         }
-        for (std::uint32_t i = node.begin; i < node.end && found < needed; ++i) {
-            const Vec3& p = h.cloud.positions[i];
-            if (p.x < box.min.x || p.y < box.min.y || p.z < box.min.z || p.x > box.max.x || p.y > box.max.y || p.z > box.max.z)
-                continue;
-            bool over = false;
-            for (const Tri& t : patch)
-                if (point_triangle_distance(p, positions[t[0]], positions[t[1]], positions[t[2]]) <= spacing) {
-                    over = true;
-                    break;
-                }
-            if (!over)
-                continue;
-            bool off_rim = true;
-            for (std::size_t k = 0; k < loop.size() && off_rim; ++k)
-                off_rim = point_segment_distance(p, positions[loop[k]], positions[loop[(k + 1) % loop.size()]]) > rim;
-            if (off_rim)
-                found += 1.0;
-        }
+        for (std::uint32_t i = node.begin; i < node.end; ++i)
+            if (in_box(h.cloud.positions[i]))
+                near.push_back(h.cloud.positions[i]);
     }
-    return found >= needed;
+    const double reach2 = reach * reach;
+    return std::all_of(spots.begin(), spots.end(), [&](const Vec3& spot) {
+        return std::any_of(near.begin(), near.end(), [&](const Vec3& p) { return dot(p - spot, p - spot) <= reach2; });
+    });
 }
 
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
@@ -2354,7 +2356,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
             }
             if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter &&
-                !points_inside_hole(h, positions, loop, patch, spacing, area))
+                !points_cover_hole(h, positions, patch, spacing))
                 continue;
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
             const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};

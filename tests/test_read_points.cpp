@@ -1342,7 +1342,13 @@ TEST(ReadErrors, truncations_and_corruptions_fail_cleanly)
         {"a.pcd", pcd_file("binary")},
         {"c.pcd", pcd_file("binary_compressed")},
         {"t.pcd", pcd_file("ascii")},
+        {"a.las", LasFile().bytes()},
     };
+    LasFile georeferenced; // with GeoTIFF keys and a WKT record (the CRS readers see corrupted records too)
+    georeferenced.records = las_record("LASF_Projection", 34735, geo_keys({{1024, 1}, {3072, 32633}})) +
+                            las_record("LASF_Projection", 2112, "PROJCS[\"WGS 84 / UTM zone 33N\"]");
+    georeferenced.record_count = 2;
+    samples.push_back({"g.las", georeferenced.bytes()});
     std::mt19937 rng(123);
     std::size_t reads = 0;
     const auto attempt = [&](const std::string& name, const std::string& bytes, bool gz) {
@@ -1375,7 +1381,7 @@ TEST(ReadErrors, truncations_and_corruptions_fail_cleanly)
     std::string noise(4096, '\0');
     for (char& c : noise)
         c = static_cast<char>(rng());
-    for (const char* name : {"n.ply", "n.xyz", "n.obj", "n.off", "n.csv", "n.pcd"}) {
+    for (const char* name : {"n.ply", "n.xyz", "n.obj", "n.off", "n.csv", "n.pcd", "n.las"}) {
         attempt(name, noise, false);
         attempt(name, noise, true);
         attempt(name, "ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty double x\n"
