@@ -352,6 +352,14 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     EXPECT_NE(info.out.find("crs         WGS 84 / UTM zone 33N (EPSG:32633): 3D Tiles are placed on the globe by it"),
               std::string::npos)
         << info.out;
+    // A model built without one is given it at export (the same place as from reconstruct).
+    ASSERT_EQ(mrtile("build " + (dir / "utm.xyz").string() + " -o " + (dir / "plain.mrt").string(), dir).code, 0);
+    const Result exported = mrtile("export " + (dir / "plain.mrt").string() + " -o " + (dir / "e").string() +
+                                       " --format 3dtiles --crs EPSG:32633",
+                                   dir);
+    ASSERT_EQ(exported.code, 0) << exported.err;
+    EXPECT_NE(exported.out.find("placed on the globe by WGS 84 / UTM zone 33N"), std::string::npos) << exported.out;
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "e" / "tileset.json"))["root"]["transform"], m);
     // Unsupported: exit 2, one line naming the option, nothing written.
     const Result bad = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "u").string() +
                                   " --format 3dtiles --crs EPSG:2264",

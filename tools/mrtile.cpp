@@ -927,6 +927,10 @@ int run(int argc, char** argv)
     exp->add_option("MODEL", exp_in, "model file")->required();
     exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->required();
     exp_args.add(exp);
+    std::string exp_crs;
+    exp->add_option("--crs", exp_crs,
+                    "3D Tiles: the model's coordinate system (EPSG:N, WKT, or a .prj/.wkt file), in place of the "
+                    "one stored in it");
 
     // demo
     auto* demo = app.add_subcommand("demo", "the whole pipeline on a built-in genus-3 test shape");
@@ -978,8 +982,11 @@ int run(int argc, char** argv)
         return 0;
     }
     if (*exp) {
+        const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
         Hierarchy h = load_model(exp_in);
         apply_globals(h);
+        if (!crs.empty())
+            h.cloud.crs = crs;
         naming_input(exp_in, [&] { exp_args.write(h, g, exp_out); });
         return 0;
     }
