@@ -327,11 +327,11 @@ bool normal_equations(const Mesh& mesh, const std::vector<Vec3>& points, const s
 }
 
 // Moves every vertex by its height along its direction, at most `max_move` × its shortest edge (edge
-// lengths taken before any move of this round). A face whose normal would turn by more than 60° (a thin
+// lengths taken before any move of this round, or before the fit's first round if shorter). A face whose normal would turn by more than 60° (a thin
 // gap face whose corners move apart along different normals can fold over its neighbours) halves the
 // moves of its corners, up to kMaxHalvings times, then keeps them still.
 void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::vector<Vec3>& direction, double max_move,
-                   FitStats& stats, double& moved_sum, std::size_t& moved_count)
+                   const std::vector<double>& start_shortest, FitStats& stats, double& moved_sum, std::size_t& moved_count)
 {
     constexpr int kMaxHalvings = 6;
     const double min_cos = 0.5;
@@ -342,7 +342,10 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
         const std::size_t v = static_cast<std::size_t>(vh.idx());
         if (!std::isfinite(shortest[v]))
             continue;
-        const double limit = max_move * shortest[v];
+        // Edge lengths as they were before the first round bound every round too: a vertex moving
+        // away from its neighbours lengthens its edges, and a limit taken from them alone grew round by
+        // round (on ten points of a sphere one vertex went 1.5 diagonals out in three rounds).
+        const double limit = max_move * std::min(shortest[v], start_shortest[v]);
         move[v] = std::isfinite(heights[v]) ? heights[v] : 0.0;
         if (std::abs(move[v]) > limit) {
             move[v] = std::copysign(limit, move[v]);
@@ -459,6 +462,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
     std::vector<Mesh::Point> start_position(n);
     for (const auto vh : mesh.vertices())
         start_position[static_cast<std::size_t>(vh.idx())] = mesh.point(vh);
+    const std::vector<double> start_shortest = shortest_edges(mesh);
     std::vector<ClosestPoint> closest;
     // A vertical fit keeps a height field a graph: so does its relaxation.
     RelaxOptions relax = options.relax;
@@ -481,7 +485,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         if (!normal_equations(mesh, used, closest, direction, options.damping, system, rhs))
             break; // no point constrains any vertex
         const std::vector<double> heights = solve(system, rhs);
-        move_vertices(mesh, heights, direction, options.max_move, stats, moved_sum, moved_count);
+        move_vertices(mesh, heights, direction, options.max_move, start_shortest, stats, moved_sum, moved_count);
         if (options.flip_edges) {
             const Vec3 up = normalized(options.axis);
             stats.flips += flip_edges(mesh, used, closest, options.vertical ? &up : nullptr, start_position,

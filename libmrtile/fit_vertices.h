@@ -9,7 +9,8 @@
 //! 1993's E_dist, linearized like point-to-plane ICP), with a small damping that holds still any vertex
 //! no point constrains, then flips the edges whose two faces fit their points better the other way round
 //! (Hoppe's edge swap; no fold beyond 60°). Points are re-assigned to their closest faces every round.
-//! A vertex moves at most `max_move` × its shortest edge per round, so fans do not fold and thin parts do
+//! A vertex moves at most `max_move` × its shortest edge per round (the shorter of that edge now and
+//! before the first round, so that the bound cannot grow with the moves), so fans do not fold and thin parts do
 //! not cross. The topology (vertices, boundary loops, genus, manifoldness, orientation) never changes;
 //! positions and, through the flips, the diagonals do.
 //! \code
@@ -37,8 +38,9 @@ struct FitOptions
     //! Weight pulling each vertex back to where it started, relative to the mean weight the points put
     //! on a vertex (keeps the system well posed where few points are; larger = smaller moves).
     double damping = 0.05;
-    //! A vertex moves at most this fraction of its shortest incident edge per round (moving along the
-    //! normal, it cannot fold its faces before it has moved about an edge length).
+    //! A vertex moves at most this fraction of its shortest incident edge per round, now or before the
+    //! first round, whichever is shorter (moving along the normal, it cannot fold its faces before it
+    //! has moved about an edge length).
     double max_move = 0.5;
     //! Use at most about this many points per vertex (every k-th point, k the same for all): the fit
     //! of a vertex needs a few dozen points, and a fine sample under a coarse mesh would cost time
