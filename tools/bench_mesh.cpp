@@ -45,6 +45,7 @@ struct MethodMeasurement
     std::uint64_t faces = 0;
     std::uint64_t caps = 0;  // faces with an angle above 150 degrees (count_caps): creases under shading
     DistanceStats distance;  // input points -> mesh, fractions of the bbox diagonal
+    DistanceStats reverse;   // mesh (vertices, face centroids) -> nearest input point: spikes and flaps
     TopologyStats topology;
 };
 
@@ -76,6 +77,7 @@ MethodMeasurement measure_ours(const MeshInput& input, double tolerance)
         m.faces = result.mesh.n_faces();
         const QualityReport quality = measure_quality(h, result.cut, result.mesh);
         m.distance = quality.point_to_mesh;
+        m.reverse = quality.mesh_to_points;
         m.topology = quality.topology;
         m.caps = quality.caps;
         return m;
@@ -88,6 +90,7 @@ void measure_soup(const TriangleSoup& soup, const std::vector<Vec3>& points, Met
     m.topology = topology_stats(soup.positions, soup.triangles);
     const Mesh mesh = unshared_mesh(soup);
     m.distance = point_to_mesh_distance(points, mesh);
+    m.reverse = mesh_to_point_distance(mesh, points);
     m.caps = count_caps(mesh);
 }
 
@@ -130,6 +133,7 @@ std::vector<std::string> method_row(const std::string& input, const std::string&
             with_commas(m.faces),
             scientific(m.distance.mean),
             scientific(m.distance.max),
+            scientific(m.reverse.max),
             std::to_string(t.nonmanifold_edges) + " / " + std::to_string(t.nonmanifold_vertices),
             std::to_string(t.boundary_loops),
             t.genus < 0 ? "n/a" : std::to_string(t.genus),
@@ -188,6 +192,7 @@ Table peers_table(const std::vector<MeshInput>& inputs)
                  {"faces"},
                  {"mean dist"},
                  {"max dist"},
+                 {"mesh→pts max"},
                  {"non-manifold E / V"},
                  {"loops"},
                  {"genus"},
@@ -208,7 +213,9 @@ Table peers_table(const std::vector<MeshInput>& inputs)
         "the peak is reset after making the input).",
         "Distances: every input point to the closest point of the mesh's triangles "
         "(`point_to_mesh_distance`), mean and max as fractions of the points' bounding-box diagonal. AFSR "
-        "interpolates the points, so its distances are those of points it left out.",
+        "interpolates the points, so its distances are those of points it left out. Mesh→pts max: the other way, "
+        "from the mesh's vertices and face centroids to the nearest input point (`mesh_to_point_distance`): "
+        "spikes, flaps and fills over holes where there are no points.",
         "Topology: `topology_stats` of the triangle set (peers: the raw soup, so non-manifold edges count); genus "
         "n/a = a non-manifold or non-orientable component.",
         "Caps %: faces with an angle above 150° (`count_caps`), as a share of the faces: their normals are noise, "
