@@ -569,8 +569,9 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
     ASSERT_GE(index.size(), 2u);
     for (std::size_t l = 0; l < index.size(); ++l) {
         EXPECT_TRUE(fs::exists(dir / "lods" / index[l]["file"].get<std::string>()));
-        for (const char* key : {"level", "tolerance", "tiles", "faces", "mean_error", "max_error"})
+        for (const char* key : {"level", "tolerance", "tiles", "faces", "mean_error", "max_error", "mesh_to_points_max"})
             EXPECT_TRUE(index[l].contains(key)) << key;
+        EXPECT_LT(index[l]["mesh_to_points_max"].get<double>(), 0.05); // no spike off the bunny
         if (l > 0) {
             EXPECT_LE(index[l]["mean_error"].get<double>(), index[l - 1]["mean_error"].get<double>());
             EXPECT_GT(index[l]["tiles"].get<std::size_t>(), index[l - 1]["tiles"].get<std::size_t>());

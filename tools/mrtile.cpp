@@ -630,7 +630,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
-                         {"e_rms", q.e_rms}});
+                         {"mesh_to_points_max", q.mesh_to_points.max}, {"e_rms", q.e_rms}});
         std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, mean/max distance %.3g/%.3g\n", level, l.tolerance,
                     l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.point_to_mesh.mean, q.point_to_mesh.max);
     }
