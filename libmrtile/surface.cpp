@@ -2271,7 +2271,14 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
         return b.min.x <= box.max.x && b.max.x >= box.min.x && b.min.y <= box.max.y && b.max.y >= box.min.y &&
                b.min.z <= box.max.z && b.max.z >= box.min.z;
     };
-    std::vector<Vec3> near;
+    // The points near the patch, bucketed in cells of the reach: each spot looks at 27 cells, so a wide
+    // hole in a large sample costs time in proportion to its spots and points, not their product.
+    const auto cell_of = [&](const Vec3& p) {
+        return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor((p.x - box.min.x) / reach)),
+                                           static_cast<std::int64_t>(std::floor((p.y - box.min.y) / reach)),
+                                           static_cast<std::int64_t>(std::floor((p.z - box.min.z) / reach))};
+    };
+    std::map<std::array<std::int64_t, 3>, std::vector<Vec3>> cells;
     std::vector<std::int32_t> stack{0};
     while (!stack.empty()) {
         const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
@@ -2285,11 +2292,21 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
         }
         for (std::uint32_t i = node.begin; i < node.end; ++i)
             if (in_box(h.cloud.positions[i]))
-                near.push_back(h.cloud.positions[i]);
+                cells[cell_of(h.cloud.positions[i])].push_back(h.cloud.positions[i]);
     }
     const double reach2 = reach * reach;
     return std::all_of(spots.begin(), spots.end(), [&](const Vec3& spot) {
-        return std::any_of(near.begin(), near.end(), [&](const Vec3& p) { return dot(p - spot, p - spot) <= reach2; });
+        const std::array<std::int64_t, 3> c = cell_of(spot);
+        for (std::int64_t dx = -1; dx <= 1; ++dx)
+            for (std::int64_t dy = -1; dy <= 1; ++dy)
+                for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                    const auto found = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
+                    if (found != cells.end())
+                        for (const Vec3& p : found->second)
+                            if (dot(p - spot, p - spot) <= reach2)
+                                return true;
+                }
+        return false;
     });
 }
 
