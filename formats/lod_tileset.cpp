@@ -106,12 +106,7 @@ GeoPlacement georeference(LodSet& set, const Vec3& origin, const BoundingBox& mo
         tile.box = box;
         tile.geometric_error *= tm.unit_to_metre;
     });
-    // A parent's box must contain its children's: grow bottom-up (children come after their parent).
-    for (std::size_t k = set.tiles.size(); k-- > 0;)
-        for (std::size_t c : set.tiles[k].children) {
-            set.tiles[k].box.min = min(set.tiles[k].box.min, set.tiles[c].box.min);
-            set.tiles[k].box.max = max(set.tiles[k].box.max, set.tiles[c].box.max);
-        }
+    nest_tile_boxes(set.tiles);
     return placement;
 }
 

@@ -28,12 +28,6 @@ double distance_to_box(const Vec3& p, const BoundingBox& b)
     return norm(d);
 }
 
-bool boxes_meet(const BoundingBox& a, const BoundingBox& b)
-{
-    return a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y &&
-           a.min.z <= b.max.z && b.min.z <= a.max.z;
-}
-
 // The refinement rule of every cut by tolerance, region or camera: the node's RMS plane distance is
 // above `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h).
 bool rougher_than(const Node& n, double limit)
@@ -117,7 +111,7 @@ Cut cut_by_budget(const Hierarchy& h, std::size_t tiles)
 bool intersects(const Node& node, const FocusRegion& region)
 {
     if (region.shape == FocusRegion::Shape::Box)
-        return boxes_meet(node.box, region.box);
+        return node.box.meets(region.box);
     return distance_to_box(region.centre, node.box) <= region.radius;
 }
 

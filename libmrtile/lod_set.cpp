@@ -393,13 +393,17 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         for (std::int32_t c : children)
             queue.push_back({c, p.level + 1, static_cast<std::ptrdiff_t>(id)});
     }
-    // A parent's box must contain its children's (3D Tiles bounding volume rule): grow bottom-up.
-    for (std::size_t k = set.tiles.size(); k-- > 0;)
-        for (std::size_t c : set.tiles[k].children) {
-            set.tiles[k].box.min = min(set.tiles[k].box.min, set.tiles[c].box.min);
-            set.tiles[k].box.max = max(set.tiles[k].box.max, set.tiles[c].box.max);
-        }
+    nest_tile_boxes(set.tiles);
     return set;
+}
+
+void nest_tile_boxes(std::vector<LodTile>& tiles)
+{
+    for (std::size_t k = tiles.size(); k-- > 0;)
+        for (std::size_t c : tiles[k].children) {
+            tiles[k].box.min = min(tiles[k].box.min, tiles[c].box.min);
+            tiles[k].box.max = max(tiles[k].box.max, tiles[c].box.max);
+        }
 }
 
 } // namespace mrt

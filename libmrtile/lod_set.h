@@ -78,6 +78,10 @@ struct LodSet
     std::vector<LodTile> tiles; //!< tiles[0] is the root; empty when options.tileset is false
 };
 
+//! Grows every tile's box to contain its children's (3D Tiles: a child's bounding volume lies inside
+//! its parent's), bottom-up; a tile's children come after it in `tiles`.
+void nest_tile_boxes(std::vector<LodTile>& tiles);
+
 //! \throw InvalidInput for options out of range (max_tile_triangles < 64, tolerances not decreasing).
 LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& options = {});
 

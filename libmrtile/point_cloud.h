@@ -26,6 +26,16 @@ struct BoundingBox
     Vec3 size() const { return max - min; }
     double largest_side() const;
     double diagonal() const;
+    //! Whether the two boxes share a point (touching counts).
+    bool meets(const BoundingBox& other) const
+    {
+        return min.x <= other.max.x && other.min.x <= max.x && min.y <= other.max.y && other.min.y <= max.y &&
+               min.z <= other.max.z && other.min.z <= max.z;
+    }
+    bool contains(const Vec3& p) const
+    {
+        return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y && p.z <= max.z;
+    }
 };
 
 struct PointCloud

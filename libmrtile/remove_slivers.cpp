@@ -17,7 +17,6 @@
 namespace mrt {
 namespace {
 
-
 Vec3 point(const Mesh& mesh, Mesh::VertexHandle vh) { return to_vec3(mesh.point(vh)); }
 
 Vec3 triangle_normal(const Vec3& p, const Vec3& q, const Vec3& r) { return normalized(cross(q - p, r - p)); }

@@ -2256,21 +2256,9 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
                 spots.push_back(a + (b - a) * u + (c - a) * v);
             }
     }
-    BoundingBox box{spots.front(), spots.front()};
-    for (const Vec3& p : spots) {
-        box.min = min(box.min, p);
-        box.max = max(box.max, p);
-    }
+    BoundingBox box = bounding_box(spots);
     box.min = box.min - Vec3{reach, reach, reach};
     box.max = box.max + Vec3{reach, reach, reach};
-    const auto in_box = [&box](const Vec3& p) {
-        return p.x >= box.min.x && p.y >= box.min.y && p.z >= box.min.z && p.x <= box.max.x && p.y <= box.max.y &&
-               p.z <= box.max.z;
-    };
-    const auto overlaps = [&box](const BoundingBox& b) {
-        return b.min.x <= box.max.x && b.max.x >= box.min.x && b.min.y <= box.max.y && b.max.y >= box.min.y &&
-               b.min.z <= box.max.z && b.max.z >= box.min.z;
-    };
     // The points near the patch, bucketed in cells of the reach: each spot looks at 27 cells, so a wide
     // hole in a large sample costs time in proportion to its spots and points, not their product.
     const auto cell_of = [&](const Vec3& p) {
@@ -2283,7 +2271,7 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
     while (!stack.empty()) {
         const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
         stack.pop_back();
-        if (!overlaps(node.box))
+        if (!node.box.meets(box))
             continue;
         if (!node.is_leaf()) {
             stack.push_back(node.right);
@@ -2291,7 +2279,7 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
             continue;
         }
         for (std::uint32_t i = node.begin; i < node.end; ++i)
-            if (in_box(h.cloud.positions[i]))
+            if (box.contains(h.cloud.positions[i]))
                 cells[cell_of(h.cloud.positions[i])].push_back(h.cloud.positions[i]);
     }
     const double reach2 = reach * reach;

@@ -95,15 +95,6 @@ inline double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& 
     return distance(p, closest_point_on_triangle(p, a, b, c));
 }
 
-//! Distance from p to the segment [a, b] (to a when the segment has no length).
-inline double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b)
-{
-    const Vec3 ab = b - a;
-    const double length2 = dot(ab, ab);
-    const double t = length2 > 0.0 ? std::clamp(dot(p - a, ab) / length2, 0.0, 1.0) : 0.0;
-    return distance(p, a + ab * t);
-}
-
 //! The largest angle of triangle (p, q, r), in radians (near pi for a cap).
 inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
 {

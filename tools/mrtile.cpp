@@ -504,18 +504,32 @@ void note_placement(const Hierarchy& h, const ExportArgs& e, bool georeferenced)
                     r / 1000.0);
 }
 
+// The CRS that `text` names when it can place a tileset on the globe; otherwise nullopt and `why`.
+std::optional<ProjectedCrs> usable_crs(const std::string& text, std::string& why)
+{
+    try {
+        return parse_crs(text);
+    } catch (const InvalidInput& e) {
+        why = e.what();
+        return std::nullopt;
+    }
+}
+
+// "WGS 84 / UTM zone 33N (EPSG:32633)".
+std::string crs_label(const ProjectedCrs& c)
+{
+    return c.name + (c.epsg > 0 ? " (EPSG:" + std::to_string(c.epsg) + ")" : std::string());
+}
+
 // One line for `info`: the CRS's name and whether 3D Tiles can be placed by it.
 std::string crs_summary(const std::string& crs)
 {
-    try {
-        const ProjectedCrs c = parse_crs(crs);
-        return c.name + (c.epsg > 0 ? " (EPSG:" + std::to_string(c.epsg) + ")" : std::string()) +
-               ": 3D Tiles are placed on the globe by it";
-    } catch (const InvalidInput& e) {
-        std::string shown = crs.size() > 60 ? crs.substr(0, 57) + "..." : crs;
-        std::replace_if(shown.begin(), shown.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
-        return shown + " (not used: " + e.what() + ")";
-    }
+    std::string why;
+    if (const std::optional<ProjectedCrs> c = usable_crs(crs, why))
+        return crs_label(*c) + ": 3D Tiles are placed on the globe by it";
+    std::string shown = crs.size() > 60 ? crs.substr(0, 57) + "..." : crs;
+    std::replace_if(shown.begin(), shown.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
+    return shown + " (not used: " + why + ")";
 }
 
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
@@ -524,12 +538,11 @@ std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
 {
     if (h.cloud.crs.empty())
         return std::nullopt;
-    try {
-        return parse_crs(h.cloud.crs);
-    } catch (const InvalidInput& e) {
-        std::printf("note: the input's coordinate system cannot place the tileset on the globe (%s)\n", e.what());
-        return std::nullopt;
-    }
+    std::string why;
+    const std::optional<ProjectedCrs> crs = usable_crs(h.cloud.crs, why);
+    if (!crs)
+        std::printf("note: the input's coordinate system cannot place the tileset on the globe (%s)\n", why.c_str());
+    return crs;
 }
 
 void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
@@ -564,10 +577,10 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     }
     write_lod_tileset(set, origin, dir, t);
     if (placed)
-        std::printf("placed on the globe by %s%s: local east-north-up metres at longitude %.7f, latitude %.7f, "
+        std::printf("placed on the globe by %s: local east-north-up metres at longitude %.7f, latitude %.7f, "
                     "height %.2f m (WGS 84)\n",
-                    crs->name.c_str(), crs->epsg > 0 ? (" (EPSG:" + std::to_string(crs->epsg) + ")").c_str() : "",
-                    placed->anchor.longitude_deg, placed->anchor.latitude_deg, placed->anchor.height);
+                    crs_label(*crs).c_str(), placed->anchor.longitude_deg, placed->anchor.latitude_deg,
+                    placed->anchor.height);
     note_placement(h, e, placed.has_value());
     std::size_t contents = 0, triangles = 0;
     for (const LodTile& tile : set.tiles)
@@ -697,11 +710,9 @@ void note_missing_scans(const std::vector<fs::path>& points)
 // A file's own CRS that cannot place a tileset: said at once, not only when exporting.
 void note_unusable_crs(const std::string& crs, const std::string& name)
 {
-    try {
-        parse_crs(crs);
-    } catch (const InvalidInput& e) {
-        std::printf("note: %s: its coordinate system cannot place 3D Tiles on the globe (%s)\n", name.c_str(), e.what());
-    }
+    std::string why;
+    if (!usable_crs(crs, why))
+        std::printf("note: %s: its coordinate system cannot place 3D Tiles on the globe (%s)\n", name.c_str(), why.c_str());
 }
 
 // --crs: "EPSG:N", WKT, or a file holding WKT (the .prj beside a shapefile, a .wkt); refused unless
@@ -718,11 +729,9 @@ std::string crs_argument(const std::string& arg)
         while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
             text.pop_back();
     }
-    try {
-        parse_crs(text);
-    } catch (const InvalidInput& e) {
-        throw UsageError(std::string("--crs: ") + e.what());
-    }
+    std::string why;
+    if (!usable_crs(text, why))
+        throw UsageError("--crs: " + why);
     return text;
 }
 
