@@ -1,6 +1,7 @@
 // Tests of the mrtile CLI as a user meets it: exit codes (0 ok, 1 error, 2 usage), one-line errors
 // naming the file, no partial output on failure, the JSON keys scripts depend on, and determinism.
 #include "libmrtile/shapes.h"
+#include "tests/obj_fixture.h"
 #include "tests/test_dir.h"
 
 #include <nlohmann/json.hpp>
@@ -477,34 +478,14 @@ TEST(Cli, a_depth_image_faces_its_camera)
         }
     write_text(dir / "depth.pcd", pcd);
     // Area-weighted facing of an OBJ toward a point.
-    const auto facing = [](const fs::path& obj, const std::array<double, 3>& eye) {
-        std::vector<std::array<double, 3>> v;
+    const auto facing = [](const fs::path& path, const Vec3& eye) {
+        const testing::ObjTriangles obj = testing::read_obj_triangles(path);
         double sum = 0.0;
-        std::ifstream in(obj);
-        std::string line;
-        while (std::getline(in, line)) {
-            std::istringstream ss(line);
-            std::string tag;
-            ss >> tag;
-            if (tag == "v") {
-                std::array<double, 3> p{};
-                ss >> p[0] >> p[1] >> p[2];
-                v.push_back(p);
-            } else if (tag == "f") {
-                std::array<std::array<double, 3>, 3> c{};
-                for (auto& corner : c) {
-                    std::string token;
-                    ss >> token;
-                    corner = v.at(static_cast<std::size_t>(std::stol(token.substr(0, token.find('/'))) - 1));
-                }
-                const std::array<double, 3> e1{c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]};
-                const std::array<double, 3> e2{c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
-                const std::array<double, 3> n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-                for (int k = 0; k < 3; ++k)
-                    sum += n[static_cast<std::size_t>(k)] * (eye[static_cast<std::size_t>(k)] - (c[0][static_cast<std::size_t>(k)] + c[1][static_cast<std::size_t>(k)] + c[2][static_cast<std::size_t>(k)]) / 3.0);
-            }
+        for (const auto& f : obj.faces) {
+            const Vec3 &a = obj.vertices.at(f[0]), &b = obj.vertices.at(f[1]), &c = obj.vertices.at(f[2]);
+            sum += dot(cross(b - a, c - a), eye - (a + b + c) / 3.0);
         }
-        EXPECT_GE(v.size(), 4u) << obj;
+        EXPECT_GE(obj.vertices.size(), 4u) << path;
         return sum;
     };
     const Result r = mrtile("reconstruct " + (dir / "depth.pcd").string() + " -o " + (dir / "d.obj").string(), dir);

@@ -6,15 +6,14 @@
 #include "libmrtile/shapes.h"
 #include "formats/read_points.h"
 #include "mesh_fixtures.h"
+#include "obj_fixture.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <random>
-#include <sstream>
 #include <string>
 
 namespace mrt {
@@ -256,28 +255,9 @@ TEST(Reconstruct, fitted_apex_lowers_the_mean_distance_on_a_sphere)
 // the CAD part the file describes, rather than its vertices (which lie on its faces' outlines only).
 PointCloud sample_obj_surface(const std::string& path, std::size_t count, std::uint32_t seed)
 {
-    std::ifstream in(path);
-    std::vector<Vec3> v;
-    std::vector<std::array<std::size_t, 3>> faces;
-    std::string line;
-    while (std::getline(in, line)) {
-        std::istringstream s(line);
-        std::string key;
-        s >> key;
-        if (key == "v") {
-            Vec3 p;
-            s >> p.x >> p.y >> p.z;
-            v.push_back(p);
-        } else if (key == "f") {
-            std::array<std::size_t, 3> f{};
-            for (std::size_t& i : f) {
-                std::string corner;
-                s >> corner;
-                i = std::stoul(corner.substr(0, corner.find('/'))) - 1;
-            }
-            faces.push_back(f);
-        }
-    }
+    const testing::ObjTriangles obj = testing::read_obj_triangles(path);
+    const std::vector<Vec3>& v = obj.vertices;
+    const std::vector<std::array<std::size_t, 3>>& faces = obj.faces;
     EXPECT_GT(faces.size(), 1000u) << path;
     std::vector<double> cumulative;
     double total = 0.0;

@@ -1,0 +1,49 @@
+#pragma once
+// Reads the vertices and triangles of a plain OBJ file (what the CLI writes, the shared CAD parts), for
+// tests that look at a mesh file without OpenMesh: "v x y z" and "f a b c" lines ("a/t/n" corners
+// too); other lines are skipped.
+#include "libmrtile/vec3.h"
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace mrt::testing {
+
+struct ObjTriangles
+{
+    std::vector<Vec3> vertices;
+    std::vector<std::array<std::size_t, 3>> faces; // 0-based vertex indices
+};
+
+inline ObjTriangles read_obj_triangles(const std::filesystem::path& path)
+{
+    ObjTriangles obj;
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::istringstream s(line);
+        std::string key;
+        s >> key;
+        if (key == "v") {
+            Vec3 p;
+            s >> p.x >> p.y >> p.z;
+            obj.vertices.push_back(p);
+        } else if (key == "f") {
+            std::array<std::size_t, 3> f{};
+            for (std::size_t& i : f) {
+                std::string corner;
+                s >> corner;
+                i = std::stoul(corner.substr(0, corner.find('/'))) - 1;
+            }
+            obj.faces.push_back(f);
+        }
+    }
+    return obj;
+}
+
+} // namespace mrt::testing
