@@ -7,6 +7,7 @@
 
 #include "libmrtile/atomic_file.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/georef.h"
 
 #include <nlohmann/json.hpp>
 
@@ -227,20 +228,7 @@ std::array<double, 16> enu_to_ecef_transform(double longitude_deg, double latitu
     if (!std::isfinite(longitude_deg) || !std::isfinite(latitude_deg) || !std::isfinite(height) ||
         std::fabs(latitude_deg) > 90.0)
         throw InvalidInput("enu_to_ecef_transform: longitude/latitude/height must be finite, |latitude| <= 90");
-    // WGS84 ellipsoid.
-    constexpr double a = 6378137.0;
-    constexpr double f = 1.0 / 298.257223563;
-    constexpr double e2 = f * (2.0 - f);
-    constexpr double deg = M_PI / 180.0;
-    const double lambda = longitude_deg * deg, phi = latitude_deg * deg;
-    const double sl = std::sin(lambda), cl = std::cos(lambda), sp = std::sin(phi), cp = std::cos(phi);
-    const double n = a / std::sqrt(1.0 - e2 * sp * sp); // prime vertical radius of curvature
-    const Vec3 east{-sl, cl, 0.0};
-    const Vec3 north{-sp * cl, -sp * sl, cp};
-    const Vec3 up{cp * cl, cp * sl, sp};
-    const Vec3 position{(n + height) * cp * cl, (n + height) * cp * sl, (n * (1.0 - e2) + height) * sp};
-    return {east.x,  east.y,  east.z,  0.0, north.x,    north.y,    north.z,    0.0,
-            up.x,    up.y,    up.z,    0.0, position.x, position.y, position.z, 1.0};
+    return EnuFrame(Ellipsoid{}, Geodetic{longitude_deg, latitude_deg, height}).enu_to_ecef(); // WGS 84
 }
 
 } // namespace mrt

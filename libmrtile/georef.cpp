@@ -730,6 +730,12 @@ Vec3 EnuFrame::ecef_to_enu(const Vec3& ecef) const
     return {dot(east_, d), dot(north_, d), dot(up_, d)};
 }
 
+std::array<double, 16> EnuFrame::enu_to_ecef() const
+{
+    return {east_.x, east_.y, east_.z, 0.0,   north_.x,  north_.y,  north_.z,  0.0,
+            up_.x,   up_.y,   up_.z,   0.0,   origin_.x, origin_.y, origin_.z, 1.0};
+}
+
 const Geodetic& EnuFrame::anchor() const { return anchor_; }
 
 } // namespace mrt

@@ -22,6 +22,7 @@
 
 #include "libmrtile/vec3.h"
 
+#include <array>
 #include <optional>
 #include <string>
 
@@ -95,6 +96,9 @@ public:
     EnuFrame(const Ellipsoid& e, const Geodetic& anchor);
     //! East, north, up metres of an ECEF point relative to the anchor.
     Vec3 ecef_to_enu(const Vec3& ecef) const;
+    //! The other way, as a column-major 4x4 matrix (a 3D Tiles root transform): columns east, north,
+    //! up and the anchor in ECEF.
+    std::array<double, 16> enu_to_ecef() const;
     const Geodetic& anchor() const;
 
 private:

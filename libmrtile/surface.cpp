@@ -1839,38 +1839,6 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::
 // away). Returns the number of islands put back; `restored_tiles` is set for each of their fans.
 constexpr std::size_t kMinRestoredTiles = 3;
 constexpr double kMinRestoredShare = 0.01;
-
-// The fans of an island: their centres, each with `reach` × its tile's spacing, their tiles, and the
-// fraction of the cloud's points the tiles hold.
-struct IslandFans
-{
-    std::vector<std::pair<Vec3, double>> centres; // position, reach distance
-    std::vector<std::int32_t> tiles;
-    double share = 0.0;
-
-    bool restorable() const { return !centres.empty() && (centres.size() >= kMinRestoredTiles || share >= kMinRestoredShare); }
-};
-
-IslandFans island_fans(const Surface& s, const std::vector<std::uint32_t>& island, const std::vector<Vec3>& positions,
-                       const std::vector<TileLoop>& loops, double reach)
-{
-    IslandFans out;
-    std::vector<bool> seen_tile(loops.size(), false);
-    for (std::uint32_t f : island) {
-        const std::int32_t t = s.face_tile()[f];
-        if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
-            continue;
-        seen_tile[static_cast<std::size_t>(t)] = true;
-        const TileLoop& tl = loops[static_cast<std::size_t>(t)];
-        if (tl.centre != kNone) {
-            out.centres.push_back({positions[tl.centre], reach * tl.spacing});
-            out.tiles.push_back(t);
-            out.share += tl.share;
-        }
-    }
-    return out;
-}
-
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
                                       std::vector<bool>& restored_tiles, double reach = 2.0)
@@ -1878,11 +1846,24 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
     std::size_t restored = 0;
     for (const std::vector<std::uint32_t>& island : removed) {
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
-        const IslandFans fans = island_fans(s, island, positions, loops, reach);
-        if (!fans.restorable())
+        std::vector<std::pair<Vec3, double>> centres; // position, reach distance
+        std::vector<std::int32_t> island_tiles;
+        double share = 0.0;
+        std::vector<bool> seen_tile(loops.size(), false);
+        for (std::uint32_t f : island) {
+            const std::int32_t t = s.face_tile()[f];
+            if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
+                continue;
+            seen_tile[static_cast<std::size_t>(t)] = true;
+            const TileLoop& tl = loops[static_cast<std::size_t>(t)];
+            if (tl.centre != kNone) {
+                centres.push_back({positions[tl.centre], reach * tl.spacing});
+                island_tiles.push_back(t);
+                share += tl.share;
+            }
+        }
+        if (centres.empty() || (centres.size() < kMinRestoredTiles && share < kMinRestoredShare))
             continue;
-        const std::vector<std::pair<Vec3, double>>& centres = fans.centres;
-        const std::vector<std::int32_t>& island_tiles = fans.tiles;
         // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
         // the surface): put back, it would float beside the surface as a component of its own.
         std::vector<std::uint64_t> edges;

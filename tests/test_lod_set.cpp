@@ -195,8 +195,8 @@ TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
 }
 
 // A hill in UTM coordinates (a sphere of radius 400 m, 3 degrees west of its zone's central meridian
-// at 47 N) placed on the globe: every vertex lands where the CRS puts it, through the root transform
-// (formats' enu_to_ecef_transform) and the content (georef's EnuFrame), two separate derivations; the
+// at 47 N) placed on the globe: every vertex, mapped into the content's ENU frame and back out by the
+// root transform (the frame's inverse, built separately as a matrix), lands where the CRS puts it; the
 // boxes still nest; normals turn with the grid (convergence about 2.2 degrees here).
 TEST(LodSet, georeference_puts_every_vertex_where_the_crs_says)
 {
