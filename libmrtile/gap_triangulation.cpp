@@ -1,7 +1,8 @@
 // Delaunay step of the gap triangulation (paper §4.3): the paper triangulates the pseudo-tile boundary
 // points with Delaunay, in 2D on the x-y projection for functional data and in 3D otherwise, and then
 // removes "undesired" triangles. CGAL's exact-predicate triangulations give the same, robustly, for
-// degenerate (cospherical, coplanar) input; this file only wraps them and lists the triangles.
+// degenerate (cospherical, coplanar) input; this file only wraps them and lists the triangles (and,
+// from the same 3D triangulation, the convex hull that stands in for a cloud too small to tile).
 #include "libmrtile/gap_triangulation.h"
 
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -11,6 +12,7 @@
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
 #include <algorithm>
+#include <iterator>
 #include <numeric>
 #include <utility>
 
@@ -94,6 +96,40 @@ DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const Dela
     std::sort(out.triangles.begin(), out.triangles.end());
     out.triangles.erase(std::unique(out.triangles.begin(), out.triangles.end()), out.triangles.end());
     return out;
+}
+
+std::vector<std::array<std::uint32_t, 3>> convex_hull_triangles(const std::vector<Vec3>& points)
+{
+    std::vector<std::array<double, 3>> coords(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        coords[i] = {points[i].x, points[i].y, points[i].z};
+    const std::vector<std::uint32_t> rep = representatives(coords);
+    std::vector<std::pair<Kernel::Point_3, std::uint32_t>> input;
+    Vec3 centroid{0, 0, 0};
+    for (std::uint32_t i = 0; i < points.size(); ++i)
+        if (rep[i] == i) {
+            input.emplace_back(Kernel::Point_3(coords[i][0], coords[i][1], coords[i][2]), i);
+            centroid = centroid + points[i];
+        }
+    std::vector<Triangle> hull;
+    Delaunay3 dt(input.begin(), input.end());
+    if (dt.dimension() != 3)
+        return hull;
+    centroid = centroid * (1.0 / static_cast<double>(input.size())); // inside the hull: it is convex
+    std::vector<Delaunay3::Cell_handle> cells;
+    dt.incident_cells(dt.infinite_vertex(), std::back_inserter(cells));
+    for (const auto& c : cells) {
+        const int i = c->index(dt.infinite_vertex());
+        Triangle t{c->vertex((i + 1) & 3)->info(), c->vertex((i + 2) & 3)->info(), c->vertex((i + 3) & 3)->info()};
+        // Wind by the centroid rather than by CGAL's cell orientation convention: outward is away from it.
+        const Vec3& a = points[t[0]];
+        if (dot(cross(points[t[1]] - a, points[t[2]] - a), a - centroid) < 0.0)
+            std::swap(t[1], t[2]);
+        std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end()); // same winding, smallest first
+        hull.push_back(t);
+    }
+    std::sort(hull.begin(), hull.end());
+    return hull;
 }
 
 } // namespace mrt

@@ -2,7 +2,7 @@
 //! \file gap_triangulation.h
 //! \brief The Delaunay step of the gap triangulation (paper §4.3, Algorithm 2): all Delaunay
 //! triangles of the tile boundary points, in 3D, or in 2D on a projection plane for functional data.
-//! \details This is the one file that includes CGAL's triangulations. The pruning of the triangles
+//! \details This is the one file that includes CGAL's triangulations (and gives their convex hull). The pruning of the triangles
 //! (one-tile triangles, local alpha radius) and the manifold extraction live in surface.cpp.
 
 #include "libmrtile/vec3.h"
@@ -33,5 +33,10 @@ struct DelaunayTriangles
 
 //! Delaunay triangles of the points. Deterministic: the same points give the same result.
 DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const DelaunayOptions& options = {});
+
+//! The convex hull's triangles as point indices, each wound counter-clockwise seen from outside (a
+//! closed genus-0 surface through every hull point), sorted; empty when the points span no volume.
+//! Deterministic. Made from the facets of the 3D Delaunay triangulation that face its infinite vertex.
+std::vector<std::array<std::uint32_t, 3>> convex_hull_triangles(const std::vector<Vec3>& points);
 
 } // namespace mrt

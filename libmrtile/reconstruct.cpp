@@ -2,12 +2,17 @@
 // measures of paper §5 (eq. 4-6), so the CLI, the demo and the benchmarks all run the same pipeline.
 // One step between the stages goes beyond the paper: a separate object that a cut gives one to three
 // tiles cannot close, so those tiles are refined before meshing (MeshOptions::small_object_rounds).
+// And a cloud too small to split (one leaf) that is no piece of plane gets its convex hull.
 #include "libmrtile/reconstruct.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/gap_triangulation.h"
 #include "libmrtile/union_find.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
+
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 
@@ -38,6 +43,55 @@ std::vector<bool> small_object_tiles(const Hierarchy& h, const Cut& cut, const s
     return small;
 }
 
+// A leaf is a "solid" when its points spread in all three directions: λ_min of M at least this share of
+// λ_mid (RMS spread across its plane at least a third of the spread along its second axis). Points
+// around a solid give 1/3 to 1 (a tetrahedron's or a cube's corners 1, a half sphere 1/4, four or five
+// random points of a sphere 0.15-0.35); a plane or a gently curved patch far less.
+constexpr double kSolidEigenvalueRatio = 0.1;
+
+// The whole cloud in one leaf (under BuildOptions::min_cluster points) that is no piece of plane: its
+// pseudo tile is no piece of the surface either, and the fan of one stood 1.0 diagonal off ten points
+// of a sphere (its apex, fitted towards points all round). So few points show no concavity to keep,
+// and their convex hull is the closed surface through all of them (a cube's corners give the cube).
+bool is_tiny_solid(const Hierarchy& h, const Cut& cut)
+{
+    if (cut.size() != 1)
+        return false;
+    const Node& node = h.nodes[static_cast<std::size_t>(cut[0])];
+    return node.is_leaf() && node.parent < 0 && node.count() >= 4 &&
+           node.frame.values[0] >= kSolidEigenvalueRatio * node.frame.values[1];
+}
+
+// The convex hull of the one leaf's points as the mesh: one tile, every face a fan face of it. Empty
+// when the points span no volume (the caller then meshes the usual way).
+Mesh hull_mesh(const Hierarchy& h, std::int32_t node_id)
+{
+    const Node& node = h.nodes[static_cast<std::size_t>(node_id)];
+    const std::vector<Vec3> points(h.cloud.positions.begin() + node.begin, h.cloud.positions.begin() + node.end);
+    Mesh mesh;
+    const auto triangles = convex_hull_triangles(points);
+    if (triangles.empty())
+        return mesh;
+    auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster);
+    auto tile_of_face = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+    auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+    std::vector<Mesh::VertexHandle> handle(points.size());
+    for (const auto& t : triangles)
+        for (std::uint32_t i : t)
+            if (!handle[i].is_valid()) {
+                handle[i] = mesh.add_vertex(to_point(points[i]));
+                cluster[handle[i]] = node_id;
+            }
+    for (const auto& t : triangles) {
+        const auto f = mesh.add_face(handle[t[0]], handle[t[1]], handle[t[2]]);
+        assert(f.is_valid()); // a convex hull is a closed 2-manifold
+        tile_of_face[f] = node_id;
+        gap[f] = false;
+    }
+    mesh.update_normals();
+    return mesh;
+}
+
 } // namespace
 
 MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& options)
@@ -47,6 +101,17 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     const auto start = std::chrono::steady_clock::now();
     MeshResult result;
     result.cut = cut;
+    if (is_tiny_solid(h, cut)) {
+        result.mesh = hull_mesh(h, cut[0]);
+        if (result.mesh.n_faces() > 0) {
+            result.tiles = 1;
+            result.surface.tiles = result.surface.fan_tiles = result.surface.components = 1;
+            result.surface.fan_faces = result.mesh.n_faces();
+            color_vertices(result.mesh, h.cloud, options.colors);
+            result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            return result;
+        }
+    }
     std::vector<Tile> tiles = make_tiles(h, result.cut, options.tiles);
     for (int round = 0; round < options.small_object_rounds && options.tiles.voronoi_trim; ++round) {
         const std::vector<bool> small = small_object_tiles(h, result.cut, tiles);

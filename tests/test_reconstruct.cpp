@@ -229,6 +229,65 @@ TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 // sphere, where every tile is a cap, the mean distance from the points to the mesh falls by more than a
 // third (the analytic ratio for a cap is about 3 inside the fans; gap faces dilute it) and nothing
 // else changes: same faces, still a closed sphere.
+// Signed volume enclosed by a closed mesh (divergence theorem; positive when it faces outward).
+double enclosed_volume(const Mesh& mesh)
+{
+    double six_v = 0.0;
+    for (const auto f : mesh.faces()) {
+        const std::array<Vec3, 3> p = face_corners(mesh, f);
+        six_v += dot(p[0], cross(p[1], p[2]));
+    }
+    return six_v / 6.0;
+}
+
+// Clouds too small to split (one leaf) that are no piece of plane are meshed as their convex hull:
+// a tetrahedron's and a cube's corners give exactly those solids (volume 1/6 and 1, outward), ten
+// points of a sphere a closed surface through all ten (the fan of their one tile stood off them: its
+// fitted apex 1.0 diagonal from every point). Ten points of a plane still give the paper's fan.
+TEST(Reconstruct, a_tiny_solid_cloud_is_meshed_as_its_convex_hull)
+{
+    const auto mesh_of = [](std::vector<Vec3> points) {
+        PointCloud cloud;
+        cloud.positions = std::move(points);
+        const Hierarchy h = build_hierarchy(cloud);
+        return mesh_cut(h, cut_by_tolerance(h, 0.002)).mesh;
+    };
+    const Mesh tetrahedron = mesh_of({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}});
+    expect_closed(tetrahedron, 0);
+    EXPECT_EQ(tetrahedron.n_faces(), 4u);
+    EXPECT_NEAR(enclosed_volume(tetrahedron), 1.0 / 6.0, 1e-12);
+
+    std::vector<Vec3> corners;
+    for (int i = 0; i < 8; ++i)
+        corners.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+    const Mesh cube = mesh_of(corners);
+    expect_closed(cube, 0);
+    EXPECT_EQ(cube.n_vertices(), 8u);
+    EXPECT_EQ(cube.n_faces(), 12u);
+    EXPECT_NEAR(enclosed_volume(cube), 1.0, 1e-12);
+    for (const auto v : cube.vertices()) // every vertex a corner, none moved
+        for (int k = 0; k < 3; ++k)
+            EXPECT_TRUE(cube.point(v)[k] == 0.0 || cube.point(v)[k] == 1.0);
+
+    std::mt19937 rng(11);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::vector<Vec3> sphere(10);
+    for (Vec3& p : sphere) {
+        p = {normal(rng), normal(rng), normal(rng)};
+        p = p * (1.0 / norm(p));
+    }
+    const Mesh ten = mesh_of(sphere);
+    expect_closed(ten, 0);
+    EXPECT_GT(enclosed_volume(ten), 0.0);
+    for (const auto v : ten.vertices()) // interpolates: every vertex is one of the points
+        EXPECT_NEAR(norm(to_vec3(ten.point(v))), 1.0, 1e-9);
+
+    std::vector<Vec3> flat(10);
+    for (std::size_t i = 0; i < flat.size(); ++i)
+        flat[i] = {std::cos(0.6 * double(i)) * (1 + 0.1 * double(i)), std::sin(0.6 * double(i)), 0.0};
+    EXPECT_EQ(topology_stats(mesh_of(flat)).boundary_loops, 1u);
+}
+
 TEST(Reconstruct, fitted_apex_lowers_the_mean_distance_on_a_sphere)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(20000));
