@@ -369,6 +369,13 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     EXPECT_NE(bad.err.find("--crs: "), std::string::npos) << bad.err;
     EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
     EXPECT_FALSE(fs::exists(dir / "u"));
+    // A CRS file that is not there is named as missing (exit 1), not parsed as a CRS.
+    const Result missing = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "u").string() +
+                                      " --format 3dtiles --crs " + (dir / "zone.prj").string(),
+                                  dir);
+    EXPECT_EQ(missing.code, 1);
+    EXPECT_NE(missing.err.find("zone.prj: no such file"), std::string::npos) << missing.err;
+    EXPECT_FALSE(fs::exists(dir / "u"));
 }
 
 // A LAS 1.2 file (point format 0) of `points` whose GeoTIFF keys name EPSG code `epsg`.

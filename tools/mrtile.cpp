@@ -721,7 +721,16 @@ std::string crs_argument(const std::string& arg)
 {
     std::string text = arg;
     std::error_code ec;
+    // WKT has brackets and an EPSG code a colon (a bare number gets its own hint from parse_crs);
+    // anything else that names no file was meant as one.
+    const bool file_like = arg.find_first_of("[(:") == std::string::npos &&
+                           arg.find_first_not_of("0123456789 ") != std::string::npos;
+    if (file_like && !fs::exists(arg, ec))
+        throw IoError(arg + ": no such file (--crs takes EPSG:N, WKT, or a .prj/.wkt file holding WKT)");
     if (fs::is_regular_file(arg, ec)) {
+        // A .prj is a line of WKT; a file of megabytes is something else given by mistake.
+        if (fs::file_size(arg, ec) > (1u << 20))
+            throw IoError(arg + ": too large for a CRS file (over 1 MB; --crs takes a .prj/.wkt file holding WKT)");
         std::ifstream in(arg, std::ios::binary);
         text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
         if (!in && !in.eof())
