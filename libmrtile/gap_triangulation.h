@@ -3,7 +3,8 @@
 //! \brief The Delaunay step of the gap triangulation (paper §4.3, Algorithm 2): all Delaunay
 //! triangles of the tile boundary points, in 3D, or in 2D on a projection plane for functional data.
 //! \details This is the one file that includes CGAL's triangulations (and gives their convex hull). The pruning of the triangles
-//! (one-tile triangles, local alpha radius) and the manifold extraction live in surface.cpp.
+//! (one-tile triangles, local alpha radius) and the manifold extraction live in surface_front.cpp and
+//! surface_holes.cpp (build_surface, in surface.cpp, runs them).
 
 #include "libmrtile/vec3.h"
 

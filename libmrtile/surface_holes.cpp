@@ -1,0 +1,681 @@
+// Islands and hole filling of the manifold assembly (paper §4.3, extended to always give a valid
+// 2-manifold; step 4 in surface.cpp): pieces that broke off the surface are dropped, and put back where
+// nothing covers their place, and the gaps left between tiles are filled while the sample's own borders
+// stay open. Apart from the front because it works on the surface the front built, through its
+// boundary loops.
+#include "libmrtile/surface_parts.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace mrt::surface_detail {
+
+// ---------------------------------------------------------------------------------------------------
+// Step 4: boundary loops and hole filling.
+
+Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
+{
+    const auto count = static_cast<std::uint32_t>(s.faces().size());
+    UnionFind parts(count);
+    for (std::uint32_t f = 0; f < count; ++f) {
+        if (!s.alive(f))
+            continue;
+        const Tri& t = s.faces()[f];
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t g = s.face_of(t[(k + 1) % 3], t[k]);
+            if (g != kNone)
+                parts.unite(f, g);
+        }
+    }
+    std::vector<std::uint32_t> size(count, 0);
+    std::vector<std::uint32_t> part_of_tile(tiles.size(), kNone);
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f)) {
+            ++size[parts.find(f)];
+            if (s.face_tile()[f] >= 0)
+                part_of_tile[static_cast<std::size_t>(s.face_tile()[f])] = parts.find(f);
+        }
+    std::vector<bool> doomed(count, false);
+    // A part made of gap faces only (a bubble closed between two sides of a thin feature) represents
+    // no tile at all: it goes unless it is the largest part.
+    std::vector<bool> has_fan(count, false);
+    std::uint32_t largest = kNone;
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f)) {
+            const std::uint32_t p = parts.find(f);
+            has_fan[p] = has_fan[p] || s.face_tile()[f] >= 0;
+            if (largest == kNone || size[p] > size[largest])
+                largest = p;
+        }
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f) && parts.find(f) == f && !has_fan[f] && f != largest)
+            doomed[f] = true;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        const std::uint32_t p = part_of_tile[t];
+        if (p == kNone)
+            continue;
+        for (std::uint32_t n : tiles[t].neighbours) {
+            const std::uint32_t q = part_of_tile[n];
+            // A neighbour in a larger part, or (for a small part) anywhere else: this part is a piece
+            // broken off a larger surface (its neighbours may be broken-off pieces themselves).
+            const bool larger = q != kNone && (size[q] > size[p] || (size[q] == size[p] && q < p));
+            const bool small_piece = q != p && p != largest && 20 * size[p] < size[largest];
+            if (larger || small_piece) {
+                doomed[p] = true;
+                break;
+            }
+        }
+    }
+    return Islands{std::move(parts), std::move(doomed), std::move(part_of_tile)};
+}
+
+// Tiles whose fans are in an island.
+std::vector<bool> island_tiles(const Islands& islands)
+{
+    std::vector<bool> out(islands.part_of_tile.size(), false);
+    for (std::size_t t = 0; t < out.size(); ++t)
+        out[t] = islands.part_of_tile[t] != kNone && islands.doomed[islands.part_of_tile[t]];
+    return out;
+}
+
+// Removes the faces of the islands: once one is gone, its hole is an ordinary one.
+void remove_islands(Surface& s, Islands& islands)
+{
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+        if (s.alive(f) && islands.doomed[islands.parts.find(f)])
+            s.remove(f);
+}
+
+// Finds and removes the islands. Returns the tiles whose fans were removed; `removed` gets the (now
+// dead) face ids of each island, in face order.
+std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed)
+{
+    Islands islands = find_islands(s, tiles);
+    std::map<std::uint32_t, std::size_t> index_of_part;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+        if (!s.alive(f))
+            continue;
+        const std::uint32_t part = islands.parts.find(f);
+        if (!islands.doomed[part])
+            continue;
+        const auto inserted = index_of_part.emplace(part, removed.size());
+        if (inserted.second)
+            removed.emplace_back();
+        removed[inserted.first->second].push_back(f);
+        s.remove(f);
+    }
+    return island_tiles(islands);
+}
+
+// An island is dropped on the grounds that it broke off a larger surface which, once the island is gone,
+// closes over its place. Where that did not happen (the island is a separate strip of the sample seen
+// beside the main surface, as behind a bunny's leg in a single range scan, or its hole was too wide to
+// fill) the island is put back: its points are far better off with their own surface than with none.
+// An island counts as covered when most of its fan centres lie within `reach` × their tile spacing of
+// a face of the rest. Islands are put back whole (all faces addable) or not at all, and never a closed
+// one; an island of fewer than kMinRestoredTiles fans only when it holds at least kMinRestoredShare of
+// the points (in a dense sample a lone fan or two is noise or a sliver at a sharp edge; in a sparse one,
+// 100 points of a bunny's head, three lone fans held 23% of the points, up to 36% of the diagonal
+// away). Returns the number of islands put back; `restored_tiles` is set for each of their fans.
+constexpr std::size_t kMinRestoredTiles = 3;
+constexpr double kMinRestoredShare = 0.01;
+std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
+                                      const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
+                                      std::vector<bool>& restored_tiles, double reach)
+{
+    std::size_t restored = 0;
+    for (const std::vector<std::uint32_t>& island : removed) {
+        // Fan centres of the island (one per tile) and the box around them, widened by the reach.
+        std::vector<std::pair<Vec3, double>> centres; // position, reach distance
+        std::vector<std::int32_t> island_tiles;
+        double share = 0.0;
+        std::vector<bool> seen_tile(loops.size(), false);
+        for (std::uint32_t f : island) {
+            const std::int32_t t = s.face_tile()[f];
+            if (t < 0 || seen_tile[static_cast<std::size_t>(t)])
+                continue;
+            seen_tile[static_cast<std::size_t>(t)] = true;
+            const TileLoop& tl = loops[static_cast<std::size_t>(t)];
+            if (tl.centre != kNone) {
+                centres.push_back({positions[tl.centre], reach * tl.spacing});
+                island_tiles.push_back(t);
+                share += tl.share;
+            }
+        }
+        if (centres.empty() || (centres.size() < kMinRestoredTiles && share < kMinRestoredShare))
+            continue;
+        // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
+        // the surface): put back, it would float beside the surface as a component of its own.
+        std::vector<std::uint64_t> edges;
+        for (std::uint32_t f : island)
+            for (int k = 0; k < 3; ++k)
+                edges.push_back(edge_key(s.faces()[f][k], s.faces()[f][(k + 1) % 3]));
+        std::sort(edges.begin(), edges.end());
+        const bool closed = std::all_of(island.begin(), island.end(), [&](std::uint32_t f) {
+            const Tri& t = s.faces()[f];
+            for (int k = 0; k < 3; ++k)
+                if (!std::binary_search(edges.begin(), edges.end(), edge_key(t[(k + 1) % 3], t[k])))
+                    return false;
+            return true;
+        });
+        if (closed)
+            continue;
+        Vec3 lo = centres[0].first, hi = lo;
+        double margin = 0.0;
+        for (const auto& [c, r] : centres) {
+            lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+            hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+            margin = std::max(margin, r);
+        }
+        // Faces of the rest near the island: one with a vertex in the widened box, or larger than the box.
+        std::vector<std::uint32_t> near;
+        auto inside = [&](const Vec3& p, double m) {
+            return p.x >= lo.x - m && p.y >= lo.y - m && p.z >= lo.z - m && p.x <= hi.x + m && p.y <= hi.y + m && p.z <= hi.z + m;
+        };
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+            if (!s.alive(f))
+                continue;
+            const Tri& t = s.faces()[f];
+            const double size = std::max({distance(positions[t[0]], positions[t[1]]), distance(positions[t[1]], positions[t[2]]),
+                                          distance(positions[t[2]], positions[t[0]])});
+            if (inside(positions[t[0]], margin + size) || inside(positions[t[1]], margin + size) || inside(positions[t[2]], margin + size))
+                near.push_back(f);
+        }
+        std::size_t covered = 0;
+        for (const auto& [c, r] : centres)
+            for (std::uint32_t f : near) {
+                const Tri& t = s.faces()[f];
+                if (point_triangle_distance(c, positions[t[0]], positions[t[1]], positions[t[2]]) <= r) {
+                    ++covered;
+                    break;
+                }
+            }
+        if (2 * covered >= centres.size())
+            continue;
+        std::size_t added = 0;
+        bool ok = true;
+        for (std::uint32_t f : island) {
+            const Tri t = s.faces()[f];
+            if (!s.can_add(t[0], t[1], t[2])) {
+                ok = false;
+                break;
+            }
+            s.add(t[0], t[1], t[2], s.face_tile()[f]);
+            ++added;
+        }
+        if (!ok)
+            s.pop_n(added);
+        else {
+            ++restored;
+            for (std::int32_t t : island_tiles)
+                restored_tiles[static_cast<std::size_t>(t)] = true;
+        }
+    }
+    return restored;
+}
+
+namespace {
+
+// Boundary loops as vertex sequences v0 -> v1 -> ... (each step a half-edge without a face). At a
+// pinched vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around
+// the vertex normal), so a loop never crosses itself.
+std::vector<std::vector<std::uint32_t>> boundary_loops(const Surface& s, const std::vector<Vec3>& positions)
+{
+    std::vector<std::uint64_t> free_halfedges;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+        if (!s.alive(f))
+            continue;
+        const Tri& t = s.faces()[f];
+        for (int k = 0; k < 3; ++k)
+            if (!s.has_halfedge(t[(k + 1) % 3], t[k]))
+                free_halfedges.push_back(edge_key(t[(k + 1) % 3], t[k]));
+    }
+    std::sort(free_halfedges.begin(), free_halfedges.end());
+
+    auto next_vertex = [&](std::uint32_t u, std::uint32_t v) { return next_boundary_vertex(s, positions, u, v); };
+
+    std::vector<std::vector<std::uint32_t>> loops;
+    std::vector<bool> used(free_halfedges.size(), false);
+    auto index_of = [&](std::uint64_t key) {
+        return static_cast<std::size_t>(std::lower_bound(free_halfedges.begin(), free_halfedges.end(), key) -
+                                        free_halfedges.begin());
+    };
+    for (std::size_t i = 0; i < free_halfedges.size(); ++i) {
+        if (used[i])
+            continue;
+        std::vector<std::uint32_t> loop;
+        std::uint32_t u = static_cast<std::uint32_t>(free_halfedges[i] >> 32);
+        std::uint32_t v = static_cast<std::uint32_t>(free_halfedges[i] & 0xffffffffu);
+        std::size_t k = i;
+        while (!used[k]) {
+            used[k] = true;
+            loop.push_back(u);
+            const std::uint32_t w = next_vertex(u, v);
+            u = v;
+            v = w;
+            k = index_of(edge_key(u, v));
+            assert(k < free_halfedges.size() && free_halfedges[k] == edge_key(u, v));
+        }
+        loops.push_back(std::move(loop));
+    }
+    return loops;
+}
+
+// Minimum-area triangulation of a boundary loop (dynamic programming over sub-polygons), refusing
+// triangles that repeat a vertex and diagonals that already are mesh edges. Faces are oriented like
+// the loop's free half-edges, so they continue the surface's orientation. Empty when impossible.
+std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& loop,
+                                    const Projection& projection)
+{
+    const std::size_t n = loop.size();
+    if (n < 3)
+        return {};
+    const double inf = std::numeric_limits<double>::infinity();
+    auto diagonal_ok = [&](std::size_t i, std::size_t j) {
+        if (j == i + 1 || (i == 0 && j == n - 1))
+            return true;
+        const std::uint32_t a = loop[i], b = loop[j];
+        return a != b && !s.has_halfedge(a, b) && !s.has_halfedge(b, a);
+    };
+    // A face of the patch must look the way the hole does as a whole (its vector area in loop order =
+    // face order; the axis for height fields) or the way the surface around its corners does (for holes
+    // bent around an edge or corner). Anything else is a fold that would double-cover the surface.
+    std::vector<Vec3> facing(n);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::uint32_t f : s.faces_at(loop[i])) {
+            const Tri& t = s.faces()[f];
+            facing[i] += normalized(triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]));
+        }
+    Vec3 up = projection.axis;
+    if (!projection.used) {
+        up = Vec3{};
+        for (std::size_t i = 0; i < n; ++i)
+            up += cross(positions[loop[i]], positions[loop[(i + 1) % n]]);
+    }
+    std::vector<double> cost(n * n, inf);
+    std::vector<std::uint32_t> split(n * n, kNone);
+    for (std::size_t i = 0; i + 1 < n; ++i)
+        cost[i * n + i + 1] = 0.0;
+    for (std::size_t len = 2; len < n; ++len) {
+        for (std::size_t i = 0; i + len < n; ++i) {
+            const std::size_t j = i + len;
+            if (!diagonal_ok(i, j))
+                continue;
+            for (std::size_t k = i + 1; k < j; ++k) {
+                const double c0 = cost[i * n + k], c1 = cost[k * n + j];
+                if (c0 == inf || c1 == inf)
+                    continue;
+                const std::uint32_t a = loop[i], b = loop[k], c = loop[j];
+                if (a == b || b == c || a == c)
+                    continue;
+                const Vec3 normal = triangle_cross(positions[a], positions[b], positions[c]);
+                const double area = norm(normal);
+                if (is_sliver(positions[a], positions[b], positions[c]) ||
+                    (!(dot(normal, up) > 0.0) && !(dot(normal, facing[i] + facing[k] + facing[j]) > 0.0)))
+                    continue;
+                const double total = c0 + c1 + area;
+                if (total < cost[i * n + j]) {
+                    cost[i * n + j] = total;
+                    split[i * n + j] = static_cast<std::uint32_t>(k);
+                }
+            }
+        }
+    }
+    if (cost[n - 1] == inf)
+        return {};
+    std::vector<Tri> out;
+    std::vector<std::pair<std::size_t, std::size_t>> stack{{0, n - 1}};
+    while (!stack.empty()) {
+        const auto [i, j] = stack.back();
+        stack.pop_back();
+        if (j <= i + 1)
+            continue;
+        const std::size_t k = split[i * n + j];
+        out.push_back({loop[i], loop[k], loop[j]});
+        stack.push_back({i, k});
+        stack.push_back({k, j});
+    }
+    return out;
+}
+
+// Splits a loop at repeated vertices (a loop through a pinch twice bounds two holes that touch there).
+std::vector<std::vector<std::uint32_t>> simple_loops(const std::vector<std::uint32_t>& loop)
+{
+    std::vector<std::vector<std::uint32_t>> out;
+    std::vector<std::vector<std::uint32_t>> work{loop};
+    while (!work.empty()) {
+        std::vector<std::uint32_t> l = std::move(work.back());
+        work.pop_back();
+        bool split = false;
+        for (std::size_t i = 0; i < l.size() && !split; ++i)
+            for (std::size_t j = i + 1; j < l.size() && !split; ++j)
+                if (l[i] == l[j]) {
+                    std::vector<std::uint32_t> a(l.begin() + static_cast<std::ptrdiff_t>(i), l.begin() + static_cast<std::ptrdiff_t>(j));
+                    std::vector<std::uint32_t> b(l.begin() + static_cast<std::ptrdiff_t>(j), l.end());
+                    b.insert(b.end(), l.begin(), l.begin() + static_cast<std::ptrdiff_t>(i));
+                    work.push_back(std::move(a));
+                    work.push_back(std::move(b));
+                    split = true;
+                }
+        if (!split)
+            out.push_back(std::move(l));
+    }
+    return out;
+}
+
+} // namespace
+
+// A tile is interior (not on the sample's border) when its surface neighbours surround it: seen from
+// its centre in its plane, the centres of its neighbours and theirs leave no empty angular sector wider
+// than max_gap_degrees, or its neighbours form a closed ring around it (each meets two others of them;
+// at a sharp edge the tile's own plane can hide a direction, the ring cannot). Tiles on the sample's
+// border have the empty outside on one side and an open ring. The sector is also measured in the
+// plane of each neighbour, and the narrowest counts: a cluster a few points wide that reaches across a
+// sharp edge is flat in a plane at right angles to the surface, and in its own plane it sees its
+// neighbours on a line (a box whose one face is sampled 10 times more densely has such clusters along
+// that face's edges, and 16-50-edge holes stayed open beside them). A border tile's neighbours lie in
+// the surface too, and their planes show the same empty outside.
+std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees)
+{
+    std::vector<bool> out(tiles.size(), false);
+    std::vector<double> widest(tiles.size(), 2.0 * kPi); // the empty sector of each tile
+    std::vector<double> angles;
+    std::vector<std::uint32_t> ring;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        angles.clear();
+        ring.clear();
+        for (std::uint32_t n : tiles[t].neighbours) {
+            ring.push_back(n);
+            ring.insert(ring.end(), tiles[n].neighbours.begin(), tiles[n].neighbours.end());
+        }
+        const auto empty_sector = [&](const Tile& plane) {
+            angles.clear();
+            for (std::uint32_t n : ring) {
+                if (n == t)
+                    continue;
+                const Vec3 d = tiles[n].centre - tiles[t].centre;
+                angles.push_back(std::atan2(dot(d, plane.axis_v), dot(d, plane.axis_u)));
+            }
+            if (angles.size() < 3)
+                return 2.0 * kPi;
+            std::sort(angles.begin(), angles.end());
+            double widest_gap = angles.front() + 2.0 * kPi - angles.back();
+            for (std::size_t i = 1; i < angles.size(); ++i)
+                widest_gap = std::max(widest_gap, angles[i] - angles[i - 1]);
+            return widest_gap;
+        };
+        double gap = empty_sector(tiles[t]);
+        // The neighbours' planes only matter where the tile's own plane sees a wide empty sector.
+        if (gap > radians(max_gap_degrees))
+            for (std::uint32_t n : tiles[t].neighbours)
+                gap = std::min(gap, empty_sector(tiles[n]));
+        if (gap >= 2.0 * kPi)
+            continue;
+        // Or the neighbours form a closed ring around it (each meets two others of them): on a sharp
+        // edge the tile's own plane can hide a neighbour's direction, but not the ring.
+        bool ring_closed = true;
+        const auto& around = tiles[t].neighbours;
+        for (std::uint32_t n : around) {
+            std::size_t inside = 0;
+            for (std::uint32_t m : tiles[n].neighbours)
+                inside += std::binary_search(around.begin(), around.end(), m) ? 1 : 0;
+            ring_closed = ring_closed && inside >= 2;
+        }
+        out[t] = gap <= radians(max_gap_degrees) || ring_closed;
+        widest[t] = gap;
+    }
+    // A tile on a sharp edge, its plane tilted between the two faces, can see both faces' tiles on one
+    // side (the 3-hole solid at 4,000 points: 174 degrees). A tile on the sample's border has its
+    // border neighbours beside it, which are not interior either: a tile whose empty sector is under a
+    // half-turn and whose neighbours are all interior is interior too (one pass: no creeping inward).
+    // So is a tile without area whose neighbours are all interior: a cluster one point wide across a
+    // sharp edge (flat, but in a plane at right angles to the surface) projects onto a line and sees
+    // every neighbour at 0 or 180 degrees (a cube whose one face is sampled 10 times more densely:
+    // such strips along that face's edges kept holes of 30-50 edges open).
+    std::vector<bool> more = out;
+    for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (!out[t] && (widest[t] < kPi || tiles[t].area <= 0.0) && !tiles[t].neighbours.empty() &&
+            std::all_of(tiles[t].neighbours.begin(), tiles[t].neighbours.end(), [&](std::uint32_t n) { return out[n]; }))
+            more[t] = true;
+    return more;
+}
+
+namespace {
+
+// What the genus of the final mesh depends on near a set of vertices, counted as split_pinches will
+// leave the surface (each fan of a pinched vertex its own vertex): vertex copies, and the boundary
+// cycles through those vertices (in the split surface a cycle arriving at a fan leaves from that fan).
+struct LocalTopology
+{
+    std::size_t vertex_copies = 0;
+    std::size_t cycles = 0;
+};
+
+LocalTopology local_topology(const Surface& s, const std::vector<std::uint32_t>& vertices)
+{
+    LocalTopology out;
+    std::vector<std::uint64_t> seen; // free half-edges already walked
+    const auto next = [&](std::uint32_t u, std::uint32_t v) {
+        const std::uint32_t w = next_in_fan(s, u, v);
+        assert(w != kNone);
+        return w;
+    };
+    for (std::uint32_t v : vertices) {
+        const auto fans = s.arcs(v);
+        out.vertex_copies += std::max<std::size_t>(1, fans.size());
+        for (const auto& fan : fans) {
+            // Free half-edge fan.first -> v; walk its cycle unless an earlier walk passed it.
+            if (std::find(seen.begin(), seen.end(), edge_key(fan.first, v)) != seen.end())
+                continue;
+            ++out.cycles;
+            std::uint32_t u = fan.first, w = v;
+            do {
+                seen.push_back(edge_key(u, w));
+                const std::uint32_t x = next(u, w);
+                u = w;
+                w = x;
+            } while (!(u == fan.first && w == v));
+        }
+    }
+    return out;
+}
+
+// Whether a patch of `faces` triangles closing a simple loop of `loop_edges` edges raised the genus,
+// from the local counts before and after (Euler: 2 Δg = -Δχ - Δb on a connected surface; the patch
+// adds its faces and (3 faces - loop edges) / 2 inner edges, and changes vertex copies and boundary
+// cycles only at the loop's vertices).
+bool adds_handle(const LocalTopology& before, const LocalTopology& after, std::size_t faces, std::size_t loop_edges)
+{
+    const long new_edges = (3 * static_cast<long>(faces) - static_cast<long>(loop_edges)) / 2;
+    const long d_chi = (static_cast<long>(after.vertex_copies) - static_cast<long>(before.vertex_copies)) - new_edges +
+                       static_cast<long>(faces);
+    const long d_b = static_cast<long>(after.cycles) - static_cast<long>(before.cycles);
+    return -d_chi - d_b > 0;
+}
+
+// Whether the input points cover a hole: every spot of its fill patch (sampled about a spacing apart)
+// has an input point within 1.5 spacings. A hole in the sample (the bunny's base) has an empty middle;
+// a hole the tiles left in a sampled surface has points all over it: a tile built from a sample of
+// at most TileOptions::max_points of its node's points can leave a gap wider than a point spacing (a
+// uniformly sampled fandisk kept one 8 spacings wide in its flat top). Counting points inside instead
+// also filled real scan holes whose loops took in some sampled surface beside them, and a tunnel of
+// the 3-hole solid.
+bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing)
+{
+    if (patch.empty() || !(spacing > 0.0))
+        return false;
+    const double reach = 1.5 * spacing;
+    // Spots: a barycentric grid on each patch triangle, its step at most a spacing along every edge.
+    std::vector<Vec3> spots;
+    for (const Tri& t : patch) {
+        const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
+        const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
+        const int steps = std::clamp(static_cast<int>(std::ceil(longest / spacing)), 1, 64);
+        for (int i = 0; i <= steps; ++i)
+            for (int j = 0; i + j <= steps; ++j) {
+                const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps;
+                spots.push_back(a + (b - a) * u + (c - a) * v);
+            }
+    }
+    BoundingBox box = bounding_box(spots);
+    box.min = box.min - Vec3{reach, reach, reach};
+    box.max = box.max + Vec3{reach, reach, reach};
+    // The points near the patch, bucketed in cells of the reach: each spot looks at 27 cells, so a wide
+    // hole in a large sample costs time in proportion to its spots and points, not their product.
+    const auto cell_of = [&](const Vec3& p) {
+        return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor((p.x - box.min.x) / reach)),
+                                           static_cast<std::int64_t>(std::floor((p.y - box.min.y) / reach)),
+                                           static_cast<std::int64_t>(std::floor((p.z - box.min.z) / reach))};
+    };
+    std::map<std::array<std::int64_t, 3>, std::vector<Vec3>> cells;
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
+        stack.pop_back();
+        if (!node.box.meets(box))
+            continue;
+        if (!node.is_leaf()) {
+            stack.push_back(node.right);
+            stack.push_back(node.left);
+            continue;
+        }
+        for (std::uint32_t i = node.begin; i < node.end; ++i)
+            if (box.contains(h.cloud.positions[i]))
+                cells[cell_of(h.cloud.positions[i])].push_back(h.cloud.positions[i]);
+    }
+    const double reach2 = reach * reach;
+    return std::all_of(spots.begin(), spots.end(), [&](const Vec3& spot) {
+        const std::array<std::int64_t, 3> c = cell_of(spot);
+        for (std::int64_t dx = -1; dx <= 1; ++dx)
+            for (std::int64_t dy = -1; dy <= 1; ++dy)
+                for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                    const auto found = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
+                    if (found != cells.end())
+                        for (const Vec3& p : found->second)
+                            if (dot(p - spot, p - spot) <= reach2)
+                                return true;
+                }
+        return false;
+    });
+}
+
+} // namespace
+
+// Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
+// max_gap_width), widening those that cannot be triangulated as they are. `before_handles`: the front
+// has not yet been allowed to close handles, and a loop around a tube it still has to close looks like
+// a hole among interior tiles; only holes small by perimeter, or among interior tiles with fewer edges
+// than a handle closes around, are filled then.
+FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
+                      const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
+                      bool before_handles)
+{
+    FillResult result;
+    // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
+    std::vector<bool> widened(positions.size(), false);
+    constexpr int kPasses = 4;
+    for (int pass = 0; pass < kPasses; ++pass) {
+        bool changed = false;
+        std::vector<std::vector<std::uint32_t>> loops;
+        for (const auto& traced : boundary_loops(s, positions))
+            for (auto& l : simple_loops(traced))
+                loops.push_back(std::move(l));
+        for (const auto& loop : loops) {
+            const std::size_t n = loop.size();
+            if (n > options.max_hole_edges || n < 3)
+                continue;
+            // Skip loops that an earlier fill or widening of this pass changed.
+            bool current = true;
+            for (std::size_t i = 0; i < n && current; ++i)
+                current = !s.has_halfedge(loop[i], loop[(i + 1) % n]) && s.has_halfedge(loop[(i + 1) % n], loop[i]);
+            if (!current)
+                continue;
+            std::vector<std::int32_t> loop_tiles;
+            double perimeter = 0.0, largest_tile = 0.0, spacing = 0.0;
+            bool was_widened = false, surrounded = true;
+            for (std::size_t i = 0; i < n; ++i) {
+                // A height field's holes are measured in its domain: a gap at a jump is small there.
+                Vec3 d = positions[loop[(i + 1) % n]] - positions[loop[i]];
+                if (projection.used)
+                    d -= projection.axis * dot(d, projection.axis);
+                perimeter += norm(d);
+                const std::int32_t t = layout.vertices[loop[i]].tile;
+                loop_tiles.push_back(t);
+                surrounded = surrounded && interior[static_cast<std::size_t>(t)];
+                largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
+                spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(t)].spacing);
+                was_widened = was_widened || widened[loop[i]];
+            }
+            std::sort(loop_tiles.begin(), loop_tiles.end());
+            loop_tiles.erase(std::unique(loop_tiles.begin(), loop_tiles.end()), loop_tiles.end());
+            // A widened hole was small before we opened it: it may be up to three times as large.
+            const double limit = options.hole_factor * largest_tile * (was_widened ? 3.0 : 1.0);
+            // A hole among interior tiles is a gap whatever its size; elsewhere only small holes are.
+            if (loop_tiles.size() < 2 ||
+                (perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges))))
+                continue;
+            const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
+            // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
+            // point spacing wide, and a hole much wider than that (mean width 2 area / perimeter) is a
+            // hole in the sample itself (the bunny's base), which stays open.
+            double area = 0.0;
+            for (const Tri& t : patch) {
+                const Vec3 c = triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+                area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
+            }
+            if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter &&
+                !points_cover_hole(h, positions, patch, spacing))
+                continue;
+            const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
+            const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};
+            std::size_t added = 0;
+            for (const Tri& t : patch) {
+                if (!s.can_add(t[0], t[1], t[2]))
+                    break;
+                s.add(t[0], t[1], t[2], -1);
+                ++added;
+            }
+            // Through a pinched vertex a fill can join two fans of one surface: a handle. Such a loop is
+            // treated like one that cannot be triangulated (widened below).
+            const bool complete = !patch.empty() && added == patch.size() &&
+                                  !(pinched && adds_handle(before, local_topology(s, loop), patch.size(), n));
+            if (complete) {
+                ++result.holes;
+                result.faces += patch.size();
+                changed = true;
+                continue;
+            }
+            for (; added > 0; --added)
+                s.pop();
+            if (pass + 1 == kPasses)
+                continue;
+            // The loop cannot be triangulated as it is (a diagonal it needs is already an edge, or a vertex
+            // would close around it twice): remove the gap faces at its vertices and try the larger hole.
+            std::vector<std::uint32_t> doomed;
+            for (std::uint32_t v : loop)
+                for (std::uint32_t f : s.faces_at(v))
+                    if (s.face_tile()[f] < 0)
+                        doomed.push_back(f);
+            std::sort(doomed.begin(), doomed.end());
+            doomed.erase(std::unique(doomed.begin(), doomed.end()), doomed.end());
+            for (std::uint32_t f : doomed) {
+                for (std::uint32_t v : s.faces()[f])
+                    widened[v] = true;
+                s.remove(f);
+            }
+            changed = changed || !doomed.empty();
+        }
+        if (!changed)
+            break;
+    }
+    return result;
+}
+
+} // namespace mrt::surface_detail

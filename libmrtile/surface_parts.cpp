@@ -1,0 +1,349 @@
+// The shared ground of the gap triangulation and manifold assembly (paper §4.3; steps numbered as in
+// surface.cpp): the surface's vertices and tile loops with the ε-splitting (step 1), the height-field test
+// (step 2a), the consistent tile orientation (step 2c), and the walks along the boundary loops of the
+// surface under construction. Apart from surface.cpp because the front (surface_front.cpp) and the hole
+// filling (surface_holes.cpp) walk the same loops.
+#include "libmrtile/surface_parts.h"
+
+#include "libmrtile/pca.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <utility>
+#include <vector>
+
+namespace mrt::surface_detail {
+
+// ---------------------------------------------------------------------------------------------------
+// Step 1: vertices, loops, ε-splitting.
+
+Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
+{
+    Layout out;
+    out.tiles.resize(tiles.size());
+    double total_length = 0.0;
+    std::size_t total_edges = 0;
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+        const Tile& tile = tiles[t];
+        TileLoop& tl = out.tiles[t];
+        tl.share = static_cast<double>(h.nodes[static_cast<std::size_t>(tile.node)].count()) /
+                   static_cast<double>(h.cloud.positions.size());
+        const auto ti = static_cast<std::int32_t>(t);
+        if (!tile.has_fan()) {
+            for (std::uint32_t p : tile.boundary)
+                out.vertices.push_back({h.cloud.positions[p], ti, kNone});
+            continue;
+        }
+        tl.centre = static_cast<std::uint32_t>(out.vertices.size());
+        out.vertices.push_back({tile.apex, ti, kNone}); // on the surface, not the patch's mean
+        double perimeter = 0.0;
+        const std::size_t n = tile.boundary.size();
+        for (std::size_t i = 0; i < n; ++i)
+            perimeter += distance(h.cloud.positions[tile.boundary[i]], h.cloud.positions[tile.boundary[(i + 1) % n]]);
+        double eps = std::numeric_limits<double>::infinity();
+        if (options.split_length > 0.0)
+            eps = options.split_length;
+        else if (options.split_length == 0.0)
+            eps = options.split_factor * std::sqrt(tile.area / std::max<double>(1.0, tile.points));
+        // Never more than 1024 points per tile, whatever ε says (a needle-thin tile has a tiny spacing).
+        eps = std::max(eps, perimeter / 1024.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            const Vec3 a = h.cloud.positions[tile.boundary[i]];
+            const Vec3 b = h.cloud.positions[tile.boundary[(i + 1) % n]];
+            tl.loop.push_back(static_cast<std::uint32_t>(out.vertices.size()));
+            out.vertices.push_back({a, ti, static_cast<std::uint32_t>(tl.loop.size() - 1)});
+            const double len = distance(a, b);
+            const auto pieces = static_cast<std::size_t>(std::ceil(len / eps - 1e-9));
+            for (std::size_t k = 1; k < pieces; ++k) {
+                const double s = static_cast<double>(k) / static_cast<double>(pieces);
+                tl.loop.push_back(static_cast<std::uint32_t>(out.vertices.size()));
+                out.vertices.push_back({a + (b - a) * s, ti, static_cast<std::uint32_t>(tl.loop.size() - 1), true});
+                ++out.split_points;
+            }
+        }
+        tl.perimeter = perimeter;
+        tl.spacing = tile.spacing();
+        tl.edge_length = perimeter / static_cast<double>(tl.loop.size());
+        total_length += perimeter;
+        total_edges += tl.loop.size();
+    }
+    out.mean_edge = total_edges ? total_length / static_cast<double>(total_edges) : 0.0;
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2a: height-field test.
+
+namespace {
+
+// The dominant normal axis: the principal eigenvector of sum(area * n nᵀ), which ignores normal signs.
+Vec3 dominant_normal_axis(const std::vector<Tile>& tiles)
+{
+    Moments m;
+    m.count = 1;
+    for (const Tile& t : tiles) {
+        if (!t.has_fan())
+            continue;
+        const double w = t.area;
+        const Vec3& n = t.normal;
+        m.m2[0] += w * n.x * n.x;
+        m.m2[1] += w * n.x * n.y;
+        m.m2[2] += w * n.x * n.z;
+        m.m2[3] += w * n.y * n.y;
+        m.m2[4] += w * n.y * n.z;
+        m.m2[5] += w * n.z * n.z;
+    }
+    const Eigen3x3 e = eigen_decomposition(m);
+    return e.vectors[2];
+}
+
+bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, double y)
+{
+    // Counter-clockwise or clockwise convex polygon: inside when all turns have the same strict sign.
+    int sign = 0;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const auto& a = poly[i];
+        const auto& b = poly[(i + 1) % poly.size()];
+        const double c = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+        const int s = c > 0 ? 1 : (c < 0 ? -1 : 0);
+        if (s == 0)
+            return false;
+        if (sign == 0)
+            sign = s;
+        else if (s != sign)
+            return false;
+    }
+    return true;
+}
+
+} // namespace
+
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
+{
+    Projection p;
+    if (options.height_field == HeightField::Off)
+        return p;
+    p.axis = normalized(dominant_normal_axis(tiles));
+    if (squared_norm(p.axis) == 0.0)
+        p.axis = {0, 0, 1};
+    // Face the axis to the positive side of its largest component (deterministic "up").
+    int big = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::abs(p.axis[i]) > std::abs(p.axis[big]))
+            big = i;
+    if (p.axis[big] < 0)
+        p.axis = -p.axis;
+    // A scan's height field faces its scanner: "up" is the side the viewpoint is on.
+    if (h.cloud.viewpoint) {
+        double toward = 0.0;
+        for (const Tile& t : tiles)
+            toward += dot(p.axis, *h.cloud.viewpoint - t.centre) * static_cast<double>(t.points);
+        if (toward < 0.0)
+            p.axis = -p.axis;
+    }
+    const Vec3 helper = std::abs(p.axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    p.u = normalized(cross(helper, p.axis));
+    p.v = cross(p.axis, p.u);
+    if (options.height_field == HeightField::On) {
+        p.used = true;
+        return p;
+    }
+    const double min_cos = std::cos(radians(options.max_tilt_degrees));
+    for (const Tile& t : tiles)
+        if (t.has_fan() && std::abs(dot(t.normal, p.axis)) < min_cos)
+            return p;
+    // Overlap test: bucket projected tile centres in a grid, test each against the outlines whose
+    // bounding boxes cover its cell.
+    struct Outline
+    {
+        std::vector<std::array<double, 2>> poly;
+        double x0, y0, x1, y1;
+    };
+    std::vector<Outline> outlines;
+    std::vector<std::array<double, 2>> centres;
+    double mean_size = 0.0;
+    for (const Tile& t : tiles) {
+        if (!t.has_fan())
+            continue;
+        Outline o;
+        o.x0 = o.y0 = std::numeric_limits<double>::infinity();
+        o.x1 = o.y1 = -o.x0;
+        for (std::uint32_t i : t.boundary) {
+            const Vec3& q = h.cloud.positions[i];
+            const double x = dot(q, p.u), y = dot(q, p.v);
+            o.poly.push_back({x, y});
+            o.x0 = std::min(o.x0, x);
+            o.y0 = std::min(o.y0, y);
+            o.x1 = std::max(o.x1, x);
+            o.y1 = std::max(o.y1, y);
+        }
+        mean_size += std::max(o.x1 - o.x0, o.y1 - o.y0);
+        outlines.push_back(std::move(o));
+        centres.push_back({dot(t.centre, p.u), dot(t.centre, p.v)});
+    }
+    if (outlines.empty())
+        return p;
+    mean_size /= static_cast<double>(outlines.size());
+    if (!(mean_size > 0.0)) {
+        p.used = true;
+        return p;
+    }
+    const double cell = mean_size;
+    auto cell_of = [&](double x, double y) {
+        return std::pair<std::int64_t, std::int64_t>{static_cast<std::int64_t>(std::floor(x / cell)),
+                                                     static_cast<std::int64_t>(std::floor(y / cell))};
+    };
+    std::vector<std::pair<std::pair<std::int64_t, std::int64_t>, std::uint32_t>> grid;
+    for (std::uint32_t i = 0; i < centres.size(); ++i)
+        grid.push_back({cell_of(centres[i][0], centres[i][1]), i});
+    std::sort(grid.begin(), grid.end());
+    for (std::uint32_t k = 0; k < outlines.size(); ++k) {
+        const Outline& o = outlines[k];
+        const auto c0 = cell_of(o.x0, o.y0), c1 = cell_of(o.x1, o.y1);
+        for (std::int64_t cx = c0.first; cx <= c1.first; ++cx) {
+            auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(std::make_pair(cx, c0.second), 0u));
+            for (; it != grid.end() && it->first.first == cx && it->first.second <= c1.second; ++it)
+                if (it->second != k && point_in_convex(o.poly, centres[it->second][0], centres[it->second][1]))
+                    return p;
+        }
+    }
+    p.used = true;
+    return p;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2c: consistent tile orientation.
+
+namespace {
+
+// How much the normals of neighbouring tiles a, b agree: n_a against n_b reflected across the plane
+// bisecting the segment between the centres. On a surface that is symmetric about that plane the
+// reflection maps one normal onto the other exactly, so the score is +1 for consistent and -1 for
+// opposite signs whatever the angle between the tiles (a plain dot product is 0 across a 90-degree edge).
+double agreement(const Tile& a, const Tile& b)
+{
+    const Vec3 d = normalized(b.centre - a.centre);
+    const Vec3 reflected = b.normal - d * (2.0 * dot(b.normal, d));
+    return dot(a.normal, reflected);
+}
+
+} // namespace
+
+// +1/-1 per tile: orientations of the tile normals that agree across the surface neighbour graph,
+// propagated along the most confident edges first (a maximum spanning tree on |agreement|, as in Hoppe
+// et al.'s normal orientation), starting from the largest tile of each connected part. Tiles without
+// neighbours keep +1.
+std::vector<int> orient_tiles(const std::vector<Tile>& tiles)
+{
+    std::vector<int> orientation(tiles.size(), 0);
+    std::vector<std::uint32_t> order(tiles.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return tiles[a].points > tiles[b].points; });
+    struct Edge
+    {
+        double confidence;
+        std::uint32_t from, to;
+        bool operator<(const Edge& o) const
+        {
+            return confidence != o.confidence ? confidence < o.confidence : std::tie(from, to) > std::tie(o.from, o.to);
+        }
+    };
+    std::priority_queue<Edge> queue;
+    for (std::uint32_t seed : order) {
+        if (orientation[seed] != 0)
+            continue;
+        orientation[seed] = 1;
+        for (std::uint32_t n : tiles[seed].neighbours)
+            queue.push({std::abs(agreement(tiles[seed], tiles[n])), seed, n});
+        while (!queue.empty()) {
+            const Edge e = queue.top();
+            queue.pop();
+            if (orientation[e.to] != 0)
+                continue;
+            orientation[e.to] = orientation[e.from] * (agreement(tiles[e.from], tiles[e.to]) >= 0.0 ? 1 : -1);
+            for (std::uint32_t n : tiles[e.to].neighbours)
+                if (orientation[n] == 0)
+                    queue.push({std::abs(agreement(tiles[e.to], tiles[n])), e.to, n});
+        }
+    }
+    return orientation;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Step 3: the manifold surface under construction.
+
+namespace {
+
+// The fans (link arcs) of v in counter-clockwise order around its normal.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> ordered_fans(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t v)
+{
+    auto fans = s.arcs(v);
+    if (fans.size() < 2)
+        return fans;
+    Vec3 n;
+    for (std::uint32_t f : s.faces_at(v)) {
+        const Tri& t = s.faces()[f];
+        n += triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+    }
+    const AngleAround angle(positions[v], normalized(n));
+    std::sort(fans.begin(), fans.end(), [&](const auto& a, const auto& b) {
+        const double aa = angle(positions[a.first]), ab = angle(positions[b.first]);
+        return aa != ab ? aa < ab : a.first < b.first;
+    });
+    return fans;
+}
+
+} // namespace
+
+// The vertex after v on the boundary loop that arrives at v by the free half-edge u -> v. At a pinched
+// vertex the loop continues into the fan gap it came from (fans ordered counter-clockwise around the
+// vertex normal), so a loop never crosses itself: it leaves v along the free edge of the fan before
+// u's (a fan (first, last) has the free half-edges first -> v and v -> last).
+std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
+{
+    const auto fans = ordered_fans(s, positions, v);
+    for (std::size_t j = 0; j < fans.size(); ++j)
+        if (fans[j].first == u)
+            return fans[(j + fans.size() - 1) % fans.size()].second;
+    assert(false);
+    return fans[0].second;
+}
+
+// The inverse step: the vertex before u on the loop that leaves u by the free half-edge u -> v.
+std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
+{
+    const auto fans = ordered_fans(s, positions, u);
+    for (std::size_t j = 0; j < fans.size(); ++j)
+        if (fans[j].second == v)
+            return fans[(j + 1) % fans.size()].first;
+    assert(false);
+    return fans[0].first;
+}
+
+// The same two steps on the surface as split_pinches will leave it, where each fan of a pinched vertex is
+// a vertex of its own: a cycle arriving at v by the free half-edge u -> v leaves by the other end of
+// the same fan's arc (first -> v, v -> last). kNone if no fan of v starts at u.
+std::uint32_t next_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
+{
+    for (const auto& fan : s.arcs(v))
+        if (fan.first == u)
+            return fan.second;
+    return kNone;
+}
+
+// The inverse step: the vertex before u on the cycle that leaves u by the free half-edge u -> v.
+std::uint32_t previous_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
+{
+    for (const auto& fan : s.arcs(u))
+        if (fan.second == v)
+            return fan.first;
+    return kNone;
+}
+
+} // namespace mrt::surface_detail

@@ -1,0 +1,670 @@
+#pragma once
+//! \file surface_parts.h
+//! \brief INTERNAL header of build_surface (surface.h), not part of the public API: what the files of the
+//! gap triangulation and manifold assembly (paper §4.3) share: the surface's vertices and tile loops, the
+//! manifold surface under construction and its boundary walks, the advancing front, the candidate pruner,
+//! and the islands and hole filling.
+//! \details Only surface.cpp, surface_parts.cpp, surface_front.cpp and surface_holes.cpp include it, and it
+//! changes with them whenever they do; no public header includes it. (The install rule copies every header
+//! of libmrtile/, so it is installed too, but nothing outside the library may rely on it.) The method is
+//! described at the top of surface.cpp; each function's comment stands at its definition.
+
+#include "libmrtile/gap_triangulation.h"
+#include "libmrtile/hierarchy.h"
+#include "libmrtile/surface.h"
+#include "libmrtile/tiles.h"
+#include "libmrtile/union_find.h"
+#include "libmrtile/vec3.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <utility>
+#include <vector>
+
+namespace mrt::surface_detail {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+using Tri = std::array<std::uint32_t, 3>;
+
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b)
+{
+    return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+
+inline Vec3 triangle_cross(const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    return cross(b - a, c - a);
+}
+
+// A triangle so thin that its area vanishes against its longest edge: it would be a zero-area face.
+inline bool is_sliver(const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const double longest = std::max({squared_distance(a, b), squared_distance(b, c), squared_distance(a, c)});
+    return !(norm(triangle_cross(a, b, c)) > 1e-9 * longest);
+}
+
+struct SurfaceVertex
+{
+    Vec3 position;
+    std::int32_t tile = -1;      // index into the tiles vector
+    std::uint32_t loop_pos = kNone; // position in the tile's boundary loop; kNone for centres and fanless tiles
+    bool split = false;             // inserted on a long hull edge (step 1), not an input point
+};
+
+struct TileLoop
+{
+    std::uint32_t centre = kNone;     // centre vertex, kNone for fanless tiles
+    std::vector<std::uint32_t> loop;  // boundary loop (counter-clockwise seen from the tile normal)
+    double perimeter = 0.0;
+    double edge_length = 0.0;         // mean loop edge length (0 for fanless tiles)
+    double spacing = 0.0;             // the tile's point spacing (Tile::spacing)
+    double share = 0.0;               // the fraction of the cloud's points in the tile's node
+    bool placed = false;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Step 1: vertices, loops, ε-splitting.
+
+struct Layout
+{
+    std::vector<SurfaceVertex> vertices;
+    std::vector<TileLoop> tiles;
+    std::size_t split_points = 0;
+    double mean_edge = 0.0;
+};
+
+Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2a: height-field test.
+
+struct Projection
+{
+    bool used = false;
+    Vec3 axis{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0};
+};
+
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2c: consistent tile orientation.
+
+std::vector<int> orient_tiles(const std::vector<Tile>& tiles);
+
+// ---------------------------------------------------------------------------------------------------
+// Step 3: the manifold surface under construction.
+
+//! Face f seen from one of its vertices v: f = (v, first, second), so v's link edge is first -> second
+//! and f holds the half-edge v -> first, numbered 3 f + (v's index in f). Kept per vertex so that
+//! half-edge and link queries read one short contiguous list instead of the faces themselves.
+struct Corner
+{
+    std::uint32_t halfedge, first, second;
+    std::uint32_t face() const { return halfedge / 3; }
+};
+
+//! A vertex's corners in the order its faces were added. Most vertices have two fan faces and a few gap
+//! faces: up to kInline corners live in place (no pointer to follow; the front's lookups all over the
+//! surface are cache misses), more move to the heap.
+class CornerList
+{
+public:
+    CornerList() = default;
+    CornerList(CornerList&&) noexcept = default;
+    CornerList& operator=(CornerList&&) noexcept = default;
+    // A copy holds the corners in place when they fit (hole filling tries two ways from one surface).
+    CornerList(const CornerList& other) { *this = other; }
+    CornerList& operator=(const CornerList& other)
+    {
+        if (this == &other)
+            return *this;
+        size_ = 0;
+        heap_.reset();
+        heap_capacity_ = 0;
+        for (const Corner& c : other)
+            push_back(c);
+        return *this;
+    }
+
+    const Corner* begin() const { return heap_ ? heap_.get() : in_place_.data(); }
+    const Corner* end() const { return begin() + size_; }
+    Corner* begin() { return heap_ ? heap_.get() : in_place_.data(); }
+    Corner* end() { return begin() + size_; }
+    std::size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+
+    void push_back(const Corner& c)
+    {
+        const std::uint32_t capacity = heap_ ? heap_capacity_ : kInline;
+        if (size_ == capacity) {
+            const std::uint32_t grown = 2 * capacity;
+            std::unique_ptr<Corner[]> bigger(new Corner[grown]);
+            std::copy(begin(), end(), bigger.get());
+            heap_ = std::move(bigger);
+            heap_capacity_ = grown;
+        }
+        begin()[size_++] = c;
+    }
+    void pop_back() { --size_; }
+    //! Removes the corner at `at`, keeping the order of the others.
+    void erase(Corner* at)
+    {
+        std::copy(at + 1, end(), at);
+        --size_;
+    }
+
+private:
+    static constexpr std::uint32_t kInline = 6;
+    std::uint32_t size_ = 0;
+    std::uint32_t heap_capacity_ = 0;
+    std::array<Corner, kInline> in_place_{};
+    std::unique_ptr<Corner[]> heap_;
+};
+
+class Surface
+{
+public:
+
+    //! The faces at a vertex, in the order they were added (iterates face ids).
+    class FaceRange
+    {
+    public:
+        class Iterator
+        {
+        public:
+            explicit Iterator(const Corner* at) : at_(at) {}
+            std::uint32_t operator*() const { return at_->face(); }
+            Iterator& operator++()
+            {
+                ++at_;
+                return *this;
+            }
+            bool operator!=(const Iterator& o) const { return at_ != o.at_; }
+
+        private:
+            const Corner* at_;
+        };
+        explicit FaceRange(const CornerList& corners) : corners_(corners) {}
+        Iterator begin() const { return Iterator(corners_.begin()); }
+        Iterator end() const { return Iterator(corners_.end()); }
+        std::size_t size() const { return corners_.size(); }
+        bool empty() const { return corners_.empty(); }
+
+    private:
+        const CornerList& corners_;
+    };
+
+    explicit Surface(std::size_t vertex_count) : corners_(vertex_count), changed_(vertex_count, 0) {}
+
+    const std::vector<Tri>& faces() const { return faces_; }
+    const std::vector<std::int32_t>& face_tile() const { return face_tile_; }
+    FaceRange faces_at(std::uint32_t v) const { return FaceRange(corners_[v]); }
+    const CornerList& corners_at(std::uint32_t v) const { return corners_[v]; }
+    bool has_halfedge(std::uint32_t a, std::uint32_t b) const { return face_of(a, b) != kNone; }
+    //! The face with half-edge a -> b, or kNone (half-edges are unique, so there is at most one).
+    std::uint32_t face_of(std::uint32_t a, std::uint32_t b) const
+    {
+        const std::uint32_t h = halfedge_of(a, b);
+        return h == kNone ? kNone : h / 3;
+    }
+    //! The number 3 f + k of half-edge a -> b (a = faces()[f][k]), or kNone. Scans the corners of a or b,
+    //! whichever has fewer (only fan centres have many).
+    std::uint32_t halfedge_of(std::uint32_t a, std::uint32_t b) const
+    {
+        const CornerList& ca = corners_[a];
+        const CornerList& cb = corners_[b];
+        if (ca.size() <= cb.size()) {
+            for (const Corner& c : ca)
+                if (c.first == b)
+                    return c.halfedge;
+        } else {
+            for (const Corner& c : cb)
+                if (c.second == a) // face (b, first, a): a follows b by two
+                    return c.halfedge - c.halfedge % 3 + (c.halfedge % 3 + 2) % 3;
+        }
+        return kNone;
+    }
+    bool on_surface(std::uint32_t v) const { return !corners_[v].empty(); }
+    //! Number of face changes so far (a logical clock for changed_at).
+    std::uint64_t clock() const { return clock_; }
+    //! The clock value of the last change of the faces at v (0 = never changed): anything computed from
+    //! v's faces at clock t is still valid while changed_at(v) <= t.
+    std::uint64_t changed_at(std::uint32_t v) const { return changed_[v]; }
+
+    //! Whether face (a, b, c) can be added keeping the surface an oriented manifold-in-progress.
+    bool can_add(std::uint32_t a, std::uint32_t b, std::uint32_t c) const
+    {
+        if (a == b || b == c || c == a)
+            return false;
+        if (has_halfedge(a, b) || has_halfedge(b, c) || has_halfedge(c, a))
+            return false;
+        return link_ok(a, b, c) && link_ok(b, c, a) && link_ok(c, a, b);
+    }
+
+    bool alive(std::uint32_t f) const { return alive_[f]; }
+
+    void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::int32_t tile)
+    {
+        const auto f = static_cast<std::uint32_t>(faces_.size());
+        assert(f < kNone / 3);
+        faces_.push_back({a, b, c});
+        face_tile_.push_back(tile);
+        alive_.push_back(true);
+        corners_[a].push_back({3 * f, b, c});
+        corners_[b].push_back({3 * f + 1, c, a});
+        corners_[c].push_back({3 * f + 2, a, b});
+        touch(faces_.back());
+    }
+
+    //! Removes the `count` most recently added faces.
+    void pop_n(std::size_t count)
+    {
+        for (; count > 0; --count)
+            pop();
+    }
+
+    //! Removes the most recently added face (used to roll back a hole fill).
+    void pop()
+    {
+        const Tri t = faces_.back();
+        faces_.pop_back();
+        face_tile_.pop_back();
+        alive_.pop_back();
+        for (int i = 0; i < 3; ++i)
+            corners_[t[i]].pop_back();
+        touch(t);
+    }
+
+    //! Removes face f (it stays in faces() as a dead entry).
+    void remove(std::uint32_t f)
+    {
+        assert(alive_[f]);
+        alive_[f] = false;
+        const Tri& t = faces_[f];
+        for (int i = 0; i < 3; ++i)
+            erase_corner(t[i], f);
+        touch(t);
+    }
+
+    //! Link arcs of v: (first, last) link vertex of each maximal path, counter-clockwise order unknown.
+    //! A closed link (interior vertex) gives no arc.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
+    {
+        const CornerList& link = corners_[v]; // directed link edges first -> second
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+        for (const Corner& e : link) {
+            if (has_link_edge_into(link, e.first))
+                continue;
+            std::uint32_t end = e.second;
+            for (bool moved = true; moved;) {
+                moved = false;
+                for (const Corner& o : link)
+                    if (o.first == end) {
+                        end = o.second;
+                        moved = true;
+                        break;
+                    }
+            }
+            out.push_back({e.first, end});
+        }
+        return out;
+    }
+
+    //! arcs(v).size() without building them.
+    std::size_t arc_count(std::uint32_t v) const
+    {
+        const CornerList& link = corners_[v];
+        std::size_t count = 0;
+        for (const Corner& e : link)
+            count += has_link_edge_into(link, e.first) ? 0 : 1;
+        return count;
+    }
+
+    std::pair<std::uint32_t, std::uint32_t> link_edge(std::uint32_t f, std::uint32_t v) const
+    {
+        const Tri& t = faces_[f];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+        return {t[(k + 1) % 3], t[(k + 2) % 3]};
+    }
+
+    //! Replaces vertex `from` by `to` in face f, moving f's corner at `from` to `to` (only used after the
+    //! construction, for pinch splits).
+    void relabel(std::uint32_t f, std::uint32_t from, std::uint32_t to)
+    {
+        for (auto& x : faces_[f])
+            if (x == from)
+                x = to;
+        for (std::uint32_t w : faces_[f]) {
+            if (w == to)
+                continue;
+            for (Corner& c : corners_[w])
+                if (c.face() == f) {
+                    c.first = c.first == from ? to : c.first;
+                    c.second = c.second == from ? to : c.second;
+                }
+        }
+        Corner* const it = std::find_if(corners_[from].begin(), corners_[from].end(), [&](const Corner& c) { return c.face() == f; });
+        assert(it != corners_[from].end());
+        const Corner moved = *it;
+        corners_[from].erase(it);
+        corners_[to].push_back(moved);
+    }
+
+    //! Duplicates every vertex whose faces form more than one fan: each extra fan gets a new vertex id
+    //! (appended after the existing ones). Returns origin[k] = the vertex new id `first_new + k` copies.
+    std::vector<std::uint32_t> split_pinches()
+    {
+        std::vector<std::uint32_t> origin;
+        const auto n = static_cast<std::uint32_t>(corners_.size());
+        for (std::uint32_t v = 0; v < n; ++v) {
+            if (arc_count(v) < 2)
+                continue; // one fan or none: nothing to split (and no list to build)
+            const auto fans = arcs(v);
+            for (std::size_t k = 1; k < fans.size(); ++k) {
+                const auto copy = static_cast<std::uint32_t>(corners_.size());
+                corners_.emplace_back();
+                changed_.push_back(clock_);
+                origin.push_back(v);
+                // Walk the fan from its first link vertex, moving its faces to the copy.
+                for (std::uint32_t x = fans[k].first; x != fans[k].second;) {
+                    std::uint32_t found = kNone;
+                    for (const Corner& c : corners_[v])
+                        if (c.first == x)
+                            found = c.face();
+                    if (found == kNone)
+                        break; // not a fan after all (cannot happen on a surface the front built): leave it
+                    x = link_edge(found, v).second;
+                    relabel(found, v, copy);
+                }
+            }
+        }
+        return origin;
+    }
+
+private:
+    static bool has_link_edge_into(const CornerList& link, std::uint32_t x)
+    {
+        for (const Corner& o : link)
+            if (o.second == x)
+                return true;
+        return false;
+    }
+
+    void erase_corner(std::uint32_t v, std::uint32_t f)
+    {
+        auto& cs = corners_[v];
+        cs.erase(std::find_if(cs.begin(), cs.end(), [&](const Corner& c) { return c.face() == f; }));
+    }
+
+    // After adding face (v, x, y), v's link (directed edges x -> y of its faces) must be a disjoint
+    // union of simple paths, or a single cycle: a closed fan plus anything else can never become a disk.
+    bool link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
+    {
+        const CornerList& link = corners_[v];
+        if (link.empty())
+            return true;
+        if (is_closed(v))
+            return false; // an interior vertex takes no more faces
+        // Half-edge uniqueness already guarantees in/out degree <= 1 in the link; the only failure is a
+        // cycle while other link edges remain outside it.
+        std::uint32_t end = y;
+        std::size_t steps = 1;
+        for (bool moved = true; moved && end != x;) {
+            moved = false;
+            for (const Corner& e : link) {
+                if (e.first == end) {
+                    end = e.second;
+                    ++steps;
+                    moved = true;
+                    break;
+                }
+            }
+        }
+        if (end != x)
+            return true; // no cycle through the new edge
+        return steps == link.size() + 1;
+    }
+
+    // Every edge at v has two faces: v's fan is a closed disk. Edge v -> x (a corner's first) has its
+    // twin x -> v exactly when another face at v has x as its corner's second: v's corners suffice.
+    bool is_closed(std::uint32_t v) const
+    {
+        const CornerList& link = corners_[v];
+        for (const Corner& c : link)
+            if (!has_link_edge_into(link, c.first))
+                return false;
+        return true;
+    }
+
+    void touch(const Tri& t)
+    {
+        ++clock_;
+        for (std::uint32_t v : t)
+            changed_[v] = clock_;
+    }
+
+    std::vector<Tri> faces_;
+    std::vector<std::int32_t> face_tile_;
+    std::vector<bool> alive_;
+    std::vector<CornerList> corners_; // per vertex
+    std::vector<std::uint64_t> changed_;
+    std::uint64_t clock_ = 0;
+};
+
+// Angles of points around a centre, counter-clockwise about a normal, from a fixed zero direction:
+// orders the fans of a pinched vertex.
+class AngleAround
+{
+public:
+    AngleAround(const Vec3& centre, const Vec3& normal) : centre_(centre)
+    {
+        const Vec3 helper = std::abs(normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        e1_ = normalized(cross(helper, normal));
+        e2_ = cross(normal, e1_);
+    }
+    double operator()(const Vec3& p) const
+    {
+        const Vec3 d = p - centre_;
+        return std::atan2(dot(d, e2_), dot(d, e1_));
+    }
+
+private:
+    Vec3 centre_, e1_, e2_;
+};
+
+// Walks along the boundary loops of a Surface (surface_parts.cpp).
+std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v);
+std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v);
+std::uint32_t next_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v);
+std::uint32_t previous_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v);
+
+// ---------------------------------------------------------------------------------------------------
+// Step 3: advancing front over the candidate triangles.
+
+struct Candidates
+{
+    std::vector<Tri> triangles;
+    std::vector<double> relative_radius; // radius / local b, in (0, 1]
+    std::vector<bool> fallback;          // proposed by some of its tiles but not all (local candidates)
+};
+
+struct Candidate
+{
+    double priority;
+    std::uint32_t a, b, c; // front half-edge a -> b (in an existing face), new face (b, a, c)
+    std::uint32_t index;   // into the candidate list
+    std::uint64_t clock;   // Surface::clock() when it was evaluated (not part of the order)
+    bool operator>(const Candidate& o) const
+    {
+        if (priority != o.priority)
+            return priority > o.priority;
+        return std::tie(a, b, c) > std::tie(o.a, o.b, o.c);
+    }
+};
+
+// The front closes a handle only around a boundary loop of at least this many edges (see Front::grow);
+// holes with fewer edges are filled before it may (see fill_holes).
+constexpr std::size_t kMinHandleLoopEdges = 24;
+
+// The member functions, with their comments, are in surface_front.cpp.
+class Front
+{
+public:
+    Front(const Layout& layout, const std::vector<Tile>& tiles, Surface& surface, const Projection& projection,
+          const std::vector<Vec3>& positions, const Candidates& candidates, double max_turn_degrees,
+          const std::vector<int>& orientation);
+    void rescue(const std::vector<bool>& stranded);
+    void regrow(const std::vector<bool>& dropped);
+    void finish();
+    void run();
+
+private:
+    Vec3 position(std::uint32_t v) const { return layout_.vertices[v].position; }
+    Vec3 face_normal(std::uint32_t a, std::uint32_t b, std::uint32_t c) const;
+    const Vec3& surface_normal(std::uint32_t f) const;
+    Vec3 vertex_normal(std::uint32_t v) const;
+    int seed_orientation(std::uint32_t t) const;
+    void place(std::uint32_t t, int orientation);
+    Candidate best(std::uint32_t a, std::uint32_t b) const;
+    bool faces_like_tiles(std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vec3& nt) const;
+    bool merge_in_order(std::uint32_t v, std::uint32_t x, std::uint32_t y) const;
+    bool folds_ok(std::uint32_t x, std::uint32_t y, const Vec3& nt) const;
+    void sync_pieces();
+    void reset_pieces();
+    bool split_view_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c);
+    bool makes_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::size_t* loop_edges = nullptr);
+    void recount_parts();
+    void grow_whole_front();
+    bool unchanged_since(const Candidate& c) const;
+
+    // Per front half-edge (by its number, Surface::halfedge_of): the last best() result, and the key of
+    // the entry last pushed for it while that entry is still queued.
+    struct EdgeState
+    {
+        double best_priority = 0.0;
+        double queued_priority = 0.0;
+        std::uint64_t best_clock = 0;
+        std::uint32_t best_c = kNone;
+        std::uint32_t queued_c = kNone;
+        std::uint32_t best_index = kNone;
+        bool evaluated = false;
+        bool queued = false;
+    };
+
+    EdgeState* edge_state(std::uint32_t a, std::uint32_t b);
+    Candidate cached_best(EdgeState& e, std::uint32_t a, std::uint32_t b) const;
+    void enqueue(EdgeState& e, const Candidate& c);
+    void push_best(std::uint32_t a, std::uint32_t b);
+    void refresh(std::uint32_t v);
+    void grow();
+
+    const Layout& layout_;
+    const std::vector<Tile>& tiles_;
+    Surface& surface_;
+    const Projection& projection_;
+    const std::vector<Vec3>& positions_;
+    const std::vector<int>& orientation_;
+    const std::vector<Tri>& candidates_;
+    const std::vector<double>& relative_radius_;
+    const std::vector<bool>& fallback_;
+    double min_cos_;
+    std::vector<bool> placed_;
+    std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
+    std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
+    std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
+    std::vector<bool> banned_;   // fallback candidates found to add a handle
+    std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
+    bool allow_handles_ = false;
+    std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
+    UnionFind pieces_;                  // see sync_pieces
+    std::uint32_t pieces_synced_ = 0;
+    UnionFind parts_;          // connected pieces of the surface, over vertices
+    std::vector<EdgeState> edges_; // by face and edge, see edge_state
+    mutable std::vector<Vec3> face_normals_; // see surface_normal
+    struct CachedNormal
+    {
+        Vec3 normal;
+        std::uint64_t clock = 0;
+        bool valid = false;
+    };
+    mutable std::vector<CachedNormal> vertex_normals_; // see vertex_normal
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Step 2b: pruning of the Delaunay triangles (paper §4.3's removal rules, plus chords).
+
+// The removal rules of paper §4.3 (one-tile triangles, local alpha radius b) plus chords across a
+// fan, slivers, and triangles joining tiles that do not meet on the surface.
+class Pruner
+{
+public:
+    Pruner(const Layout& layout, const std::vector<Tile>& tiles, const Projection& projection, double alpha,
+           const SurfaceOptions& options);
+    bool know_neighbours() const { return know_neighbours_; }
+    double relative_radius(const Tri& t) const;
+
+private:
+    bool apart(std::int32_t a, std::int32_t b) const;
+    bool chord(std::uint32_t a, std::uint32_t b) const;
+    double scale(std::uint32_t v) const;
+    Vec3 flat(const Vec3& p) const;
+
+    const Layout& layout_;
+    const std::vector<Tile>& tiles_;
+    const Projection& projection_;
+    double alpha_;
+    const SurfaceOptions& options_;
+    bool know_neighbours_ = false;
+};
+
+Candidates global_candidates(const Pruner& pruner, const DelaunayTriangles& dt, const std::vector<std::uint32_t>& vertex_of);
+
+Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layout& layout, const std::vector<Tile>& tiles,
+                            std::size_t threads);
+
+// ---------------------------------------------------------------------------------------------------
+// Step 4: boundary loops and hole filling.
+
+// The pieces of the surface that broke off a larger one: a part with a tile whose surface neighbour
+// lies in a larger part, a small part (under 5% of the largest) with a tile whose neighbour lies
+// outside it, and a part of gap faces only. Such an island meets the rest of the surface in the
+// sampled data but failed to join it (typically at a thin or sharp feature), and the larger surface
+// around it then has a hole with the island inside that no disk can fill. Parts whose tiles have no
+// neighbours elsewhere (separate objects) are not islands.
+struct Islands
+{
+    UnionFind parts{0};                      // faces -> part
+    std::vector<bool> doomed;                // per part root: an island
+    std::vector<std::uint32_t> part_of_tile; // kNone for tiles without faces
+};
+
+Islands find_islands(const Surface& s, const std::vector<Tile>& tiles);
+std::vector<bool> island_tiles(const Islands& islands);
+void remove_islands(Surface& s, Islands& islands);
+std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed);
+
+std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
+                                      const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
+                                      std::vector<bool>& restored_tiles, double reach = 2.0);
+
+struct FillResult
+{
+    std::size_t holes = 0;
+    std::size_t faces = 0;
+};
+
+std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees);
+
+FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
+                      const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
+                      bool before_handles);
+
+} // namespace mrt::surface_detail
