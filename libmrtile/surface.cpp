@@ -212,6 +212,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         !(options.max_gap_width >= 0.0) || !(options.collapse_tolerance >= 0.0) || !(options.strip_tolerance >= 0.0))
         throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width, collapse_tolerance, strip_tolerance must be >= 0 and alpha_factor, "
                            "split_factor, max_turn_degrees, max_tilt_degrees, interior_gap_degrees > 0");
+    if (options.close_holes > kMaxCloseHoles)
+        throw InvalidInput("SurfaceOptions::close_holes: at most " + std::to_string(kMaxCloseHoles) +
+                           " edges (a hole's fill costs the cube of its edges)");
     std::size_t fan_tiles = 0;
     for (const Tile& t : tiles) {
         if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
@@ -282,17 +285,19 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     FillResult filled;
     std::size_t islands = 0, restored_islands = 0;
     std::vector<bool> restored_tiles(tiles.size(), false); // fans of islands put back (kept in step 5)
-    const std::vector<bool> interior = options.fill_holes ? interior_tiles(tiles, options.interior_gap_degrees) : std::vector<bool>{};
-    auto fill = [&](bool before_handles) {
-        const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, before_handles);
+    const std::vector<bool> interior = options.fill_holes || options.close_holes > 0
+                                           ? interior_tiles(tiles, options.interior_gap_degrees)
+                                           : std::vector<bool>{};
+    auto fill = [&](FillMode mode) {
+        const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, mode);
         filled.holes += more.holes;
         filled.faces += more.faces;
     };
     if (options.fill_holes)
-        fill(true);
+        fill(FillMode::BeforeHandles);
     front.finish();
     if (options.fill_holes) {
-        fill(false);
+        fill(FillMode::Gaps);
         std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
         const std::vector<bool> dropped = drop_islands(surface, tiles, removed);
         islands = static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
@@ -301,7 +306,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             // (a) Fill again and put back the islands the rest does not cover.
             const Surface after_drop = surface;
             const FillResult filled_after_drop = filled;
-            fill(false);
+            fill(FillMode::Gaps);
             const auto restored_fans = [&] { return static_cast<std::size_t>(std::count(restored_tiles.begin(), restored_tiles.end(), true)); };
             restored_islands = restore_uncovered_islands(surface, removed, positions, layout.tiles, restored_tiles);
             const std::size_t left_out = islands - restored_fans();
@@ -317,13 +322,13 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
                 surface = after_drop;
                 filled = filled_after_drop;
                 front.regrow(dropped);
-                fill(false);
+                fill(FillMode::Gaps);
                 std::vector<std::vector<std::uint32_t>> removed_again;
                 const std::vector<bool> dropped_again = drop_islands(surface, tiles, removed_again);
                 islands = static_cast<std::size_t>(std::count(dropped_again.begin(), dropped_again.end(), true));
                 restored_islands = 0;
                 if (islands > 0) {
-                    fill(false);
+                    fill(FillMode::Gaps);
                     restored_islands = restore_uncovered_islands(surface, removed_again, positions, layout.tiles, restored_tiles);
                 }
                 if (!(islands - restored_fans() < left_out)) {
@@ -336,6 +341,10 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
             }
         }
     }
+
+    // On request, last: the holes that are the sample's own (a scan's unseen base), for watertight output.
+    if (options.close_holes > 0)
+        fill(FillMode::Close);
 
     // Pinched vertices become one vertex per fan.
     const std::vector<std::uint32_t> copies = surface.split_pinches();

@@ -30,6 +30,9 @@ enum class HeightField
     Off,  //!< always 3D Delaunay
 };
 
+//! Largest SurfaceOptions::close_holes accepted.
+inline constexpr std::size_t kMaxCloseHoles = 2000;
+
 struct SurfaceOptions
 {
     //! Functional-data mode (paper §4.3, 2D Delaunay on a projection). Auto switches it on when every
@@ -66,6 +69,13 @@ struct SurfaceOptions
     double hole_factor = 1.0;
     //! Largest number of edges of a hole that is filled.
     std::size_t max_hole_edges = 300;
+    //! Beyond the gaps between tiles: after everything else, fill every hole left with at most this many
+    //! edges, the sample's own holes too (a scan's unseen base; the outline of an open scan as well, if
+    //! it has no more edges), for watertight output (3D printing, volumes, simulation). 0 = off (the
+    //! default: such holes are where the sample ends, and a fill there is made up). Filled by the same
+    //! triangulation as the gaps, where a manifold patch fits; at most kMaxCloseHoles (the minimum-area
+    //! fill is cubic in a hole's edges: 2,000 edges take about a second).
+    std::size_t close_holes = 0;
     //! A tile is interior (not on the sample's border) when, seen from its centre in its own plane or
     //! in a neighbour's, its surface neighbours (Tile::neighbours) and theirs leave no empty angular
     //! sector wider than this, or its neighbours form a closed ring around it. A hole whose loop touches only interior tiles is

@@ -569,14 +569,18 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
 } // namespace
 
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
-// max_gap_width), widening those that cannot be triangulated as they are. `before_handles`: the front
+// max_gap_width), or in FillMode::Close every hole up to SurfaceOptions::close_holes edges, widening those
+// that cannot be triangulated as they are. FillMode::BeforeHandles: the front
 // has not yet been allowed to close handles, and a loop around a tube it still has to close looks like
 // a hole among interior tiles; only holes small by perimeter, or among interior tiles with fewer edges
 // than a handle closes around, are filled then.
 FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
                       const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
-                      bool before_handles)
+                      FillMode mode)
 {
+    const bool before_handles = mode == FillMode::BeforeHandles;
+    const bool closing = mode == FillMode::Close;
+    const std::size_t max_edges = closing ? options.close_holes : options.max_hole_edges;
     FillResult result;
     // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
     std::vector<bool> widened(positions.size(), false);
@@ -589,7 +593,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 loops.push_back(std::move(l));
         for (const auto& loop : loops) {
             const std::size_t n = loop.size();
-            if (n > options.max_hole_edges || n < 3)
+            if (n > max_edges || n < 3)
                 continue;
             // Skip loops that an earlier fill or widening of this pass changed.
             bool current = true;
@@ -618,8 +622,8 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             // A widened hole was small before we opened it: it may be up to three times as large.
             const double limit = options.hole_factor * largest_tile * (was_widened ? 3.0 : 1.0);
             // A hole among interior tiles is a gap whatever its size; elsewhere only small holes are.
-            if (loop_tiles.size() < 2 ||
-                (perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges))))
+            if (!closing && (loop_tiles.size() < 2 ||
+                             (perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges)))))
                 continue;
             const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
             // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
@@ -630,8 +634,8 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 const Vec3 c = triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
                 area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
             }
-            if (options.max_gap_width > 0.0 && spacing > 0.0 && 2.0 * area > options.max_gap_width * spacing * perimeter &&
-                !points_cover_hole(h, positions, patch, spacing))
+            if (!closing && options.max_gap_width > 0.0 && spacing > 0.0 &&
+                2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, spacing))
                 continue;
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
             const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};
@@ -654,7 +658,9 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             }
             for (; added > 0; --added)
                 s.pop();
-            if (pass + 1 == kPasses)
+            // Closing widens nothing: a loop it cannot fill may be where the sample ends, not a gap, and
+            // opening it up would only cut faces off the surface there.
+            if (pass + 1 == kPasses || closing)
                 continue;
             // The loop cannot be triangulated as it is (a diagonal it needs is already an edge, or a vertex
             // would close around it twice): remove the gap faces at its vertices and try the larger hole.

@@ -663,8 +663,16 @@ struct FillResult
 
 std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees);
 
+// Which holes fill_holes fills.
+enum class FillMode
+{
+    BeforeHandles, //!< gaps between tiles, before the front may close handles (small ones only)
+    Gaps,          //!< gaps between tiles (SurfaceOptions::hole_factor, interior_gap_degrees, max_gap_width)
+    Close,         //!< every hole of at most SurfaceOptions::close_holes edges, the sample's own too
+};
+
 FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
                       const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
-                      bool before_handles);
+                      FillMode mode);
 
 } // namespace mrt::surface_detail

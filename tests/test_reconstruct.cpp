@@ -383,6 +383,35 @@ TEST(Reconstruct, holes_in_the_sample_stay_open_at_coarse_cuts)
     }
 }
 
+// SurfaceOptions::close_holes: the bunny's base holes (the sample's own, open by default) are closed at
+// every tolerance, the rest of the mesh as accurate as before; a height field's outline, which no
+// fill can close without folding over the surface, is left exactly as it was (no faces cut off it).
+TEST(Reconstruct, close_holes_makes_the_bunny_watertight)
+{
+    const Hierarchy bunny = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    MeshOptions closing;
+    closing.surface.close_holes = 2000;
+    for (double tolerance : {0.005, 0.002, 0.001}) {
+        const Cut cut = cut_by_tolerance(bunny, tolerance);
+        const MeshResult open = mesh_cut(bunny, cut), closed = mesh_cut(bunny, cut, closing);
+        const QualityReport q_open = measure_quality(bunny, cut, open.mesh);
+        const QualityReport q_closed = measure_quality(bunny, cut, closed.mesh);
+        EXPECT_GE(q_open.topology.boundary_loops, 1u) << tolerance;
+        expect_closed(closed.mesh, 0);
+        EXPECT_LE(q_closed.point_to_mesh.mean, 1.02 * q_open.point_to_mesh.mean) << tolerance;
+        EXPECT_LE(q_closed.point_to_mesh.max, 0.01) << tolerance; // of the diagonal
+    }
+    const Hierarchy terrain = build_hierarchy(shapes::smooth_height_field(20000));
+    const Cut cut = cut_by_tolerance(terrain, 0.002);
+    const Mesh open = mesh_cut(terrain, cut).mesh, closed = mesh_cut(terrain, cut, closing).mesh;
+    EXPECT_EQ(topology_stats(closed).boundary_loops, 1u);
+    EXPECT_EQ(closed.n_faces(), open.n_faces());
+    EXPECT_EQ(closed.n_vertices(), open.n_vertices());
+    MeshOptions too_many;
+    too_many.surface.close_holes = kMaxCloseHoles + 1;
+    EXPECT_THROW(mesh_cut(terrain, cut, too_many), InvalidInput);
+}
+
 TEST(Reconstruct, fan_refinement_lowers_the_deviation)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(20000));

@@ -245,6 +245,7 @@ struct MeshArgs
     double refine_fans = 0.0;
     int fit_rounds = FitOptions{}.rounds;
     bool no_colors = false;
+    std::size_t close_holes = 0;
 
     void add(CLI::App* cmd)
     {
@@ -264,6 +265,9 @@ struct MeshArgs
             ->check(CLI::Range(0, 100))
             ->capture_default_str();
         cmd->add_flag("--no-colors", no_colors, "leave the mesh uncoloured even when the points have colours");
+        cmd->add_option("--close-holes", close_holes,
+                        "also fill the sample's own holes of at most N edges, for watertight output (0 = off; at most 2000)")
+            ->check(CLI::Range(0, 2000));
     }
 
     MeshOptions options() const
@@ -275,6 +279,7 @@ struct MeshArgs
         o.refine.max_deviation = refine_fans;
         o.fit.rounds = fit_rounds;
         o.colors.enabled = !no_colors;
+        o.surface.close_holes = close_holes;
         return o;
     }
 };
