@@ -58,8 +58,12 @@ bool is_tiny_solid(const Hierarchy& h, const Cut& cut)
     if (cut.size() != 1)
         return false;
     const Node& node = h.nodes[static_cast<std::size_t>(cut[0])];
-    return node.is_leaf() && node.parent < 0 && node.count() >= 4 &&
-           node.frame.values[0] >= kSolidEigenvalueRatio * node.frame.values[1];
+    // Only clouds too small to split: a large cloud in one leaf is flat at the build's tolerance (a
+    // noisy line, two far objects), and its hull would join what the sample keeps apart.
+    const std::uint32_t too_small = h.info.min_cluster > 0 ? h.info.min_cluster : 16;
+    return node.is_leaf() && node.parent < 0 && node.count() >= 4 && node.count() <= too_small &&
+           node.frame.values[0] >= kSolidEigenvalueRatio * node.frame.values[1] &&
+           node.frame.values[1] >= kSolidEigenvalueRatio * node.frame.values[2]; // not a line either
 }
 
 // The convex hull of the one leaf's points as the mesh: one tile, every face a fan face of it. Empty

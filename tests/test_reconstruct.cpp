@@ -286,6 +286,10 @@ TEST(Reconstruct, a_tiny_solid_cloud_is_meshed_as_its_convex_hull)
     for (std::size_t i = 0; i < flat.size(); ++i)
         flat[i] = {std::cos(0.6 * double(i)) * (1 + 0.1 * double(i)), std::sin(0.6 * double(i)), 0.0};
     EXPECT_EQ(topology_stats(mesh_of(flat)).boundary_loops, 1u);
+    std::vector<Vec3> line(12); // along x, a little jitter across: a line, not a solid
+    for (std::size_t i = 0; i < line.size(); ++i)
+        line[i] = {double(i), 0.01 * std::sin(double(i)), 0.01 * std::cos(2.0 * double(i))};
+    EXPECT_EQ(topology_stats(mesh_of(line)).boundary_loops, 1u);
 }
 
 TEST(Reconstruct, fitted_apex_lowers_the_mean_distance_on_a_sphere)
