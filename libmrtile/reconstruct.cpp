@@ -5,6 +5,7 @@
 // And a cloud too small to split (one leaf) that is no piece of plane gets its convex hull.
 #include "libmrtile/reconstruct.h"
 
+#include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/union_find.h"
@@ -60,7 +61,7 @@ bool is_tiny_solid(const Hierarchy& h, const Cut& cut)
     const Node& node = h.nodes[static_cast<std::size_t>(cut[0])];
     // Only clouds too small to split: a large cloud in one leaf is flat at the build's tolerance (a
     // noisy line, two far objects), and its hull would join what the sample keeps apart.
-    const std::uint32_t too_small = h.info.min_cluster > 0 ? h.info.min_cluster : 16;
+    const std::size_t too_small = h.info.min_cluster > 0 ? h.info.min_cluster : BuildOptions{}.min_cluster;
     return node.is_leaf() && node.parent < 0 && node.count() >= 4 && node.count() <= too_small &&
            node.frame.values[0] >= kSolidEigenvalueRatio * node.frame.values[1] &&
            node.frame.values[1] >= kSolidEigenvalueRatio * node.frame.values[2]; // not a line either

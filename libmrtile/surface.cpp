@@ -285,9 +285,7 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     FillResult filled;
     std::size_t islands = 0, restored_islands = 0;
     std::vector<bool> restored_tiles(tiles.size(), false); // fans of islands put back (kept in step 5)
-    const std::vector<bool> interior = options.fill_holes || options.close_holes > 0
-                                           ? interior_tiles(tiles, options.interior_gap_degrees)
-                                           : std::vector<bool>{};
+    const std::vector<bool> interior = options.fill_holes ? interior_tiles(tiles, options.interior_gap_degrees) : std::vector<bool>{};
     auto fill = [&](FillMode mode) {
         const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, mode);
         filled.holes += more.holes;

@@ -612,7 +612,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 perimeter += norm(d);
                 const std::int32_t t = layout.vertices[loop[i]].tile;
                 loop_tiles.push_back(t);
-                surrounded = surrounded && interior[static_cast<std::size_t>(t)];
+                surrounded = surrounded && !closing && interior[static_cast<std::size_t>(t)]; // unused when closing
                 largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
                 spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(t)].spacing);
                 was_widened = was_widened || widened[loop[i]];
