@@ -176,14 +176,14 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         }
         return Mesh::VertexHandle(l);
     };
-    // The half-edges of the selected faces, in half-edge order (as a scan of all half-edges would meet them).
-    std::vector<int> inner;
+    // The half-edges of the selected faces in face order, each face's from its first corner: an order
+    // that depends only on the faces and their corners, not on half-edge indices, so that a level mesh
+    // loaded from a model file (model_file.h), whose half-edges are numbered afresh, gives the same tile.
+    std::vector<Mesh::HalfedgeHandle> inner;
     for (const std::uint32_t fi : faces)
         for (const auto he : src.fh_range(Mesh::FaceHandle(static_cast<int>(fi))))
-            inner.push_back(he.idx());
-    std::sort(inner.begin(), inner.end());
-    for (const int hi : inner) {
-        const Mesh::HalfedgeHandle he(hi);
+            inner.push_back(he);
+    for (const Mesh::HalfedgeHandle he : inner) {
         const auto f = src.face_handle(he);
         const auto g = src.opposite_face_handle(he);
         if (!f.is_valid() || !g.is_valid())
@@ -279,13 +279,13 @@ void drop_small_steps(std::vector<LodLevel>& levels)
 
 } // namespace
 
-LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
+std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
 {
     if (o.max_tile_triangles < 64)
         throw InvalidInput("lods: max_tile_triangles must be at least 64");
     if (h.nodes.empty())
         throw InvalidInput("lods: empty hierarchy");
-    LodSet set;
+    std::vector<LodLevel> levels;
     double previous_error = std::numeric_limits<double>::infinity();
     // Levels arrive meshed and finer than the one before (the finer ones are filtered below; meshing may
     // have refined a level's small separate objects, MeshOptions::small_object_rounds).
@@ -293,7 +293,7 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         level.max_plane_distance = level_max_plane_distance(h, level.cut);
         level.geometric_error = std::min(previous_error, level.max_plane_distance);
         previous_error = level.geometric_error;
-        set.levels.push_back(std::move(level));
+        levels.push_back(std::move(level));
     };
     std::vector<double> tolerances = o.tolerances;
     for (std::size_t i = 0; i < tolerances.size(); ++i)
@@ -312,7 +312,7 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
         LodLevel level;
         level.tolerance = tol;
         level.cut = cut_by_tolerance(h, tol);
-        const std::size_t previous = finer.empty() ? (set.levels.empty() ? 0 : set.levels.back().cut.size()) : finer.back().cut.size();
+        const std::size_t previous = finer.empty() ? (levels.empty() ? 0 : levels.back().cut.size()) : finer.back().cut.size();
         if (level.cut.size() > previous) // no finer than the previous level (e.g. below the build tolerance): skip
             finer.push_back(std::move(level));
     }
@@ -321,8 +321,8 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
     std::vector<std::size_t> order(finer.size());
     for (std::size_t i = 0; i < order.size(); ++i)
         order[i] = finer.size() - 1 - i; // finest (largest) first
-    const std::size_t total = set.levels.size() + finer.size();
-    std::size_t done = set.levels.size();
+    const std::size_t total = levels.size() + finer.size();
+    std::size_t done = levels.size();
     std::mutex progress_lock;
     if (o.progress && done > 0)
         o.progress(done, total);
@@ -336,8 +336,19 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
     });
     for (LodLevel& level : finer)
         add_level(std::move(level));
-    if (!set.levels.empty())
-        set.levels.back().geometric_error = 0.0;
+    if (!levels.empty())
+        levels.back().geometric_error = 0.0;
+    return levels;
+}
+
+LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const LodSetOptions& o)
+{
+    if (o.max_tile_triangles < 64)
+        throw InvalidInput("lods: max_tile_triangles must be at least 64");
+    if (h.nodes.empty() || levels.empty())
+        throw InvalidInput("lods: empty hierarchy or no levels");
+    LodSet set;
+    set.levels = std::move(levels);
     if (!o.tileset)
         return set;
 
@@ -396,6 +407,8 @@ LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o)
     nest_tile_boxes(set.tiles);
     return set;
 }
+
+LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& o) { return make_lod_tiles(h, make_lod_levels(h, o), o); }
 
 void nest_tile_boxes(std::vector<LodTile>& tiles)
 {

@@ -82,7 +82,19 @@ struct LodSet
 //! its parent's), bottom-up; a tile's children come after it in `tiles`.
 void nest_tile_boxes(std::vector<LodTile>& tiles);
 
+//! \brief The levels and, with options.tileset, the tile tree over them: make_lod_tiles(h,
+//! make_lod_levels(h, options), options).
 //! \throw InvalidInput for options out of range (max_tile_triangles < 64, tolerances not decreasing).
 LodSet make_lod_set(const Hierarchy& h, const LodSetOptions& options = {});
+
+//! \brief The meshed levels alone, coarse to fine: the expensive part of a LOD set (a minute for 1M
+//! points), which a model file can store (model_file.h, StoredLevels) so that later exports only cut
+//! tiles. Uses every option but `tileset`, `skirts` and (past level 0's size) `max_tile_triangles`.
+std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& options = {});
+
+//! \brief A LOD set over levels made by make_lod_levels for the same hierarchy (e.g. loaded with the
+//! model): the tile tree when options.tileset (cheap: it cuts the level meshes, it meshes nothing).
+//! The caller vouches that `levels` belong to `h`. \throw InvalidInput for no levels, bad options.
+LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const LodSetOptions& options = {});
 
 } // namespace mrt

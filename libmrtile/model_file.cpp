@@ -3,11 +3,14 @@
 #include "libmrtile/model_file.h"
 
 #include "libmrtile/atomic_file.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -22,8 +25,13 @@ constexpr std::uint32_t kEndianMarker = 0x01020304u;
 constexpr std::size_t kHeaderSize = 104;
 constexpr std::size_t kNodeSize = 168;
 constexpr std::size_t kTrailerSize = 8;
-constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8;
-constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs;
+constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
+constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels;
+// Stored levels: a LOD set has at most LodSetOptions::max_levels (16) levels; a recipe is a line of options.
+constexpr std::uint32_t kMaxStoredLevels = 64;
+constexpr std::uint32_t kMaxRecipeBytes = 1u << 16;
+constexpr std::size_t kStoredVertexBytes = 48 + 4; // position, normal, cluster (+ 4 with colours)
+constexpr std::size_t kStoredFaceBytes = 12 + 4 + 1;
 // A WKT CRS is a few kilobytes; anything near this is not one.
 constexpr std::uint32_t kMaxCrsBytes = 1u << 20;
 
@@ -98,6 +106,11 @@ public:
         pos_ += n;
     }
     std::size_t position() const { return pos_; }
+    void skip(std::size_t n)
+    {
+        need(n);
+        pos_ += n;
+    }
     [[noreturn]] void fail(const std::string& why) const { throw IoError(name_ + ": not a valid .mrt model: " + why); }
 
 private:
@@ -168,6 +181,169 @@ void check_structure(const Hierarchy& h, const Reader& r)
             r.fail("non-finite coordinate");
 }
 
+
+// The stored levels (SaveOptions::levels). A mesh is written vertex by vertex and face by face in
+// index order with the corners as OpenMesh walks them, so that reading it back with add_face gives
+// the same indices, the same corner order and therefore byte-identical tiles.
+void write_levels(Writer& w, std::string& out, const StoredLevels& stored)
+{
+    if (stored.recipe.size() > kMaxRecipeBytes || stored.levels.size() > kMaxStoredLevels)
+        throw InvalidInput("save_model: too many stored levels or too long a recipe");
+    const std::size_t size_at = out.size();
+    w.u64(0); // section size, patched below
+    w.u32(static_cast<std::uint32_t>(stored.recipe.size()));
+    w.bytes(stored.recipe.data(), stored.recipe.size());
+    w.u32(static_cast<std::uint32_t>(stored.levels.size()));
+    for (const LodLevel& level : stored.levels) {
+        w.f64(level.tolerance);
+        w.f64(level.geometric_error);
+        w.f64(level.max_plane_distance);
+        w.u64(level.cut.size());
+        for (std::int32_t id : level.cut)
+            w.i32(id);
+        const Mesh& m = level.mesh;
+        OpenMesh::FPropHandleT<int> tile;
+        OpenMesh::FPropHandleT<bool> gap;
+        OpenMesh::VPropHandleT<int> cluster;
+        if (!m.get_property_handle(tile, kFaceTile) || !m.get_property_handle(gap, kFaceGap) ||
+            !m.get_property_handle(cluster, kVertexCluster) || !m.has_vertex_normals())
+            throw InvalidInput("save_model: a level mesh lacks its tile, gap, cluster or normal properties");
+        for (const auto v : m.all_vertices())
+            if (m.status(v).deleted())
+                throw InvalidInput("save_model: a level mesh holds deleted elements (collect its garbage first)");
+        for (const auto f : m.all_faces())
+            if (m.status(f).deleted())
+                throw InvalidInput("save_model: a level mesh holds deleted elements (collect its garbage first)");
+        const bool colored = m.has_vertex_colors();
+        w.u64(m.n_vertices());
+        w.u64(m.n_faces());
+        w.u32(colored ? 1u : 0u);
+        for (const auto v : m.vertices()) {
+            for (int a = 0; a < 3; ++a)
+                w.f64(m.point(v)[a]);
+            for (int a = 0; a < 3; ++a)
+                w.f64(m.normal(v)[a]);
+            w.i32(m.property(cluster, v));
+            if (colored)
+                w.bytes(m.color(v).data(), 4);
+        }
+        for (const auto f : m.faces()) {
+            int k = 0;
+            for (const auto v : m.fv_range(f)) {
+                w.u32(static_cast<std::uint32_t>(v.idx()));
+                ++k;
+            }
+            if (k != 3)
+                throw InvalidInput("save_model: a level mesh has a face that is not a triangle");
+            w.i32(m.property(tile, f));
+            const char g = m.property(gap, f) ? 1 : 0;
+            w.bytes(&g, 1);
+        }
+    }
+    std::string patch;
+    Writer(patch).u64(out.size() - size_at - 8);
+    out.replace(size_at, 8, patch);
+}
+
+// Reads the section write_levels wrote, checking every count against the bytes left before anything
+// is allocated from it, every id against the hierarchy, and every face as OpenMesh adds it.
+StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
+{
+    StoredLevels stored;
+    const std::size_t node_count = h.nodes.size();
+    auto left = [&] { return end - r.position(); };
+    auto fits = [&](std::uint64_t count, std::size_t each) { return count <= left() / each; };
+    const std::uint32_t recipe = r.u32();
+    if (recipe > kMaxRecipeBytes || recipe > left())
+        r.fail("stored levels: recipe of " + std::to_string(recipe) + " bytes does not fit");
+    stored.recipe.resize(recipe);
+    r.bytes(stored.recipe.data(), recipe);
+    const std::uint32_t count = r.u32();
+    if (count == 0 || count > kMaxStoredLevels)
+        r.fail("stored levels: " + std::to_string(count) + " levels (expected 1 to " + std::to_string(kMaxStoredLevels) + ")");
+    const QuietOpenMesh quiet; // a refused face is reported below, as the file's fault
+    for (std::uint32_t l = 0; l < count; ++l) {
+        const std::string which = "stored level " + std::to_string(l) + ": ";
+        LodLevel level;
+        level.tolerance = r.f64();
+        level.geometric_error = r.f64();
+        level.max_plane_distance = r.f64();
+        if (!std::isfinite(level.tolerance) || !std::isfinite(level.geometric_error) || !std::isfinite(level.max_plane_distance))
+            r.fail(which + "non-finite error");
+        const std::uint64_t cut_size = r.u64();
+        if (cut_size == 0 || !fits(cut_size, 4))
+            r.fail(which + "cut of " + std::to_string(cut_size) + " nodes does not fit");
+        level.cut.resize(cut_size);
+        for (std::int32_t& id : level.cut) {
+            id = r.i32();
+            if (id < 0 || static_cast<std::size_t>(id) >= node_count)
+                r.fail(which + "cut names node " + std::to_string(id) + " of " + std::to_string(node_count));
+        }
+        if (!is_partition(h, level.cut))
+            r.fail(which + "the cut is not a partition of the points");
+        const std::uint64_t vertices = r.u64();
+        const std::uint64_t faces = r.u64();
+        const std::uint32_t colored = r.u32();
+        const std::size_t vertex_bytes = kStoredVertexBytes + (colored ? 4 : 0);
+        if (colored > 1 || vertices > std::numeric_limits<std::int32_t>::max() ||
+            faces > std::numeric_limits<std::int32_t>::max() || !fits(vertices, vertex_bytes) ||
+            !fits(faces, kStoredFaceBytes) || vertices * vertex_bytes + faces * kStoredFaceBytes > left())
+            r.fail(which + "declared " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
+                   " faces do not fit the file");
+        Mesh& m = level.mesh;
+        m.reserve(vertices, 3 * faces / 2 + 3, faces);
+        if (colored)
+            m.request_vertex_colors();
+        auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(m, kVertexCluster);
+        auto tile = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(m, kFaceTile);
+        auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(m, kFaceGap);
+        auto valid_id = [&](std::int32_t id) { return id >= -1 && id < static_cast<std::int64_t>(node_count); };
+        for (std::uint64_t i = 0; i < vertices; ++i) {
+            OpenMesh::Vec3d p, n;
+            for (int a = 0; a < 3; ++a)
+                p[a] = r.f64();
+            for (int a = 0; a < 3; ++a)
+                n[a] = r.f64();
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || !std::isfinite(n[0]) ||
+                !std::isfinite(n[1]) || !std::isfinite(n[2]))
+                r.fail(which + "non-finite vertex " + std::to_string(i));
+            const auto v = m.add_vertex(p);
+            m.set_normal(v, n);
+            const std::int32_t id = r.i32();
+            if (!valid_id(id))
+                r.fail(which + "vertex " + std::to_string(i) + " names node " + std::to_string(id));
+            cluster[v] = id;
+            if (colored) {
+                Mesh::Color c;
+                r.bytes(c.data(), 4);
+                m.set_color(v, c);
+            }
+        }
+        for (std::uint64_t i = 0; i < faces; ++i) {
+            std::array<Mesh::VertexHandle, 3> corner;
+            for (auto& c : corner) {
+                const std::uint32_t index = r.u32();
+                if (index >= vertices)
+                    r.fail(which + "face " + std::to_string(i) + " names vertex " + std::to_string(index));
+                c = Mesh::VertexHandle(static_cast<int>(index));
+            }
+            const auto f = m.add_face(corner[0], corner[1], corner[2]);
+            if (!f.is_valid())
+                r.fail(which + "face " + std::to_string(i) + " does not fit a manifold mesh");
+            const std::int32_t id = r.i32();
+            char g = 0;
+            r.bytes(&g, 1);
+            if (!valid_id(id) || (g != 0 && g != 1))
+                r.fail(which + "face " + std::to_string(i) + " has an invalid tile or gap flag");
+            tile[f] = id;
+            gap[f] = g != 0;
+        }
+        m.update_face_normals();
+        stored.levels.push_back(std::move(level));
+    }
+    return stored;
+}
+
 } // namespace
 
 std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
@@ -181,8 +357,9 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(kEndianMarker);
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
+    const bool levels = options.levels != nullptr && !options.levels->levels.empty();
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
-          (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs));
+          (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u));
     w.u64(n);
     w.u64(h.nodes.size());
     w.f64(h.cloud.origin.x);
@@ -238,6 +415,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         w.u32(static_cast<std::uint32_t>(h.cloud.crs.size()));
         w.bytes(h.cloud.crs.data(), h.cloud.crs.size());
     }
+    if (levels)
+        write_levels(w, out, *options.levels);
     const std::uint64_t payload = out.size() - kHeaderSize;
     std::string patch;
     Writer(patch).u64(payload);
@@ -247,7 +426,9 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     return out;
 }
 
-Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
+namespace {
+
+Model parse_model(const std::string& bytes, const std::string& name, bool with_levels)
 {
     Reader r(bytes, name);
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
@@ -272,7 +453,7 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
-        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + kTrailerSize >
+        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -283,7 +464,8 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
     if (Reader(stored_crc, name).u32() != crc(bytes, end))
         r.fail("checksum mismatch (corrupted)");
 
-    Hierarchy h;
+    Model model;
+    Hierarchy& h = model.hierarchy;
     h.cloud.origin.x = r.f64();
     h.cloud.origin.y = r.f64();
     h.cloud.origin.z = r.f64();
@@ -353,11 +535,38 @@ Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
         h.cloud.crs.resize(length);
         r.bytes(h.cloud.crs.data(), length);
     }
+    std::size_t levels_at = 0;
+    if (flags & kFlagLevels) {
+        const std::uint64_t size = r.u64();
+        if (size > end - r.position())
+            r.fail("stored levels of " + std::to_string(size) + " bytes do not fit");
+        levels_at = r.position();
+        r.skip(static_cast<std::size_t>(size));
+    }
     if (r.position() != end)
         r.fail("unexpected extra sections (written by a newer version?)");
     check_structure(h, r);
     update_derived(h);
-    return h;
+    if (levels_at > 0 && with_levels) {
+        Reader levels(bytes, name);
+        levels.skip(levels_at);
+        model.levels = read_levels(levels, end, h);
+        if (levels.position() != end)
+            levels.fail("stored levels end before their section does");
+    }
+    return model;
+}
+
+} // namespace
+
+Hierarchy deserialize_model(const std::string& bytes, const std::string& name)
+{
+    return std::move(parse_model(bytes, name, false).hierarchy);
+}
+
+Model deserialize_model_with_levels(const std::string& bytes, const std::string& name)
+{
+    return parse_model(bytes, name, true);
 }
 
 void save_model(const Hierarchy& h, const std::filesystem::path& path, const SaveOptions& options)
@@ -365,7 +574,9 @@ void save_model(const Hierarchy& h, const std::filesystem::path& path, const Sav
     write_file_atomically(path, serialize_model(h, options));
 }
 
-Hierarchy load_model(const std::filesystem::path& path)
+namespace {
+
+std::string read_model_bytes(const std::filesystem::path& path)
 {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec))
@@ -382,7 +593,19 @@ Hierarchy load_model(const std::filesystem::path& path)
     in.read(bytes.data(), static_cast<std::streamsize>(size));
     if (static_cast<std::uintmax_t>(in.gcount()) != size)
         throw IoError(path.string() + ": read failed");
-    return deserialize_model(bytes, path.string());
+    return bytes;
+}
+
+} // namespace
+
+Hierarchy load_model(const std::filesystem::path& path)
+{
+    return deserialize_model(read_model_bytes(path), path.string());
+}
+
+Model load_model_with_levels(const std::filesystem::path& path)
+{
+    return deserialize_model_with_levels(read_model_bytes(path), path.string());
 }
 
 } // namespace mrt

@@ -11,7 +11,11 @@
 //!            flagged), input index (points × u32), nodes (nodes × 168 bytes: begin, end, parent, left,
 //!            right, depth as 32-bit, count u64, mean 3 f64, M 6 f64, eq. 1 error f64, max plane
 //!            distance f64, box min 3 f64, box max 3 f64), viewpoint (3 f64 relative to origin, if flagged),
-//!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged)
+//!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged), stored
+//!            levels (if flag 16: u64 section size, u32 recipe length, recipe, u32 levels, then per level
+//!            tolerance, geometric error, max plane distance as f64, u64 cut size, cut nodes as i32,
+//!            u64 vertices, u64 faces, u32 1 if coloured, per vertex position 3 f64, normal 3 f64,
+//!            cluster i32, colour 4 u8 if coloured, per face 3 u32 corners, tile i32, gap u8)
 //!   trailer  u32 CRC-32 of everything before it, magic "MEND"
 //! \endcode
 //! The file holds only exact statistics; PCA frames are recomputed on load, so load → save is
@@ -21,6 +25,7 @@
 //! and options otherwise give byte-identical files.
 
 #include "libmrtile/hierarchy.h"
+#include "libmrtile/lod_set.h"
 
 #include <filesystem>
 #include <string>
@@ -29,10 +34,31 @@ namespace mrt {
 
 inline constexpr std::uint32_t kModelFormatVersion = 1;
 
+//! \brief A LOD set's meshed levels (make_lod_levels) kept in the model file, so that exports of
+//! the model cut tiles from them instead of meshing every level again (a minute for 1M points).
+//! \details `recipe` names the options the levels were made with, in the caller's terms (the CLI
+//! writes its level and mesh options); a reader reuses the levels only for the same recipe. Meshes are
+//! stored exactly: loaded, they give byte-identical tiles.
+struct StoredLevels
+{
+    std::string recipe;
+    std::vector<LodLevel> levels;
+};
+
 struct SaveOptions
 {
     //! Store Hierarchy::info.build_seconds (makes two builds of the same input differ in 8 bytes).
     bool record_build_time = false;
+    //! Levels to store with the hierarchy (nullptr or none: no levels section). About 50 bytes per
+    //! face of all levels together (the finest level has about 0.7 faces per point).
+    const StoredLevels* levels = nullptr;
+};
+
+//! A model file's contents: the hierarchy and the levels stored with it (empty when there are none).
+struct Model
+{
+    Hierarchy hierarchy;
+    StoredLevels levels;
 };
 
 //! Serialises a hierarchy into the bytes of a `.mrt` file.
@@ -42,10 +68,18 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options = {})
 //! \throw IoError if the bytes are truncated, corrupted or of an unsupported version.
 Hierarchy deserialize_model(const std::string& bytes, const std::string& name);
 
+//! Like deserialize_model, and the stored levels too (every level mesh is rebuilt face by face and
+//! checked). \throw IoError as deserialize_model, or if a level is invalid.
+Model deserialize_model_with_levels(const std::string& bytes, const std::string& name);
+
 //! Writes atomically (temporary file + rename). \throw IoError naming the path on failure.
 void save_model(const Hierarchy& h, const std::filesystem::path& path, const SaveOptions& options = {});
 
 //! \throw IoError naming the path if it is missing, unreadable, truncated or corrupted.
+//! The stored levels, if any, are checked by the checksum but not parsed.
 Hierarchy load_model(const std::filesystem::path& path);
+
+//! The hierarchy and its stored levels. \throw IoError as load_model, or if a stored level is invalid.
+Model load_model_with_levels(const std::filesystem::path& path);
 
 } // namespace mrt

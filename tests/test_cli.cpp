@@ -323,6 +323,42 @@ TEST(Cli, tileset_placement_note)
     EXPECT_EQ(local.out.find(note), std::string::npos) << local.out;
 }
 
+// `build --store-levels` keeps the LOD levels in the model; an export with the same options uses them
+// and writes the same tileset as one that meshes the levels; other options mesh the levels again.
+TEST(Cli, stored_levels_make_the_same_tileset)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 3000);
+    const std::string stored = (dir / "stored.mrt").string(), plain = (dir / "plain.mrt").string();
+    const Result built = mrtile("build " + xyz.string() + " -o " + stored + " --store-levels", dir);
+    ASSERT_EQ(built.code, 0) << built.err;
+    EXPECT_NE(built.out.find("levels to store"), std::string::npos) << built.out;
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + plain, dir).code, 0);
+    EXPECT_GT(fs::file_size(stored), fs::file_size(plain));
+    const Result info = mrtile("info " + stored + " --json", dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    EXPECT_GT(nlohmann::json::parse(info.out)["stored_levels"].get<int>(), 0) << info.out;
+    const Result reused = mrtile("export " + stored + " -o " + (dir / "a").string() + " --format 3dtiles --draco", dir);
+    ASSERT_EQ(reused.code, 0) << reused.err;
+    EXPECT_NE(reused.out.find("stored in the model (no meshing)"), std::string::npos) << reused.out;
+    const Result meshed = mrtile("export " + plain + " -o " + (dir / "b").string() + " --format 3dtiles --draco", dir);
+    ASSERT_EQ(meshed.code, 0) << meshed.err;
+    EXPECT_EQ(meshed.out.find("stored in the model"), std::string::npos) << meshed.out;
+    std::size_t files = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "b")) {
+        if (!entry.is_regular_file())
+            continue;
+        ++files;
+        const fs::path twin = dir / "a" / fs::relative(entry.path(), dir / "b");
+        EXPECT_EQ(slurp(entry.path()), slurp(twin)) << twin;
+    }
+    EXPECT_GE(files, 2u);
+    const Result other = mrtile("export " + stored + " -o " + (dir / "c").string() + " --format 3dtiles --fit-rounds 1", dir);
+    ASSERT_EQ(other.code, 0) << other.err;
+    EXPECT_NE(other.out.find("made with other options"), std::string::npos) << other.out;
+    EXPECT_TRUE(fs::exists(dir / "c" / "tileset.json"));
+}
+
 // Input in UTM coordinates with its CRS (--crs here; a LAS file's own records the same way): the
 // tileset lands on the globe at the right place, info names the CRS, and a CRS we cannot place by is
 // refused as a usage error before anything is read.

@@ -1,9 +1,11 @@
 // Tests of model_file.h: .mrt round trips are exact, and every kind of damage is rejected cleanly.
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/shapes.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -68,7 +70,7 @@ TEST(ModelFile, viewpoint_round_trip_and_unknown_flags)
     EXPECT_EQ(serialize_model(back), bytes);
     EXPECT_FALSE(deserialize_model(serialize_model(sample()), "memory").cloud.viewpoint.has_value());
     std::string unknown = bytes;
-    unknown[20] = static_cast<char>(unknown[20] | 16); // flags: the u32 after magic, version, marker, header size
+    unknown[20] = static_cast<char>(unknown[20] | 32); // flags: the u32 after magic, version, marker, header size
     try {
         deserialize_model(unknown, "m.mrt");
         ADD_FAILURE() << "an unknown flag was accepted";
@@ -147,6 +149,155 @@ TEST(ModelFile, save_load_and_determinism)
     h.info.build_seconds = 1.25;
     save_model(h, c, timed);
     EXPECT_EQ(load_model(c).info.build_seconds, 1.25);
+}
+
+// Levels small enough for a test: a 3,000-point torus with tiles of at most 512 triangles gives a
+// few levels, coarse to fine.
+StoredLevels sample_levels(const Hierarchy& h)
+{
+    LodSetOptions o;
+    o.max_tile_triangles = 512;
+    o.levels = 3;
+    StoredLevels stored;
+    stored.recipe = "test recipe";
+    stored.levels = make_lod_levels(h, o);
+    return stored;
+}
+
+// The same bytes again after a change: the CRC-32 of everything before the trailer.
+void refresh_checksum(std::string& bytes)
+{
+    const std::size_t end = bytes.size() - 8;
+    const auto value = static_cast<std::uint32_t>(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(end)));
+    for (int i = 0; i < 4; ++i)
+        bytes[end + static_cast<std::size_t>(i)] = static_cast<char>((value >> (8 * i)) & 0xffu);
+}
+
+std::vector<std::array<int, 3>> corners(const Mesh& m)
+{
+    std::vector<std::array<int, 3>> faces;
+    for (const auto f : m.faces()) {
+        std::array<int, 3> c{};
+        int k = 0;
+        for (const auto v : m.fv_range(f))
+            c[static_cast<std::size_t>(k++)] = v.idx();
+        faces.push_back(c);
+    }
+    return faces;
+}
+
+// Stored levels come back exactly: every vertex, normal, colour, corner order and id, so that the tiles
+// cut from them equal those of a LOD set meshed now; a model read without its levels skips them.
+TEST(ModelFile, stored_levels_round_trip_exactly)
+{
+    for (bool colors : {false, true}) {
+        const Hierarchy h = sample(colors);
+        StoredLevels stored = sample_levels(h);
+        ASSERT_GE(stored.levels.size(), 2u);
+        SaveOptions options;
+        options.levels = &stored;
+        const std::string bytes = serialize_model(h, options);
+        Model back = deserialize_model_with_levels(bytes, "memory");
+        SaveOptions again;
+        again.levels = &back.levels;
+        EXPECT_EQ(serialize_model(back.hierarchy, again), bytes);
+        EXPECT_EQ(serialize_model(deserialize_model(bytes, "memory")), serialize_model(h)); // levels skipped
+        EXPECT_EQ(back.levels.recipe, "test recipe");
+        ASSERT_EQ(back.levels.levels.size(), stored.levels.size());
+        for (std::size_t l = 0; l < stored.levels.size(); ++l) {
+            LodLevel& a = stored.levels[l];
+            LodLevel& b = back.levels.levels[l];
+            EXPECT_EQ(a.cut, b.cut);
+            EXPECT_EQ(a.tolerance, b.tolerance);
+            EXPECT_EQ(a.geometric_error, b.geometric_error);
+            ASSERT_EQ(a.mesh.n_vertices(), b.mesh.n_vertices());
+            EXPECT_EQ(corners(a.mesh), corners(b.mesh));
+            EXPECT_EQ(b.mesh.has_vertex_colors(), colors);
+            const auto tile_a = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(a.mesh, kFaceTile);
+            const auto tile_b = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(b.mesh, kFaceTile);
+            const auto gap_b = OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(b.mesh, kFaceGap);
+            const auto gap_a = OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(a.mesh, kFaceGap);
+            for (const auto f : a.mesh.faces()) {
+                EXPECT_EQ(tile_a[f], tile_b[f]);
+                EXPECT_EQ(gap_a[f], gap_b[f]);
+                EXPECT_EQ(a.mesh.normal(f), b.mesh.normal(f));
+            }
+            const auto cluster_a = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(a.mesh, kVertexCluster);
+            const auto cluster_b = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(b.mesh, kVertexCluster);
+            for (const auto v : a.mesh.vertices()) {
+                EXPECT_EQ(a.mesh.point(v), b.mesh.point(v));
+                EXPECT_EQ(a.mesh.normal(v), b.mesh.normal(v));
+                EXPECT_EQ(cluster_a[v], cluster_b[v]);
+                if (colors) {
+                    EXPECT_EQ(a.mesh.color(v), b.mesh.color(v));
+                }
+            }
+        }
+        // Tiles cut from the loaded levels are those of the set meshed from scratch.
+        LodSetOptions o;
+        o.max_tile_triangles = 512;
+        o.levels = 3;
+        const LodSet fresh = make_lod_set(h, o);
+        const LodSet reused = make_lod_tiles(back.hierarchy, std::move(back.levels.levels), o);
+        ASSERT_EQ(fresh.tiles.size(), reused.tiles.size());
+        EXPECT_GT(fresh.tiles.size(), 2u);
+        for (std::size_t t = 0; t < fresh.tiles.size(); ++t) {
+            EXPECT_EQ(fresh.tiles[t].children, reused.tiles[t].children);
+            EXPECT_EQ(corners(fresh.tiles[t].mesh), corners(reused.tiles[t].mesh));
+            ASSERT_EQ(fresh.tiles[t].mesh.n_vertices(), reused.tiles[t].mesh.n_vertices());
+            for (const auto v : fresh.tiles[t].mesh.vertices())
+                EXPECT_EQ(fresh.tiles[t].mesh.point(v), reused.tiles[t].mesh.point(v));
+        }
+    }
+}
+
+// A damaged levels section is refused with an IoError naming the cause, also when its checksum was
+// made to match: a node or vertex id out of range, a face that cannot be added, a truncated section.
+TEST(ModelFile, damaged_stored_levels_are_rejected)
+{
+    const Hierarchy h = sample();
+    const StoredLevels stored = sample_levels(h);
+    SaveOptions options;
+    options.levels = &stored;
+    const std::string bytes = serialize_model(h, options);
+    auto rejected = [&](std::string damaged, const std::string& why) {
+        refresh_checksum(damaged);
+        try {
+            deserialize_model_with_levels(damaged, "levels.mrt");
+            ADD_FAILURE() << "accepted; expected: " << why;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("levels.mrt"), std::string::npos) << e.what();
+        }
+    };
+    // The last level's faces end the section: 17 bytes each (3 corners, tile, gap).
+    const std::size_t faces_end = bytes.size() - 8;
+    const std::size_t face_count = stored.levels.back().mesh.n_faces();
+    const std::size_t first_face = faces_end - 17 * face_count;
+    std::string out_of_range = bytes;
+    for (int i = 0; i < 4; ++i)
+        out_of_range[faces_end - 17 + static_cast<std::size_t>(i)] = static_cast<char>(0xff);
+    rejected(out_of_range, "names vertex");
+    std::string duplicate = bytes;
+    duplicate.replace(faces_end - 17, 17, bytes.substr(first_face, 17)); // the first face again
+    rejected(duplicate, "does not fit a manifold mesh");
+    std::string gap_flag = bytes;
+    gap_flag[faces_end - 1] = 7;
+    rejected(gap_flag, "invalid tile or gap flag");
+    // The cut's first node follows the recipe, the level count, three errors and the cut size.
+    std::string bad_node = bytes;
+    const std::size_t level0 = bytes.find("test recipe") + std::string("test recipe").size() + 4;
+    const std::size_t node0 = level0 + 3 * 8 + 8;
+    for (int i = 0; i < 4; ++i)
+        bad_node[node0 + static_cast<std::size_t>(i)] = static_cast<char>(0x7f);
+    rejected(bad_node, "cut names node");
+    // Flipped bytes without a matching checksum, and truncation: rejected too.
+    for (std::size_t at = level0; at < faces_end; at += 4099) {
+        std::string flipped = bytes;
+        flipped[at] = static_cast<char>(flipped[at] ^ 0x21);
+        EXPECT_THROW(deserialize_model_with_levels(flipped, "levels.mrt"), IoError) << at;
+    }
+    EXPECT_THROW(deserialize_model_with_levels(bytes.substr(0, faces_end - 100), "levels.mrt"), IoError);
 }
 
 // Every truncation and every single flipped byte (sampled) is rejected with an IoError.

@@ -537,6 +537,42 @@ std::string crs_summary(const std::string& crs)
     return shown + " (not used: " + why + ")";
 }
 
+// What the levels of a LOD set depend on, in this tool's terms (the level and mesh options, the noise
+// floor switch): levels stored in a model are reused only when an export asks for the same.
+std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& g)
+{
+    char number[32];
+    auto real = [&](double v) {
+        std::snprintf(number, sizeof number, "%.17g", v);
+        return std::string(number);
+    };
+    std::string tolerances;
+    for (double t : e.tolerances)
+        tolerances += (tolerances.empty() ? "" : ",") + real(t);
+    return "max-tile-triangles=" + std::to_string(e.max_tile_triangles) + " levels=" + std::to_string(e.levels) +
+           " lod-tolerances=" + tolerances + " below-noise=" + (g.below_noise ? "1" : "0") + " alpha=" + real(m.alpha) +
+           " height-field=" + m.height_field + " keep-steps=" + (m.keep_steps ? "1" : "0") +
+           " refine-fans=" + real(m.refine_fans) + " fit-rounds=" + std::to_string(m.fit_rounds) +
+           " no-colors=" + (m.no_colors ? "1" : "0") + " close-holes=" + std::to_string(m.close_holes);
+}
+
+// The levels of an export's LOD set: the model's stored ones when they were made with the same options
+// (`stored` is emptied), else meshed now.
+std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, const std::string& recipe, StoredLevels& stored,
+                                 const Globals& g)
+{
+    if (!stored.levels.empty()) {
+        if (stored.recipe == recipe) {
+            std::printf("using the %zu levels stored in the model (no meshing)\n", stored.levels.size());
+            return std::move(stored.levels);
+        }
+        std::printf("note: the model's stored levels were made with other options (%s); meshing the levels again\n",
+                    stored.recipe.c_str());
+    }
+    show_level_progress(options, g);
+    return make_lod_levels(h, options);
+}
+
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
 // tileset stays in the input's coordinates.
 std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
@@ -550,7 +586,8 @@ std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
     return crs;
 }
 
-void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
+void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir,
+                   StoredLevels& stored)
 {
     const auto start = Clock::now();
     TilesetOptions t;
@@ -569,9 +606,8 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         throw UsageError("--up y: the model's CRS (" + crs->name + ") has z up; leave --up out");
     if (e.geoid_height != 0.0 && (!crs || !std::isfinite(e.geoid_height)))
         throw UsageError("--geoid-height: needs a finite value and a tileset placed by the model's CRS (not --enu)");
-    LodSetOptions options = e.options(m);
-    show_level_progress(options, g);
-    LodSet set = make_lod_set(h, options);
+    const LodSetOptions options = e.options(m);
+    LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
     Vec3 origin = h.cloud.origin;
     std::optional<GeoPlacement> placed;
@@ -598,13 +634,13 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
-void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out)
+void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out,
+                   StoredLevels& stored)
 {
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     options.tileset = false;
-    show_level_progress(options, g);
-    const LodSet set = make_lod_set(h, options);
+    const LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
@@ -675,12 +711,13 @@ struct ProduceArgs
         exp.add(cmd);
     }
 
-    void write(const Hierarchy& h, const Globals& g, const fs::path& out) const
+    //! `stored`: levels stored with the model (reused when made with the same options).
+    void write(const Hierarchy& h, const Globals& g, const fs::path& out, StoredLevels stored = {}) const
     {
         if (exp.format == "3dtiles")
-            write_tileset(h, exp, mesh, output, g, out);
+            write_tileset(h, exp, mesh, output, g, out, stored);
         else if (exp.format == "lod-glb")
-            write_lod_glb(h, exp, mesh, output, g, out);
+            write_lod_glb(h, exp, mesh, output, g, out, stored);
         else
             mesh_and_write(h, cut, mesh, output, out);
     }
@@ -811,7 +848,12 @@ void naming_input(const fs::path& input, Work work)
 
 int run_info(const fs::path& model, bool json)
 {
-    const Hierarchy h = load_model(model);
+    const Model contents = load_model_with_levels(model);
+    const Hierarchy& h = contents.hierarchy;
+    const StoredLevels& stored = contents.levels;
+    std::size_t stored_faces = 0;
+    for (const LodLevel& level : stored.levels)
+        stored_faces += level.mesh.n_faces();
     const BoundingBox box = h.bbox();
     const Vec3 lo = box.min + h.cloud.origin, hi = box.max + h.cloud.origin;
     const bool timed = std::isfinite(h.info.build_seconds);
@@ -846,6 +888,9 @@ int run_info(const fs::path& model, bool json)
         j["scale"] = h.scale;
         j["noise_floor_max"] = floor_max;
         j["noisy_share"] = noisy_share;
+        j["stored_levels"] = stored.levels.size();
+        j["stored_level_faces"] = stored_faces;
+        j["stored_level_recipe"] = stored.levels.empty() ? nlohmann::json(nullptr) : nlohmann::json(stored.recipe);
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
@@ -871,6 +916,11 @@ int run_info(const fs::path& model, bool json)
         std::printf("build time  %.3f s\n", h.info.build_seconds);
     else
         std::printf("build time  not recorded (build with --record-time)\n");
+    if (!stored.levels.empty())
+        std::printf("levels      %zu stored (%zu faces in all; `export` reuses them with: %s)\n", stored.levels.size(),
+                    stored_faces, stored.recipe.c_str());
+    else
+        std::printf("levels      none stored (build with --store-levels for fast exports)\n");
     return 0;
 }
 
@@ -903,6 +953,10 @@ int run(int argc, char** argv)
     build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
     build_args.add(build, "");
     build->add_flag("--record-time", record_time, "store the build time in the model (the file then differs between runs)");
+    bool store_levels = false;
+    build->add_flag("--store-levels", store_levels,
+                    "also mesh the levels a default `export` makes and store them in the model, so that exports of it "
+                    "only cut tiles (about a minute per million points; adds about 40 bytes per point)");
 
     // info
     auto* info = app.add_subcommand("info", "describe a .mrt model");
@@ -973,6 +1027,24 @@ int run(int argc, char** argv)
         naming_input(inputs_name(build_in), [&] { h = build_from_points(build_in, build_args, g); });
         SaveOptions s;
         s.record_build_time = record_time;
+        StoredLevels stored;
+        if (store_levels) {
+            const auto start = Clock::now();
+            if (g.below_noise)
+                clear_noise_floor(h); // derived, not saved: only the levels see it
+            const ExportArgs e;
+            const MeshArgs m;
+            LodSetOptions options = e.options(m);
+            show_level_progress(options, g);
+            naming_input(inputs_name(build_in), [&] { stored.levels = make_lod_levels(h, options); });
+            stored.recipe = level_recipe(e, m, g);
+            s.levels = &stored;
+            std::size_t faces = 0;
+            for (const LodLevel& level : stored.levels)
+                faces += level.mesh.n_faces();
+            std::printf("meshed %zu levels to store (%zu faces in all) (%.2f s)\n", stored.levels.size(), faces,
+                        seconds_since(start));
+        }
         save_model(h, build_out, s);
         std::printf("wrote %s (%ju bytes)\n", build_out.string().c_str(), static_cast<std::uintmax_t>(fs::file_size(build_out)));
         return 0;
@@ -1006,11 +1078,12 @@ int run(int argc, char** argv)
     }
     if (*exp) {
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
-        Hierarchy h = load_model(exp_in);
+        Model model = load_model_with_levels(exp_in);
+        Hierarchy& h = model.hierarchy;
         apply_globals(h);
         if (!crs.empty())
             h.cloud.crs = crs;
-        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out); });
+        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, std::move(model.levels)); });
         return 0;
     }
     if (*demo) {
@@ -1033,7 +1106,8 @@ int run(int argc, char** argv)
         mesh_and_write(h, cut, m, o, demo_out / "mesh.ply", {AlsoWrite{demo_out / "mesh.glb", draco}});
         o.draco = true;
         ExportArgs e;
-        write_tileset(h, e, m, o, g, demo_out / "tiles");
+        StoredLevels none;
+        write_tileset(h, e, m, o, g, demo_out / "tiles", none);
         std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
                     (demo_out / "tiles" / "tileset.json").string().c_str(), (demo_out / "mesh.glb").string().c_str());
         return 0;
