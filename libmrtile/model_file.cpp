@@ -327,6 +327,8 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
                     r.fail(which + "face " + std::to_string(i) + " names vertex " + std::to_string(index));
                 c = Mesh::VertexHandle(static_cast<int>(index));
             }
+            if (corner[0] == corner[1] || corner[1] == corner[2] || corner[0] == corner[2]) // OpenMesh would loop an edge
+                r.fail(which + "face " + std::to_string(i) + " repeats a corner");
             const auto f = m.add_face(corner[0], corner[1], corner[2]);
             if (!f.is_valid())
                 r.fail(which + "face " + std::to_string(i) + " does not fit a manifold mesh");
