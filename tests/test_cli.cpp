@@ -357,6 +357,15 @@ TEST(Cli, stored_levels_make_the_same_tileset)
     ASSERT_EQ(other.code, 0) << other.err;
     EXPECT_NE(other.out.find("made with other options"), std::string::npos) << other.out;
     EXPECT_TRUE(fs::exists(dir / "c" / "tileset.json"));
+    // export --store-levels keeps the levels of its own options in the model, for the next such export.
+    const std::string small = " --format 3dtiles --max-tile-triangles 2000";
+    const Result keep = mrtile("export " + plain + " -o " + (dir / "d").string() + small + " --store-levels", dir);
+    ASSERT_EQ(keep.code, 0) << keep.err;
+    EXPECT_NE(keep.out.find("stored the"), std::string::npos) << keep.out;
+    const Result again = mrtile("export " + plain + " -o " + (dir / "e").string() + small, dir);
+    ASSERT_EQ(again.code, 0) << again.err;
+    EXPECT_NE(again.out.find("stored in the model (no meshing)"), std::string::npos) << again.out;
+    EXPECT_EQ(slurp(dir / "d" / "tileset.json"), slurp(dir / "e" / "tileset.json"));
 }
 
 // Input in UTM coordinates with its CRS (--crs here; a LAS file's own records the same way): the

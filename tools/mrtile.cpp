@@ -556,21 +556,37 @@ std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& 
            " no-colors=" + (m.no_colors ? "1" : "0") + " close-holes=" + std::to_string(m.close_holes);
 }
 
-// The levels of an export's LOD set: the model's stored ones when they were made with the same options
-// (`stored` is emptied), else meshed now.
-std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, const std::string& recipe, StoredLevels& stored,
+// Levels stored in a model, on their way into an export, and (export --store-levels) those the export
+// used, on their way back into the model.
+struct LevelStore
+{
+    StoredLevels from_model;
+    bool keep = false;
+    StoredLevels kept;
+};
+
+// The levels of an export's LOD set: the model's stored ones when they were made with the same options,
+// else meshed now.
+std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, const std::string& recipe, LevelStore& store,
                                  const Globals& g)
 {
-    if (!stored.levels.empty()) {
-        if (stored.recipe == recipe) {
-            std::printf("using the %zu levels stored in the model (no meshing)\n", stored.levels.size());
-            return std::move(stored.levels);
+    std::vector<LodLevel> levels;
+    StoredLevels& stored = store.from_model;
+    if (!stored.levels.empty() && stored.recipe == recipe) {
+        std::printf("using the %zu levels stored in the model (no meshing)\n", stored.levels.size());
+        levels = std::move(stored.levels);
+    } else {
+        if (!stored.levels.empty())
+            std::printf("note: the model's stored levels were made with other options (%s); meshing the levels again\n",
+                        stored.recipe.c_str());
+        show_level_progress(options, g);
+        levels = make_lod_levels(h, options);
+        if (store.keep) {
+            store.kept.recipe = recipe;
+            store.kept.levels = levels;
         }
-        std::printf("note: the model's stored levels were made with other options (%s); meshing the levels again\n",
-                    stored.recipe.c_str());
     }
-    show_level_progress(options, g);
-    return make_lod_levels(h, options);
+    return levels;
 }
 
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
@@ -587,7 +603,7 @@ std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
 }
 
 void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir,
-                   StoredLevels& stored)
+                   LevelStore& stored)
 {
     const auto start = Clock::now();
     TilesetOptions t;
@@ -635,7 +651,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
 void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& out,
-                   StoredLevels& stored)
+                   LevelStore& stored)
 {
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
@@ -711,8 +727,9 @@ struct ProduceArgs
         exp.add(cmd);
     }
 
-    //! `stored`: levels stored with the model (reused when made with the same options).
-    void write(const Hierarchy& h, const Globals& g, const fs::path& out, StoredLevels stored = {}) const
+    //! `stored`: levels stored with the model (reused when made with the same options); with
+    //! stored.keep, the levels meshed here are left in stored.kept.
+    void write(const Hierarchy& h, const Globals& g, const fs::path& out, LevelStore& stored) const
     {
         if (exp.format == "3dtiles")
             write_tileset(h, exp, mesh, output, g, out, stored);
@@ -1005,6 +1022,10 @@ int run(int argc, char** argv)
     exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->required();
     exp_args.add(exp);
     std::string exp_crs;
+    bool exp_store_levels = false;
+    exp->add_flag("--store-levels", exp_store_levels,
+                  "LOD sets: store the levels meshed here in MODEL.mrt (rewritten), so that exports with the same "
+                  "level and mesh options only cut tiles");
     exp->add_option("--crs", exp_crs,
                     "3D Tiles: the model's coordinate system (EPSG:N, WKT, or a .prj/.wkt file), in place of the "
                     "one stored in it");
@@ -1067,7 +1088,8 @@ int run(int argc, char** argv)
         apply_globals(h);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out); });
+        LevelStore none;
+        naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, none); });
         return 0;
     }
     if (*lods) {
@@ -1080,10 +1102,26 @@ int run(int argc, char** argv)
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
         Model model = load_model_with_levels(exp_in);
         Hierarchy& h = model.hierarchy;
+        const std::string model_crs = h.cloud.crs;
         apply_globals(h);
         if (!crs.empty())
             h.cloud.crs = crs;
-        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, std::move(model.levels)); });
+        LevelStore store;
+        store.from_model = std::move(model.levels);
+        store.keep = exp_store_levels;
+        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, store); });
+        if (!store.kept.levels.empty()) {
+            // Back into the model as it was loaded (an export's --crs places this tileset only).
+            h.cloud.crs = model_crs;
+            SaveOptions s;
+            s.record_build_time = std::isfinite(h.info.build_seconds);
+            s.levels = &store.kept;
+            save_model(h, exp_in, s);
+            std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
+                        exp_in.string().c_str());
+        } else if (exp_store_levels && exp_args.exp.format != "3dtiles" && exp_args.exp.format != "lod-glb") {
+            std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
+        }
         return 0;
     }
     if (*demo) {
@@ -1106,7 +1144,7 @@ int run(int argc, char** argv)
         mesh_and_write(h, cut, m, o, demo_out / "mesh.ply", {AlsoWrite{demo_out / "mesh.glb", draco}});
         o.draco = true;
         ExportArgs e;
-        StoredLevels none;
+        LevelStore none;
         write_tileset(h, e, m, o, g, demo_out / "tiles", none);
         std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
                     (demo_out / "tiles" / "tileset.json").string().c_str(), (demo_out / "mesh.glb").string().c_str());
