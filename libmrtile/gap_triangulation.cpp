@@ -50,6 +50,17 @@ std::vector<std::uint32_t> representatives(const std::vector<std::array<double, 
     return rep;
 }
 
+// The 3D Delaunay input: each distinct point once (its representative), with its index as info.
+std::vector<std::pair<Kernel::Point_3, std::uint32_t>> distinct_points_3(const std::vector<std::array<double, 3>>& coords,
+                                                                         const std::vector<std::uint32_t>& representative)
+{
+    std::vector<std::pair<Kernel::Point_3, std::uint32_t>> input;
+    for (std::uint32_t i = 0; i < coords.size(); ++i)
+        if (representative[i] == i)
+            input.emplace_back(Kernel::Point_3(coords[i][0], coords[i][1], coords[i][2]), i);
+    return input;
+}
+
 } // namespace
 
 DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const DelaunayOptions& options)
@@ -73,10 +84,7 @@ DelaunayTriangles delaunay_triangles(const std::vector<Vec3>& points, const Dela
             for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
                 out.triangles.push_back(sorted(f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()));
     } else {
-        std::vector<std::pair<Kernel::Point_3, std::uint32_t>> input;
-        for (std::uint32_t i = 0; i < points.size(); ++i)
-            if (out.representative[i] == i)
-                input.emplace_back(Kernel::Point_3(coords[i][0], coords[i][1], coords[i][2]), i);
+        const auto input = distinct_points_3(coords, out.representative);
         Delaunay3 dt(input.begin(), input.end());
         if (dt.dimension() == 3) {
             for (auto f = dt.finite_facets_begin(); f != dt.finite_facets_end(); ++f) {
@@ -103,14 +111,10 @@ std::vector<std::array<std::uint32_t, 3>> convex_hull_triangles(const std::vecto
     std::vector<std::array<double, 3>> coords(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         coords[i] = {points[i].x, points[i].y, points[i].z};
-    const std::vector<std::uint32_t> rep = representatives(coords);
-    std::vector<std::pair<Kernel::Point_3, std::uint32_t>> input;
+    const auto input = distinct_points_3(coords, representatives(coords));
     Vec3 centroid{0, 0, 0};
-    for (std::uint32_t i = 0; i < points.size(); ++i)
-        if (rep[i] == i) {
-            input.emplace_back(Kernel::Point_3(coords[i][0], coords[i][1], coords[i][2]), i);
-            centroid = centroid + points[i];
-        }
+    for (const auto& [p, i] : input)
+        centroid = centroid + points[i];
     std::vector<Triangle> hull;
     Delaunay3 dt(input.begin(), input.end());
     if (dt.dimension() != 3)

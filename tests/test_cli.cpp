@@ -88,6 +88,11 @@ TEST(Cli, version_help_and_usage_errors)
     EXPECT_EQ(mrtile("build", dir).code, 2); // missing POINTS and -o
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --tolerance 0.1 --tau 2", dir).code, 2);
+    // A usage error is one line too, naming the option.
+    r = mrtile("mesh x.mrt -o y.ply --close-holes 3000", dir);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("--close-holes"), std::string::npos) << r.err;
 }
 
 // Bad input: exit 1, one line naming the file and the cause, and no output file.

@@ -1035,6 +1035,10 @@ int run(int argc, char** argv)
     fs::path demo_out = "out/demo";
     demo->add_option("-o,--output", demo_out, "output directory")->capture_default_str();
 
+    // One line, like every other error (CLI11's default adds a second "Run with --help" line).
+    app.failure_message([](const CLI::App*, const CLI::Error& e) {
+        return std::string("mrtile: usage error: ") + e.what() + " (see --help)\n";
+    });
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
