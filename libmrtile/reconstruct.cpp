@@ -141,14 +141,18 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     // A height field stays a graph through both: every face they change faces up its axis.
     FitOptions fit = options.fit;
     SliverOptions slivers = options.slivers;
+    UntangleOptions untangle_options = options.untangle;
     if (result.surface.height_field_used) {
-        fit.vertical = slivers.vertical = true;
-        fit.axis = slivers.axis = result.surface.height_field_axis;
+        fit.vertical = slivers.vertical = untangle_options.vertical = true;
+        fit.axis = slivers.axis = untangle_options.axis = result.surface.height_field_axis;
     }
     // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
     // no new caps: FitOptions::max_flip_angle_degrees).
     result.slivers = remove_slivers(result.mesh, slivers);
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
+    // Last of the geometry: the fit's flips can also cross a thin part (it reverts only its moves).
+    if (untangle_options.max_rounds > 0)
+        result.untangle = untangle(result.mesh, untangle_options);
     color_vertices(result.mesh, h.cloud, options.colors);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

@@ -18,6 +18,7 @@
 #include "libmrtile/remove_slivers.h"
 #include "libmrtile/surface.h"
 #include "libmrtile/tiles.h"
+#include "libmrtile/untangle.h"
 
 namespace mrt {
 
@@ -31,6 +32,8 @@ struct MeshOptions
     FitOptions fit;
     //! caps flipped away before the fit (remove_slivers.h); vertical in height-field mode
     SliverOptions slivers;
+    //! self-intersections removed by local flips and moves, after the fit (untangle.h); max_rounds 0 = off
+    UntangleOptions untangle;
     //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
     ColorOptions colors;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
@@ -52,6 +55,7 @@ struct MeshResult
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     FitStats fit;                   //!< the vertex fit (fit_vertices)
     SliverStats slivers;            //!< caps and needles removed (remove_slivers)
+    UntangleStats untangle;         //!< self-intersections removed (untangle)
     double seconds = 0.0; //!< tiles + surface + slivers + fit (with its relaxation) + colours
 };
 

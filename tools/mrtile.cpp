@@ -342,6 +342,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["fit_flips"] = r.fit.flips;
     j["fit_reverted"] = r.fit.reverted;
     j["sliver_flips"] = r.slivers.flips;
+    j["untangled_pairs"] = r.untangle.pairs_before - r.untangle.pairs_after;
     j["relaxed_moves"] = r.fit.relax.moves;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;

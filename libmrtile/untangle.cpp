@@ -1,0 +1,394 @@
+// Beyond the paper (its §6 lists holes and non-manifold output; we also rule out self-intersections):
+// the surface stage builds an oriented 2-manifold, but where the sample is thinner than a tile a gap
+// face may cross a fan of the other side. This pass finds the intersecting pairs once with CGAL's box
+// intersection (self_intersecting_faces) and then repairs them with local edits, each judged by exact
+// triangle-triangle tests against the faces near it (a uniform grid over face boxes finds those).
+#include "libmrtile/untangle.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/mesh_stats.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+namespace mrt {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+
+Point cgal(const OpenMesh::Vec3d& p) { return Point(p[0], p[1], p[2]); }
+
+std::array<Mesh::VertexHandle, 3> corners_of(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    std::array<Mesh::VertexHandle, 3> v;
+    std::size_t k = 0;
+    for (const auto vh : mesh.fv_range(f))
+        v[k++] = vh;
+    return v;
+}
+
+// Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
+// intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
+// touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
+bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
+{
+    const auto a = corners_of(mesh, f), b = corners_of(mesh, g);
+    int shared = 0;
+    std::array<int, 3> in_b{-1, -1, -1}; // for each corner of f, its position in g (-1: none)
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (a[static_cast<std::size_t>(i)] == b[static_cast<std::size_t>(j)]) {
+                in_b[static_cast<std::size_t>(i)] = j;
+                ++shared;
+            }
+    const auto p = [&](Mesh::VertexHandle v) { return cgal(mesh.point(v)); };
+    const Kernel::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+    if (ta.is_degenerate() || tb.is_degenerate())
+        return false; // no area: nothing to cross (the callers never make such faces)
+    if (shared == 0)
+        return CGAL::do_intersect(ta, tb);
+    if (shared == 1) {
+        int i = 0;
+        while (in_b[static_cast<std::size_t>(i)] < 0)
+            ++i;
+        const int j = in_b[static_cast<std::size_t>(i)];
+        const Kernel::Segment_3 opposite_a(p(a[static_cast<std::size_t>((i + 1) % 3)]), p(a[static_cast<std::size_t>((i + 2) % 3)]));
+        const Kernel::Segment_3 opposite_b(p(b[static_cast<std::size_t>((j + 1) % 3)]), p(b[static_cast<std::size_t>((j + 2) % 3)]));
+        return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
+    }
+    if (shared == 2) {
+        Mesh::VertexHandle r, s, e0, e1;
+        for (int i = 0; i < 3; ++i)
+            if (in_b[static_cast<std::size_t>(i)] < 0)
+                r = a[static_cast<std::size_t>(i)];
+        for (const auto v : b)
+            if (v != a[0] && v != a[1] && v != a[2])
+                s = v;
+        bool first = true;
+        for (int i = 0; i < 3; ++i)
+            if (in_b[static_cast<std::size_t>(i)] >= 0) {
+                (first ? e0 : e1) = a[static_cast<std::size_t>(i)];
+                first = false;
+            }
+        return CGAL::coplanar(p(e0), p(e1), p(r), p(s)) &&
+               CGAL::coplanar_orientation(p(e0), p(e1), p(r), p(s)) == CGAL::POSITIVE;
+    }
+    return false; // the same corners: a duplicate face, which a manifold mesh does not have
+}
+
+struct Box
+{
+    OpenMesh::Vec3d min, max;
+    bool overlaps(const Box& o) const
+    {
+        for (int k = 0; k < 3; ++k)
+            if (max[k] < o.min[k] || o.max[k] < min[k])
+                return false;
+        return true;
+    }
+};
+
+Box face_box(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    Box b{OpenMesh::Vec3d(std::numeric_limits<double>::max()), OpenMesh::Vec3d(std::numeric_limits<double>::lowest())};
+    for (const auto v : mesh.fv_range(f)) {
+        b.min.minimize(mesh.point(v));
+        b.max.maximize(mesh.point(v));
+    }
+    return b;
+}
+
+// Faces by the grid cells their boxes overlap. Faces are added again when an edit moves them; stale
+// entries are harmless, since every candidate's current box is tested.
+class FaceGrid
+{
+public:
+    FaceGrid(const Mesh& mesh, double cell) : mesh_(mesh), cell_(cell), stamp_(mesh.n_faces(), 0)
+    {
+        for (const auto f : mesh.faces())
+            insert(f);
+    }
+
+    void insert(Mesh::FaceHandle f)
+    {
+        const Box b = face_box(mesh_, f);
+        for_cells(b, [&](std::int64_t key) {
+            auto& list = cells_[key];
+            if (list.empty() || list.back() != f.idx())
+                list.push_back(f.idx());
+        });
+    }
+
+    // Faces whose current box overlaps `b`, each once, in increasing index order.
+    std::vector<int> near(const Box& b)
+    {
+        ++round_;
+        std::vector<int> out;
+        for_cells(b, [&](std::int64_t key) {
+            const auto it = cells_.find(key);
+            if (it == cells_.end())
+                return;
+            for (const int f : it->second)
+                if (stamp_[static_cast<std::size_t>(f)] != round_) {
+                    stamp_[static_cast<std::size_t>(f)] = round_;
+                    if (face_box(mesh_, Mesh::FaceHandle(f)).overlaps(b))
+                        out.push_back(f);
+                }
+        });
+        std::sort(out.begin(), out.end());
+        return out;
+    }
+
+private:
+    template <typename Visit>
+    void for_cells(const Box& b, Visit visit) const
+    {
+        std::array<std::int64_t, 3> lo{}, hi{};
+        for (int k = 0; k < 3; ++k) {
+            lo[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(std::floor(b.min[k] / cell_));
+            hi[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(std::floor(b.max[k] / cell_));
+        }
+        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                    visit(((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff));
+    }
+
+    const Mesh& mesh_;
+    double cell_;
+    std::unordered_map<std::int64_t, std::vector<int>> cells_;
+    std::vector<unsigned> stamp_;
+    unsigned round_ = 0;
+};
+
+class Untangler
+{
+public:
+    Untangler(Mesh& mesh, const UntangleOptions& options)
+        : mesh_(mesh), options_(options), min_cos_(std::cos(options.max_turn_degrees * M_PI / 180.0)),
+          grid_(mesh, grid_cell(mesh))
+    {
+        mesh_.get_property_handle(tile_, kFaceTile);
+        mesh_.get_property_handle(gap_, kFaceGap);
+    }
+
+    // Tries the edits for face f, keeps the first that lowers its faces' intersections.
+    void repair(Mesh::FaceHandle f, UntangleStats& stats)
+    {
+        if (hits({f}) == 0)
+            return; // an earlier edit fixed it
+        for (const auto he : mesh_.fh_range(f))
+            if (try_flip(mesh_.edge_handle(he))) {
+                ++stats.flips;
+                return;
+            }
+        // Moves toward the centre of the neighbours (smoothing pulls a crossing apart), then across the
+        // surface either way (a fold held by its neighbours), corners first, then the ring around them:
+        // at a thin tip the crossing can hinge on a vertex next to the faces.
+        const auto corners = corners_of(mesh_, f);
+        std::vector<Mesh::VertexHandle> ring;
+        for (const auto v : corners)
+            for (const auto w : mesh_.vv_range(v))
+                if (std::find(corners.begin(), corners.end(), w) == corners.end())
+                    ring.push_back(w);
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        std::vector<Mesh::VertexHandle> own(corners.begin(), corners.end());
+        for (const std::vector<Mesh::VertexHandle>* vertices : {&own, &ring})
+            for (const Move move : {Move{false, 0.25}, Move{true, 0.25}, Move{true, -0.25}, Move{false, 0.5}, Move{true, 0.5}, Move{true, -0.5}, Move{false, 1.0}})
+                for (const auto v : *vertices)
+                    if (try_move(v, move)) {
+                        ++stats.moves;
+                        return;
+                    }
+    }
+
+private:
+    static double grid_cell(const Mesh& mesh)
+    {
+        double sum = 0.0;
+        std::size_t n = 0;
+        for (const auto e : mesh.edges()) {
+            sum += mesh.calc_edge_length(e);
+            ++n;
+        }
+        return n > 0 && sum > 0 ? 2.0 * sum / static_cast<double>(n) : 1.0;
+    }
+
+    // Intersecting pairs with at least one face in `faces` (pairs inside `faces` counted once).
+    std::size_t hits(const std::vector<Mesh::FaceHandle>& faces)
+    {
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < faces.size(); ++i)
+            for (const int g : grid_.near(face_box(mesh_, faces[i]))) {
+                const Mesh::FaceHandle gh(g);
+                if (gh == faces[i])
+                    continue;
+                const auto earlier = std::find(faces.begin(), faces.begin() + static_cast<std::ptrdiff_t>(i), gh);
+                if (earlier != faces.begin() + static_cast<std::ptrdiff_t>(i))
+                    continue; // counted from the other face
+                if (faces_intersect(mesh_, faces[i], gh))
+                    ++count;
+            }
+        return count;
+    }
+
+    OpenMesh::Vec3d unit_normal(Mesh::FaceHandle f) const
+    {
+        const auto c = corners_of(mesh_, f);
+        const OpenMesh::Vec3d n = OpenMesh::cross(mesh_.point(c[1]) - mesh_.point(c[0]), mesh_.point(c[2]) - mesh_.point(c[0]));
+        const double length = n.norm();
+        return length > 0 ? n / length : OpenMesh::Vec3d(0, 0, 0);
+    }
+
+    // Area above a millionth of the longest edge squared: an edit never makes a needle or a cap that
+    // is nearly a segment (mesh_stats counts such faces as degenerate; their normals are noise).
+    bool has_area(Mesh::FaceHandle f) const
+    {
+        const auto c = corners_of(mesh_, f);
+        const OpenMesh::Vec3d a = mesh_.point(c[0]), b = mesh_.point(c[1]), d = mesh_.point(c[2]);
+        const double longest = std::max({(b - a).sqrnorm(), (d - b).sqrnorm(), (a - d).sqrnorm()});
+        return OpenMesh::cross(b - a, d - a).norm() > 2e-6 * longest;
+    }
+
+    bool faces_up(const OpenMesh::Vec3d& n) const { return !options_.vertical || OpenMesh::dot(n, to_point(options_.axis)) > 0.0; }
+
+    bool try_flip(Mesh::EdgeHandle e)
+    {
+        if (mesh_.is_boundary(e) || !mesh_.is_flip_ok(e))
+            return false;
+        const auto h0 = mesh_.halfedge_handle(e, 0), h1 = mesh_.halfedge_handle(e, 1);
+        const auto f0 = mesh_.face_handle(h0), f1 = mesh_.face_handle(h1);
+        const std::vector<Mesh::FaceHandle> pair{f0, f1};
+        const std::size_t before = hits(pair);
+        if (before == 0)
+            return false;
+        const OpenMesh::Vec3d old_normal = (unit_normal(f0) + unit_normal(f1)).normalized();
+        mesh_.flip(e);
+        const OpenMesh::Vec3d n0 = unit_normal(f0), n1 = unit_normal(f1);
+        if (OpenMesh::dot(n0, old_normal) > min_cos_ && OpenMesh::dot(n1, old_normal) > min_cos_ && faces_up(n0) &&
+            faces_up(n1) && has_area(f0) && has_area(f1) && hits(pair) < before) {
+            if (tile_.is_valid() && mesh_.property(tile_, f0) != mesh_.property(tile_, f1)) {
+                mesh_.property(tile_, f0) = mesh_.property(tile_, f1) = -1;
+                if (gap_.is_valid())
+                    mesh_.property(gap_, f0) = mesh_.property(gap_, f1) = true;
+            }
+            grid_.insert(f0);
+            grid_.insert(f1);
+            return true;
+        }
+        mesh_.flip(e); // the other diagonal again: the faces are as they were
+        return false;
+    }
+
+    // A candidate move: toward the neighbours' centre by `amount` of the way, or along the vertex
+    // normal by `amount` of the shortest edge.
+    struct Move
+    {
+        bool along_normal;
+        double amount;
+    };
+
+    bool try_move(Mesh::VertexHandle v, Move move)
+    {
+        if (mesh_.is_boundary(v))
+            return false; // a border vertex has no centre to move to
+        OpenMesh::Vec3d centre(0, 0, 0);
+        double shortest = std::numeric_limits<double>::max();
+        int neighbours = 0;
+        for (const auto w : mesh_.vv_range(v)) {
+            centre += mesh_.point(w);
+            shortest = std::min(shortest, (mesh_.point(w) - mesh_.point(v)).norm());
+            ++neighbours;
+        }
+        if (neighbours == 0)
+            return false;
+        centre /= static_cast<double>(neighbours);
+        const OpenMesh::Vec3d start = mesh_.point(v);
+        OpenMesh::Vec3d step = (centre - start) * move.amount;
+        if (move.along_normal) {
+            OpenMesh::Vec3d normal(0, 0, 0);
+            for (const auto f : mesh_.vf_range(v))
+                normal += unit_normal(f);
+            if (normal.norm() == 0.0)
+                return false;
+            step = normal.normalized() * (move.amount * shortest);
+        }
+        const double limit = options_.max_move * shortest;
+        if (step.norm() > limit)
+            step *= limit / step.norm();
+        if (step.norm() == 0.0)
+            return false;
+        std::vector<Mesh::FaceHandle> faces;
+        for (const auto f : mesh_.vf_range(v))
+            faces.push_back(f);
+        std::sort(faces.begin(), faces.end());
+        std::vector<OpenMesh::Vec3d> normals;
+        for (const auto f : faces)
+            normals.push_back(unit_normal(f));
+        const std::size_t before = hits(faces);
+        if (before == 0)
+            return false;
+        mesh_.point(v) = start + step;
+        bool ok = true;
+        for (std::size_t i = 0; i < faces.size() && ok; ++i)
+            ok = OpenMesh::dot(unit_normal(faces[i]), normals[i]) > min_cos_ && faces_up(unit_normal(faces[i])) &&
+                 has_area(faces[i]);
+        if (ok) {
+            for (const auto f : faces)
+                grid_.insert(f);
+            if (hits(faces) < before)
+                return true;
+        }
+        mesh_.point(v) = start;
+        return false;
+    }
+
+    Mesh& mesh_;
+    const UntangleOptions& options_;
+    double min_cos_;
+    FaceGrid grid_;
+    OpenMesh::FPropHandleT<int> tile_;
+    OpenMesh::FPropHandleT<bool> gap_;
+};
+
+} // namespace
+
+UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
+{
+    UntangleStats stats;
+    std::vector<std::pair<int, int>> pairs = self_intersecting_faces(mesh);
+    stats.pairs_before = pairs.size();
+    if (pairs.empty())
+        return stats;
+    Untangler untangler(mesh, options);
+    for (int round = 0; round < options.max_rounds && !pairs.empty(); ++round) {
+        std::vector<int> faces;
+        for (const auto& [a, b] : pairs) {
+            faces.push_back(a);
+            faces.push_back(b);
+        }
+        std::sort(faces.begin(), faces.end());
+        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+        const std::size_t edits = stats.flips + stats.moves;
+        for (const int f : faces)
+            untangler.repair(Mesh::FaceHandle(f), stats);
+        pairs = self_intersecting_faces(mesh);
+        if (stats.flips + stats.moves == edits)
+            break; // nothing more this way
+    }
+    stats.pairs_after = pairs.size();
+    if (stats.flips + stats.moves > 0)
+        mesh.update_normals();
+    return stats;
+}
+
+} // namespace mrt

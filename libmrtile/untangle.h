@@ -1,0 +1,48 @@
+#pragma once
+//! \file untangle.h
+//! \brief Removes geometric self-intersections from a manifold mesh by small local edits.
+//! \details Beyond the paper: the surface stage (surface.h) guarantees a combinatorial 2-manifold, not
+//! an embedded one. Where the sample is thinner than a tile (the bunny's ear tips, a thin rim), a gap
+//! face chosen on one side can pass through a fan on the other: a few faces in ten thousand, invisible
+//! in a viewer, fatal for a 3D printer, a boolean or a volume. Each face of an intersecting pair is
+//! offered, in turn, a flip of each of its edges, then moves of its corners and then of their
+//! neighbours (toward the centre of their neighbours, or across the surface); the first edit that
+//! lowers the number of intersections of the faces it changes, without turning a face by more than
+//! max_turn_degrees or moving a vertex by more than `max_move` of its shortest edge, is kept. Topology
+//! never changes (flips are OpenMesh's is_flip_ok ones). A tip folded over itself around one vertex
+//! can stay (no flip or move unfolds it): pairs_after says how many pairs are left.
+
+#include "libmrtile/mesh.h"
+
+#include <cstddef>
+
+namespace mrt {
+
+struct UntangleOptions
+{
+    //! Rounds over the faces still intersecting (each round re-finds the pairs).
+    int max_rounds = 6;
+    //! Largest move of a vertex, as a fraction of its shortest edge.
+    double max_move = 0.75;
+    //! Largest turn of a face's normal an edit may cause (a flip: of either new face against the old pair).
+    double max_turn_degrees = 60.0;
+    //! Height fields: every face an edit changes must still face up `axis` (the mesh stays a graph).
+    bool vertical = false;
+    Vec3 axis{0, 0, 1};
+};
+
+struct UntangleStats
+{
+    std::size_t pairs_before = 0; //!< intersecting face pairs found first
+    std::size_t pairs_after = 0;  //!< left at the end (0 on success)
+    std::size_t flips = 0;
+    std::size_t moves = 0;
+};
+
+//! \brief Lowers the self-intersections of `mesh` (self_intersecting_faces in mesh_stats.h) by local
+//! edge flips and vertex moves. Deterministic. A flip across two tiles marks both faces as gap faces
+//! (f:tile -1, f:gap true), as fit_vertices does. Vertex and face normals of changed faces are updated.
+//! \throw InvalidInput if the mesh is not a manifold triangle mesh.
+UntangleStats untangle(Mesh& mesh, const UntangleOptions& options = {});
+
+} // namespace mrt
