@@ -21,6 +21,9 @@
 namespace mrt {
 namespace {
 
+// Repairs tried per face over all rounds.
+constexpr std::uint8_t kMaxTries = 2;
+
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 
@@ -180,13 +183,18 @@ public:
         mesh_.get_property_handle(gap_, kFaceGap);
     }
 
+    // Triangle pairs tested so far; repair stops trying once `budget` is spent.
+    std::size_t tests() const { return tests_; }
+
     // Tries the edits for face f, keeps the first that lowers its faces' intersections.
-    void repair(Mesh::FaceHandle f, UntangleStats& stats)
+    void repair(Mesh::FaceHandle f, UntangleStats& stats, std::size_t budget)
     {
-        if (hits({f}) == 0)
-            return; // an earlier edit fixed it
+        // A face tried twice without success hinges on something no edit here changes: skip it.
+        if (tests_ >= budget || tries_[static_cast<std::size_t>(f.idx())] >= kMaxTries || hits({f}) == 0)
+            return; // out of budget, given up, or an earlier edit fixed it
+        ++tries_[static_cast<std::size_t>(f.idx())];
         for (const auto he : mesh_.fh_range(f))
-            if (try_flip(mesh_.edge_handle(he))) {
+            if (tests_ < budget && try_flip(mesh_.edge_handle(he))) {
                 ++stats.flips;
                 return;
             }
@@ -205,7 +213,7 @@ public:
         for (const std::vector<Mesh::VertexHandle>* vertices : {&own, &ring})
             for (const Move move : {Move{false, 0.25}, Move{true, 0.25}, Move{true, -0.25}, Move{false, 0.5}, Move{true, 0.5}, Move{true, -0.5}, Move{false, 1.0}})
                 for (const auto v : *vertices)
-                    if (try_move(v, move)) {
+                    if (tests_ < budget && try_move(v, move)) {
                         ++stats.moves;
                         return;
                     }
@@ -235,6 +243,7 @@ private:
                 const auto earlier = std::find(faces.begin(), faces.begin() + static_cast<std::ptrdiff_t>(i), gh);
                 if (earlier != faces.begin() + static_cast<std::ptrdiff_t>(i))
                     continue; // counted from the other face
+                ++tests_;
                 if (faces_intersect(mesh_, faces[i], gh))
                     ++count;
             }
@@ -358,6 +367,8 @@ private:
     FaceGrid grid_;
     OpenMesh::FPropHandleT<int> tile_;
     OpenMesh::FPropHandleT<bool> gap_;
+    std::size_t tests_ = 0;
+    std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
 };
 
 } // namespace
@@ -370,6 +381,9 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
     if (pairs.empty())
         return stats;
     Untangler untangler(mesh, options);
+    // A crumpled surface (a noisy sample meshed below its noise floor) can cross itself everywhere; the
+    // edits are for the few crossings of a clean one, so their work is bounded by the mesh's size.
+    const auto budget = static_cast<std::size_t>(options.tests_per_face * static_cast<double>(mesh.n_faces()));
     for (int round = 0; round < options.max_rounds && !pairs.empty(); ++round) {
         std::vector<int> faces;
         for (const auto& [a, b] : pairs) {
@@ -380,12 +394,13 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
         faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
         const std::size_t edits = stats.flips + stats.moves;
         for (const int f : faces)
-            untangler.repair(Mesh::FaceHandle(f), stats);
+            untangler.repair(Mesh::FaceHandle(f), stats, budget);
         pairs = self_intersecting_faces(mesh);
-        if (stats.flips + stats.moves == edits)
-            break; // nothing more this way
+        if (stats.flips + stats.moves == edits || untangler.tests() >= budget)
+            break; // nothing more this way, or out of budget
     }
     stats.pairs_after = pairs.size();
+    stats.tests = untangler.tests();
     if (stats.flips + stats.moves > 0)
         mesh.update_normals();
     return stats;

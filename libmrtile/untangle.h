@@ -26,6 +26,11 @@ struct UntangleOptions
     double max_move = 0.75;
     //! Largest turn of a face's normal an edit may cause (a flip: of either new face against the old pair).
     double max_turn_degrees = 60.0;
+    //! Work bound: at most this many triangle-pair tests per face of the mesh, in all (and each face is
+    //! tried at most twice). A clean surface's few crossings take far less (the bunny: under 2 per face);
+    //! a crumpled one (noise meshed below its floor, thousands of crossings) stops here instead of
+    //! taking a minute.
+    double tests_per_face = 10.0;
     //! Height fields: every face an edit changes must still face up `axis` (the mesh stays a graph).
     bool vertical = false;
     Vec3 axis{0, 0, 1};
@@ -37,6 +42,7 @@ struct UntangleStats
     std::size_t pairs_after = 0;  //!< left at the end (0 on success)
     std::size_t flips = 0;
     std::size_t moves = 0;
+    std::size_t tests = 0; //!< triangle pairs tested (see UntangleOptions::tests_per_face)
 };
 
 //! \brief Lowers the self-intersections of `mesh` (self_intersecting_faces in mesh_stats.h) by local
