@@ -23,6 +23,9 @@ namespace {
 
 // Repairs tried per face over all rounds.
 constexpr std::uint8_t kMaxTries = 2;
+// The work bound's floor (UntangleOptions::tests_per_face), about a twentieth of a second: a small
+// mesh's crossings get the same chance as a large one's.
+constexpr std::size_t kMinTests = 100000;
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
@@ -193,8 +196,12 @@ public:
         if (tests_ >= budget || tries_[static_cast<std::size_t>(f.idx())] >= kMaxTries || hits({f}) == 0)
             return; // out of budget, given up, or an earlier edit fixed it
         ++tries_[static_cast<std::size_t>(f.idx())];
+        // The edges first: a flip tried and undone renumbers the face's half-edges under a circulator.
+        std::vector<Mesh::EdgeHandle> edges;
         for (const auto he : mesh_.fh_range(f))
-            if (tests_ < budget && try_flip(mesh_.edge_handle(he))) {
+            edges.push_back(mesh_.edge_handle(he));
+        for (const auto e : edges)
+            if (tests_ < budget && try_flip(e)) {
                 ++stats.flips;
                 return;
             }
@@ -383,7 +390,7 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
     Untangler untangler(mesh, options);
     // A crumpled surface (a noisy sample meshed below its noise floor) can cross itself everywhere; the
     // edits are for the few crossings of a clean one, so their work is bounded by the mesh's size.
-    const auto budget = static_cast<std::size_t>(options.tests_per_face * static_cast<double>(mesh.n_faces()));
+    const auto budget = std::max(kMinTests, static_cast<std::size_t>(options.tests_per_face * static_cast<double>(mesh.n_faces())));
     for (int round = 0; round < options.max_rounds && !pairs.empty(); ++round) {
         std::vector<int> faces;
         for (const auto& [a, b] : pairs) {

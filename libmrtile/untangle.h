@@ -26,8 +26,8 @@ struct UntangleOptions
     double max_move = 0.75;
     //! Largest turn of a face's normal an edit may cause (a flip: of either new face against the old pair).
     double max_turn_degrees = 60.0;
-    //! Work bound: at most this many triangle-pair tests per face of the mesh, in all (and each face is
-    //! tried at most twice). A clean surface's few crossings take far less (the bunny: under 2 per face);
+    //! Work bound: at most this many triangle-pair tests per face of the mesh, in all, but at least
+    //! 100,000 (and each face is tried at most twice). A clean surface's few crossings take far less (the bunny: under 2 per face);
     //! a crumpled one (noise meshed below its floor, thousands of crossings) stops here instead of
     //! taking a minute.
     double tests_per_face = 10.0;
