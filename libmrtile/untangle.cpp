@@ -288,6 +288,8 @@ private:
         if (before == 0)
             return false;
         const OpenMesh::Vec3d old_normal = (unit_normal(f0) + unit_normal(f1)).normalized();
+        auto corners0 = corners_of(mesh_, f0);
+        std::sort(corners0.begin(), corners0.end());
         mesh_.flip(e);
         const OpenMesh::Vec3d n0 = unit_normal(f0), n1 = unit_normal(f1);
         if (OpenMesh::dot(n0, old_normal) > min_cos_ && OpenMesh::dot(n1, old_normal) > min_cos_ && faces_up(n0) &&
@@ -301,7 +303,26 @@ private:
             grid_.insert(f1);
             return true;
         }
-        mesh_.flip(e); // the other diagonal again: the faces are as they were
+        // The other diagonal again: the same two triangles, but OpenMesh may hand them back to the
+        // two face handles the other way round. Then their ids go with them, and both are filed anew
+        // in the grid (each now has the other's box).
+        mesh_.flip(e);
+        auto sorted_corners = [&](Mesh::FaceHandle f) {
+            auto c = corners_of(mesh_, f);
+            std::sort(c.begin(), c.end());
+            return c;
+        };
+        if (sorted_corners(f0) != corners0) {
+            if (tile_.is_valid())
+                std::swap(mesh_.property(tile_, f0), mesh_.property(tile_, f1));
+            if (gap_.is_valid()) {
+                const bool g0 = mesh_.property(gap_, f0);
+                mesh_.property(gap_, f0) = mesh_.property(gap_, f1);
+                mesh_.property(gap_, f1) = g0;
+            }
+            grid_.insert(f0);
+            grid_.insert(f1);
+        }
         return false;
     }
 

@@ -9,7 +9,12 @@
 #include "libmrtile/shapes.h"
 #include "libmrtile/untangle.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
 
 #include <cmath>
 #include <string>
@@ -43,10 +48,31 @@ Mesh tent_through_sheet()
     return mesh;
 }
 
+// Corners of a face, sorted (the triangle whatever its handle or first corner).
+std::array<int, 3> triangle(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    std::array<int, 3> c{};
+    std::size_t k = 0;
+    for (const auto v : mesh.fv_range(f))
+        c[k++] = v.idx();
+    std::sort(c.begin(), c.end());
+    return c;
+}
+
 TEST(Untangle, a_tip_through_a_sheet_is_pulled_back)
 {
     Mesh mesh = tent_through_sheet();
     const std::size_t faces = mesh.n_faces();
+    // Every face its own tile id: a flip tried and undone may hand the two triangles back to the two
+    // handles the other way round, and the ids must follow their triangles.
+    auto tile = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+    auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+    std::map<int, std::array<int, 3>> triangle_of_tile;
+    for (const auto f : mesh.faces()) {
+        tile[f] = f.idx();
+        gap[f] = false;
+        triangle_of_tile[f.idx()] = triangle(mesh, f);
+    }
     const std::vector<std::pair<int, int>> crossing = self_intersecting_faces(mesh);
     ASSERT_FALSE(crossing.empty());
     std::vector<Mesh::Point> before;
@@ -58,6 +84,13 @@ TEST(Untangle, a_tip_through_a_sheet_is_pulled_back)
     EXPECT_TRUE(self_intersecting_faces(mesh).empty());
     EXPECT_GT(stats.moves, 0u);
     EXPECT_EQ(mesh.n_faces(), faces);
+    std::size_t labelled = 0;
+    for (const auto f : mesh.faces())
+        if (tile[f] >= 0) { // -1: a kept flip across two tiles
+            EXPECT_EQ(triangle(mesh, f), triangle_of_tile[tile[f]]) << f.idx();
+            ++labelled;
+        }
+    EXPECT_GT(labelled, faces - 2 * stats.flips - 1);
     // Every vertex moved by at most max_move of its shortest edge (here at least 0.95: the grid's
     // spacing is 1, the tent's rim edges and slopes about 1).
     const double limit = UntangleOptions{}.max_move * 1.05;
