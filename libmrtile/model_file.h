@@ -49,7 +49,7 @@ struct SaveOptions
 {
     //! Store Hierarchy::info.build_seconds (makes two builds of the same input differ in 8 bytes).
     bool record_build_time = false;
-    //! Levels to store with the hierarchy (nullptr or none: no levels section). About 50 bytes per
+    //! Levels to store with the hierarchy (nullptr or none: no levels section). About 45 bytes per
     //! face of all levels together (the finest level has about 0.7 faces per point).
     const StoredLevels* levels = nullptr;
 };
