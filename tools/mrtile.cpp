@@ -550,7 +550,7 @@ std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& 
     std::string tolerances;
     for (double t : e.tolerances)
         tolerances += (tolerances.empty() ? "" : ",") + real(t);
-    return "max-tile-triangles=" + std::to_string(e.max_tile_triangles) + " levels=" + std::to_string(e.levels) +
+    return std::string("mrtile=") + MRTILE_VERSION + " max-tile-triangles=" + std::to_string(e.max_tile_triangles) + " levels=" + std::to_string(e.levels) +
            " lod-tolerances=" + tolerances + " below-noise=" + (g.below_noise ? "1" : "0") + " alpha=" + real(m.alpha) +
            " height-field=" + m.height_field + " keep-steps=" + (m.keep_steps ? "1" : "0") +
            " refine-fans=" + real(m.refine_fans) + " fit-rounds=" + std::to_string(m.fit_rounds) +
@@ -1105,7 +1105,13 @@ int run(int argc, char** argv)
     }
     if (*exp) {
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
-        Model model = load_model_with_levels(exp_in);
+        // Stored levels serve LOD sets only; a single mesh leaves them unread (a second or so per million points).
+        const bool lod_set = exp_args.exp.format == "3dtiles" || exp_args.exp.format == "lod-glb";
+        Model model;
+        if (lod_set)
+            model = load_model_with_levels(exp_in);
+        else
+            model.hierarchy = load_model(exp_in);
         Hierarchy& h = model.hierarchy;
         const std::string model_crs = h.cloud.crs;
         apply_globals(h);
@@ -1124,7 +1130,7 @@ int run(int argc, char** argv)
             save_model(h, exp_in, s);
             std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
                         exp_in.string().c_str());
-        } else if (exp_store_levels && exp_args.exp.format != "3dtiles" && exp_args.exp.format != "lod-glb") {
+        } else if (exp_store_levels && !lod_set) {
             std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
         }
         return 0;
