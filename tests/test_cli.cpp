@@ -371,6 +371,19 @@ TEST(Cli, stored_levels_make_the_same_tileset)
     ASSERT_EQ(again.code, 0) << again.err;
     EXPECT_NE(again.out.find("stored in the model (no meshing)"), std::string::npos) << again.out;
     EXPECT_EQ(slurp(dir / "d" / "tileset.json"), slurp(dir / "e" / "tileset.json"));
+    // reconstruct --model M --store-levels: the model it saves carries the levels of its tileset.
+    const std::string rec_model = (dir / "rec.mrt").string();
+    const Result rec = mrtile("reconstruct " + xyz.string() + " -o " + (dir / "f").string() +
+                                  " --format 3dtiles --model " + rec_model + " --store-levels",
+                              dir);
+    ASSERT_EQ(rec.code, 0) << rec.err;
+    EXPECT_NE(rec.out.find("stored the"), std::string::npos) << rec.out;
+    const Result from_rec = mrtile("export " + rec_model + " -o " + (dir / "g").string() + " --format 3dtiles", dir);
+    ASSERT_EQ(from_rec.code, 0) << from_rec.err;
+    EXPECT_NE(from_rec.out.find("stored in the model (no meshing)"), std::string::npos) << from_rec.out;
+    EXPECT_EQ(slurp(dir / "f" / "tileset.json"), slurp(dir / "g" / "tileset.json"));
+    EXPECT_EQ(mrtile("reconstruct " + xyz.string() + " -o " + (dir / "h").string() + " --format 3dtiles --store-levels", dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "h"));
 }
 
 // Input in UTM coordinates with its CRS (--crs here; a LAS file's own records the same way): the

@@ -1004,6 +1004,10 @@ int run(int argc, char** argv)
     rec->add_option("POINTS", rec_in, "point files (one or more, merged)")->required();
     rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
     rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
+    bool rec_store_levels = false;
+    rec->add_flag("--store-levels", rec_store_levels,
+                  "with --model and a LOD set (--format 3dtiles or lod-glb): also store the levels meshed here in "
+                  "the model, so that exports of it only cut tiles");
     rec_build.add(rec, "build-");
     rec_args.add(rec);
 
@@ -1089,12 +1093,24 @@ int run(int argc, char** argv)
         return 0;
     }
     if (*rec) {
+        if (rec_store_levels && rec_model.empty())
+            throw UsageError("--store-levels: needs --model M.mrt (the levels are stored in it)");
         Hierarchy h = build_from_points(rec_in, rec_build, g);
         apply_globals(h);
         if (!rec_model.empty())
             save_model(h, rec_model);
-        LevelStore none;
-        naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, none); });
+        LevelStore store;
+        store.keep = rec_store_levels;
+        naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
+        if (!store.kept.levels.empty()) {
+            SaveOptions s;
+            s.levels = &store.kept;
+            save_model(h, rec_model, s);
+            std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
+                        rec_model.string().c_str());
+        } else if (rec_store_levels) {
+            std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
+        }
         return 0;
     }
     if (*lods) {
