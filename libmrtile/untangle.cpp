@@ -5,7 +5,6 @@
 // triangle-triangle tests against the faces near it (a uniform grid over face boxes finds those).
 #include "libmrtile/untangle.h"
 
-#include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -257,16 +256,9 @@ private:
         return count;
     }
 
-    OpenMesh::Vec3d unit_normal(Mesh::FaceHandle f) const
-    {
-        const auto c = corners_of(mesh_, f);
-        const OpenMesh::Vec3d n = OpenMesh::cross(mesh_.point(c[1]) - mesh_.point(c[0]), mesh_.point(c[2]) - mesh_.point(c[0]));
-        const double length = n.norm();
-        return length > 0 ? n / length : OpenMesh::Vec3d(0, 0, 0);
-    }
-
     // Area above a millionth of the longest edge squared: an edit never makes a needle or a cap that
-    // is nearly a segment (mesh_stats counts such faces as degenerate; their normals are noise).
+    // is nearly a segment (mesh_stats counts such faces as degenerate; their normals are noise). Far
+    // stricter than vec3.h's has_area, which only tells area from rounding noise.
     bool has_area(Mesh::FaceHandle f) const
     {
         const auto c = corners_of(mesh_, f);
@@ -287,11 +279,11 @@ private:
         const std::size_t before = hits(pair);
         if (before == 0)
             return false;
-        const OpenMesh::Vec3d old_normal = (unit_normal(f0) + unit_normal(f1)).normalized();
+        const OpenMesh::Vec3d old_normal = (mesh_.calc_face_normal(f0) + mesh_.calc_face_normal(f1)).normalized();
         auto corners0 = corners_of(mesh_, f0);
         std::sort(corners0.begin(), corners0.end());
         mesh_.flip(e);
-        const OpenMesh::Vec3d n0 = unit_normal(f0), n1 = unit_normal(f1);
+        const OpenMesh::Vec3d n0 = mesh_.calc_face_normal(f0), n1 = mesh_.calc_face_normal(f1);
         if (OpenMesh::dot(n0, old_normal) > min_cos_ && OpenMesh::dot(n1, old_normal) > min_cos_ && faces_up(n0) &&
             faces_up(n1) && has_area(f0) && has_area(f1) && hits(pair) < before) {
             if (tile_.is_valid() && mesh_.property(tile_, f0) != mesh_.property(tile_, f1)) {
@@ -354,7 +346,7 @@ private:
         if (move.along_normal) {
             OpenMesh::Vec3d normal(0, 0, 0);
             for (const auto f : mesh_.vf_range(v))
-                normal += unit_normal(f);
+                normal += mesh_.calc_face_normal(f);
             if (normal.norm() == 0.0)
                 return false;
             step = normal.normalized() * (move.amount * shortest);
@@ -370,14 +362,14 @@ private:
         std::sort(faces.begin(), faces.end());
         std::vector<OpenMesh::Vec3d> normals;
         for (const auto f : faces)
-            normals.push_back(unit_normal(f));
+            normals.push_back(mesh_.calc_face_normal(f));
         const std::size_t before = hits(faces);
         if (before == 0)
             return false;
         mesh_.point(v) = start + step;
         bool ok = true;
         for (std::size_t i = 0; i < faces.size() && ok; ++i)
-            ok = OpenMesh::dot(unit_normal(faces[i]), normals[i]) > min_cos_ && faces_up(unit_normal(faces[i])) &&
+            ok = OpenMesh::dot(mesh_.calc_face_normal(faces[i]), normals[i]) > min_cos_ && faces_up(mesh_.calc_face_normal(faces[i])) &&
                  has_area(faces[i]);
         if (ok) {
             for (const auto f : faces)
