@@ -56,6 +56,13 @@ public:
         bytes(b, 8);
     }
     void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+    //! Overwrites the u64 written at `at` (a size known only once what follows it is written).
+    void patch_u64(std::size_t at, std::uint64_t v)
+    {
+        std::string bytes;
+        Writer(bytes).u64(v);
+        out_.replace(at, 8, bytes);
+    }
     void f64(double v)
     {
         std::uint64_t bits;
@@ -240,9 +247,7 @@ void write_levels(Writer& w, std::string& out, const StoredLevels& stored)
             w.bytes(&g, 1);
         }
     }
-    std::string patch;
-    Writer(patch).u64(out.size() - size_at - 8);
-    out.replace(size_at, 8, patch);
+    w.patch_u64(size_at, out.size() - size_at - 8);
 }
 
 // Reads the section write_levels wrote, checking every count against the bytes left before anything
@@ -252,7 +257,6 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
     StoredLevels stored;
     const std::size_t node_count = h.nodes.size();
     auto left = [&] { return end - r.position(); };
-    auto fits = [&](std::uint64_t count, std::size_t each) { return count <= left() / each; };
     const std::uint32_t recipe = r.u32();
     if (recipe > kMaxRecipeBytes || recipe > left())
         r.fail("stored levels: recipe of " + std::to_string(recipe) + " bytes does not fit");
@@ -271,7 +275,7 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
         if (!std::isfinite(level.tolerance) || !std::isfinite(level.geometric_error) || !std::isfinite(level.max_plane_distance))
             r.fail(which + "non-finite error");
         const std::uint64_t cut_size = r.u64();
-        if (cut_size == 0 || !fits(cut_size, 4))
+        if (cut_size == 0 || cut_size > left() / 4)
             r.fail(which + "cut of " + std::to_string(cut_size) + " nodes does not fit");
         level.cut.resize(cut_size);
         for (std::int32_t& id : level.cut) {
@@ -285,9 +289,9 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
         const std::uint64_t faces = r.u64();
         const std::uint32_t colored = r.u32();
         const std::size_t vertex_bytes = kStoredVertexBytes + (colored ? 4 : 0);
+        // Counts below 2^31 keep the byte count below 2^38: it cannot overflow.
         if (colored > 1 || vertices > std::numeric_limits<std::int32_t>::max() ||
-            faces > std::numeric_limits<std::int32_t>::max() || !fits(vertices, vertex_bytes) ||
-            !fits(faces, kStoredFaceBytes) || vertices * vertex_bytes + faces * kStoredFaceBytes > left())
+            faces > std::numeric_limits<std::int32_t>::max() || vertices * vertex_bytes + faces * kStoredFaceBytes > left())
             r.fail(which + "declared " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
                    " faces do not fit the file");
         Mesh& m = level.mesh;
@@ -304,8 +308,7 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
                 p[a] = r.f64();
             for (int a = 0; a < 3; ++a)
                 n[a] = r.f64();
-            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || !std::isfinite(n[0]) ||
-                !std::isfinite(n[1]) || !std::isfinite(n[2]))
+            if (!is_finite(to_vec3(p)) || !is_finite(to_vec3(n)))
                 r.fail(which + "non-finite vertex " + std::to_string(i));
             const auto v = m.add_vertex(p);
             m.set_normal(v, n);
@@ -420,9 +423,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     if (levels)
         write_levels(w, out, *options.levels);
     const std::uint64_t payload = out.size() - kHeaderSize;
-    std::string patch;
-    Writer(patch).u64(payload);
-    out.replace(payload_size_at, 8, patch);
+    w.patch_u64(payload_size_at, payload);
     w.u32(crc(out, out.size()));
     w.bytes(kEndMagic, 4);
     return out;
