@@ -457,6 +457,9 @@ struct ExportArgs
         cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")->delimiter(',');
     }
 
+    //! Whether the output is a LOD set (the formats stored levels serve).
+    bool lod_set() const { return format == "3dtiles" || format == "lod-glb"; }
+
     LodSetOptions options(const MeshArgs& mesh_args) const
     {
         LodSetOptions o;
@@ -557,14 +560,31 @@ std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& 
            " no-colors=" + (m.no_colors ? "1" : "0") + " close-holes=" + std::to_string(m.close_holes);
 }
 
-// Levels stored in a model, on their way into an export, and (export --store-levels) those the export
-// used, on their way back into the model.
+// Levels stored in a model, on their way into an export, and (--store-levels) those the export meshed,
+// on their way back into the model.
 struct LevelStore
 {
     StoredLevels from_model;
     bool keep = false;
     StoredLevels kept;
+
+    // The LOD set's levels once the export is done with them, when they are to be kept (moved, not
+    // copied: they are the largest thing the export holds).
+    void take_back(std::vector<LodLevel>& levels)
+    {
+        if (keep && !kept.recipe.empty())
+            kept.levels = std::move(levels);
+    }
 };
+
+// Faces of all levels together.
+std::size_t level_faces(const std::vector<LodLevel>& levels)
+{
+    std::size_t faces = 0;
+    for (const LodLevel& level : levels)
+        faces += level.mesh.n_faces();
+    return faces;
+}
 
 // The levels of an export's LOD set: the model's stored ones when they were made with the same options,
 // else meshed now.
@@ -582,12 +602,25 @@ std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, cons
                         stored.recipe.c_str());
         show_level_progress(options, g);
         levels = make_lod_levels(h, options);
-        if (store.keep) {
-            store.kept.recipe = recipe;
-            store.kept.levels = levels;
-        }
+        if (store.keep)
+            store.kept.recipe = recipe; // the levels follow through take_back
     }
     return levels;
+}
+
+// --store-levels after an export or reconstruct: the levels it meshed go into `model` with `h` (and
+// `save`'s other options), or a note says why there are none (not a LOD set). Nothing is written when
+// the export reused the model's own stored levels.
+void store_kept_levels(const Hierarchy& h, const fs::path& model, LevelStore& store, bool lod_set, SaveOptions save)
+{
+    if (!store.kept.levels.empty()) {
+        save.levels = &store.kept;
+        save_model(h, model, save);
+        std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
+                    model.string().c_str());
+    } else if (store.keep && !lod_set) {
+        std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
+    }
 }
 
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
@@ -648,6 +681,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         }
     std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
                 dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+    stored.take_back(set.levels);
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
@@ -657,7 +691,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     const auto start = Clock::now();
     LodSetOptions options = e.options(m);
     options.tileset = false;
-    const LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
+    LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
@@ -667,6 +701,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     write_glb_lods(fine_to_coarse, h.cloud.origin, out, lod_options);
     std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
                 seconds_since(start));
+    stored.take_back(set.levels);
 }
 
 void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
@@ -869,9 +904,7 @@ int run_info(const fs::path& model, bool json)
     const Model contents = load_model_with_levels(model);
     const Hierarchy& h = contents.hierarchy;
     const StoredLevels& stored = contents.levels;
-    std::size_t stored_faces = 0;
-    for (const LodLevel& level : stored.levels)
-        stored_faces += level.mesh.n_faces();
+    const std::size_t stored_faces = level_faces(stored.levels);
     const BoundingBox box = h.bbox();
     const Vec3 lo = box.min + h.cloud.origin, hi = box.max + h.cloud.origin;
     const bool timed = std::isfinite(h.info.build_seconds);
@@ -974,7 +1007,7 @@ int run(int argc, char** argv)
     bool store_levels = false;
     build->add_flag("--store-levels", store_levels,
                     "also mesh the levels a default `export` makes and store them in the model, so that exports of it "
-                    "only cut tiles (about a minute per million points; adds about 40 bytes per point)");
+                    "only cut tiles (about a minute per million points; adds about 50 bytes per point)");
 
     // info
     auto* info = app.add_subcommand("info", "describe a .mrt model");
@@ -1069,11 +1102,8 @@ int run(int argc, char** argv)
             naming_input(inputs_name(build_in), [&] { stored.levels = make_lod_levels(h, options); });
             stored.recipe = level_recipe(e, m, g);
             s.levels = &stored;
-            std::size_t faces = 0;
-            for (const LodLevel& level : stored.levels)
-                faces += level.mesh.n_faces();
-            std::printf("meshed %zu levels to store (%zu faces in all) (%.2f s)\n", stored.levels.size(), faces,
-                        seconds_since(start));
+            std::printf("meshed %zu levels to store (%zu faces in all) (%.2f s)\n", stored.levels.size(),
+                        level_faces(stored.levels), seconds_since(start));
         }
         save_model(h, build_out, s);
         std::printf("wrote %s (%ju bytes)\n", build_out.string().c_str(), static_cast<std::uintmax_t>(fs::file_size(build_out)));
@@ -1102,15 +1132,7 @@ int run(int argc, char** argv)
         LevelStore store;
         store.keep = rec_store_levels;
         naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
-        if (!store.kept.levels.empty()) {
-            SaveOptions s;
-            s.levels = &store.kept;
-            save_model(h, rec_model, s);
-            std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
-                        rec_model.string().c_str());
-        } else if (rec_store_levels) {
-            std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
-        }
+        store_kept_levels(h, rec_model, store, rec_args.exp.lod_set(), SaveOptions{});
         return 0;
     }
     if (*lods) {
@@ -1122,7 +1144,7 @@ int run(int argc, char** argv)
     if (*exp) {
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
         // Stored levels serve LOD sets only; a single mesh leaves them unread (a second or so per million points).
-        const bool lod_set = exp_args.exp.format == "3dtiles" || exp_args.exp.format == "lod-glb";
+        const bool lod_set = exp_args.exp.lod_set();
         Model model;
         if (lod_set)
             model = load_model_with_levels(exp_in);
@@ -1137,18 +1159,11 @@ int run(int argc, char** argv)
         store.from_model = std::move(model.levels);
         store.keep = exp_store_levels;
         naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, store); });
-        if (!store.kept.levels.empty()) {
-            // Back into the model as it was loaded (an export's --crs places this tileset only).
-            h.cloud.crs = model_crs;
-            SaveOptions s;
-            s.record_build_time = std::isfinite(h.info.build_seconds);
-            s.levels = &store.kept;
-            save_model(h, exp_in, s);
-            std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
-                        exp_in.string().c_str());
-        } else if (exp_store_levels && !lod_set) {
-            std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
-        }
+        // Back into the model as it was loaded (an export's --crs places this tileset only).
+        h.cloud.crs = model_crs;
+        SaveOptions keep_time;
+        keep_time.record_build_time = std::isfinite(h.info.build_seconds);
+        store_kept_levels(h, exp_in, store, lod_set, keep_time);
         return 0;
     }
     if (*demo) {
