@@ -277,14 +277,20 @@ void drop_small_steps(std::vector<LodLevel>& levels)
     levels = std::move(kept);
 }
 
-} // namespace
-
-std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
+// What both halves of a LOD set need: a hierarchy, and room in a tile for a mesh.
+void check_lod_options(const Hierarchy& h, const LodSetOptions& o)
 {
     if (o.max_tile_triangles < 64)
         throw InvalidInput("lods: max_tile_triangles must be at least 64");
     if (h.nodes.empty())
         throw InvalidInput("lods: empty hierarchy");
+}
+
+} // namespace
+
+std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
+{
+    check_lod_options(h, o);
     std::vector<LodLevel> levels;
     double previous_error = std::numeric_limits<double>::infinity();
     // Levels arrive meshed and finer than the one before (the finer ones are filtered below; meshing may
@@ -343,10 +349,9 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
 
 LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const LodSetOptions& o)
 {
-    if (o.max_tile_triangles < 64)
-        throw InvalidInput("lods: max_tile_triangles must be at least 64");
-    if (h.nodes.empty() || levels.empty())
-        throw InvalidInput("lods: empty hierarchy or no levels");
+    check_lod_options(h, o);
+    if (levels.empty())
+        throw InvalidInput("lods: no levels");
     LodSet set;
     set.levels = std::move(levels);
     if (!o.tileset)
