@@ -39,6 +39,9 @@ struct TilesetOptions
     //! Top-level geometricError (error when nothing is rendered). Default: the larger of the root's
     //! error and the root box diagonal.
     std::optional<double> tileset_geometric_error;
+    //! Tiles are encoded and written on this many threads (0 = the default, see parallel.h). The files
+    //! do not depend on it.
+    std::size_t threads = 0;
 };
 
 //! \brief Writes `dir`/tileset.json and `dir`/tiles/<index>.glb (tiles[0] is the root).

@@ -103,13 +103,14 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level)
 bool inside(const Node& region, const Node& node) { return region.begin <= node.begin && node.end <= region.end; }
 
 // The content of a tile: the level's faces owned by cut nodes inside the region, with a skirt along
-// every border edge that is not a border of the whole level mesh.
-Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
-                    double skirt_depth, bool skirts, std::size_t* skirt_faces)
+// every border edge that is not a border of the whole level mesh. Written into `out` (empty), which
+// is the tile's own mesh: an OpenMesh mesh returned and assigned would be copied (it cannot be moved).
+void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
+                    double skirt_depth, bool skirts, Mesh& out, std::size_t* skirt_faces)
 {
+    assert(out.n_vertices() == 0);
     const Mesh& src = level.mesh;
     const QuietOpenMesh quiet; // refusals below are handled, not reported on the console
-    Mesh out;
     const bool colored = src.has_vertex_colors();
     if (colored)
         out.request_vertex_colors();
@@ -161,7 +162,7 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     }
     *skirt_faces = 0;
     if (!skirts || skirt_depth <= 0)
-        return out;
+        return;
     // Border edges of the region that are interior edges of the level mesh get a skirt quad.
     std::vector<int> lowered(src.n_vertices(), -1);
     auto lower = [&](Mesh::VertexHandle src_v) {
@@ -199,7 +200,6 @@ Mesh extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         if (out.add_face(tb, la, lb).is_valid())
             ++*skirt_faces;
     }
-    return out;
 }
 
 BoundingBox mesh_box(const Mesh& m, BoundingBox box)
@@ -291,28 +291,22 @@ void check_lod_options(const Hierarchy& h, const LodSetOptions& o)
 std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
 {
     check_lod_options(h, o);
+    // Levels are meshed in their final place: an OpenMesh mesh has no move constructor, so a meshed
+    // level moved into a vector would be copied (1.2M faces over the levels of a 1M-point set). Only
+    // unmeshed levels and the small first one are moved around.
     std::vector<LodLevel> levels;
-    double previous_error = std::numeric_limits<double>::infinity();
-    // Levels arrive meshed and finer than the one before (the finer ones are filtered below; meshing may
-    // have refined a level's small separate objects, MeshOptions::small_object_rounds).
-    auto add_level = [&](LodLevel level) {
-        level.max_plane_distance = level_max_plane_distance(h, level.cut);
-        level.geometric_error = std::min(previous_error, level.max_plane_distance);
-        previous_error = level.geometric_error;
-        levels.push_back(std::move(level));
-    };
     std::vector<double> tolerances = o.tolerances;
     for (std::size_t i = 0; i < tolerances.size(); ++i)
         if (!(tolerances[i] >= 0) || (i > 0 && !(tolerances[i] < tolerances[i - 1])))
             throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
     if (tolerances.empty()) {
         const Cut finest = cut_by_tolerance(h, 0.0);
-        LodLevel first = first_level(h, o, finest);
-        tolerances = finer_tolerances(h, o, first.tolerance, finest.size());
-        add_level(std::move(first));
+        levels.push_back(first_level(h, o, finest));
+        tolerances = finer_tolerances(h, o, levels.front().tolerance, finest.size());
     }
+    const std::size_t meshed = levels.size();
     // The finer levels are independent meshing jobs: cut them, mesh them on worker threads (largest
-    // first), then add them in order.
+    // first), each in its place.
     std::vector<LodLevel> finer;
     for (double tol : tolerances) {
         LodLevel level;
@@ -324,24 +318,31 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
     }
     if (o.tolerances.empty() && o.levels == 0)
         drop_small_steps(finer);
-    std::vector<std::size_t> order(finer.size());
-    for (std::size_t i = 0; i < order.size(); ++i)
-        order[i] = finer.size() - 1 - i; // finest (largest) first
-    const std::size_t total = levels.size() + finer.size();
-    std::size_t done = levels.size();
+    levels.reserve(meshed + finer.size());
+    for (LodLevel& level : finer)
+        levels.push_back(std::move(level));
+    finer.clear();
+    const std::size_t total = levels.size();
+    std::size_t done = meshed;
     std::mutex progress_lock;
     if (o.progress && done > 0)
         o.progress(done, total);
-    run_parallel(order.size(), o.threads, [&](std::size_t k) {
-        LodLevel& level = finer[order[k]];
+    run_parallel(total - meshed, o.threads, [&](std::size_t k) {
+        LodLevel& level = levels[total - 1 - k]; // finest (largest) first
         mesh_level(h, level, o.mesh);
         if (o.progress) {
             const std::lock_guard<std::mutex> hold(progress_lock);
             o.progress(++done, total);
         }
     });
-    for (LodLevel& level : finer)
-        add_level(std::move(level));
+    // Errors in order, coarse to fine (meshing may have refined a level's small separate objects,
+    // MeshOptions::small_object_rounds, so they are taken from the cuts as meshed).
+    double previous_error = std::numeric_limits<double>::infinity();
+    for (LodLevel& level : levels) {
+        level.max_plane_distance = level_max_plane_distance(h, level.cut);
+        level.geometric_error = std::min(previous_error, level.max_plane_distance);
+        previous_error = level.geometric_error;
+    }
     if (!levels.empty())
         levels.back().geometric_error = 0.0;
     return levels;
@@ -377,10 +378,8 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         LodTile tile;
         tile.region = p.region;
         tile.level = p.level;
-        const LodLevel& level = set.levels[p.level];
-        tile.mesh = extract_region(h, level, index[p.level], region, 2.0 * level.max_plane_distance, o.skirts, &tile.skirt_faces);
-        tile.geometric_error = level.geometric_error;
-        tile.box = mesh_box(tile.mesh, region.box);
+        tile.geometric_error = set.levels[p.level].geometric_error;
+        tile.box = region.box;
         const std::size_t id = set.tiles.size();
         if (p.parent >= 0)
             set.tiles[static_cast<std::size_t>(p.parent)].children.push_back(id);
@@ -409,6 +408,16 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         for (std::int32_t c : children)
             queue.push_back({c, p.level + 1, static_cast<std::ptrdiff_t>(id)});
     }
+    // The tree above needs only the level indices, so the tiles' meshes (most of the time of an export
+    // from stored levels) are cut afterwards, each on its own: the same meshes on any number of threads.
+    run_parallel(set.tiles.size(), o.threads, [&](std::size_t k) {
+        LodTile& tile = set.tiles[k];
+        const LodLevel& level = set.levels[tile.level];
+        const Node& region = h.nodes[static_cast<std::size_t>(tile.region)];
+        extract_region(h, level, index[tile.level], region, 2.0 * level.max_plane_distance, o.skirts, tile.mesh,
+                       &tile.skirt_faces);
+        tile.box = mesh_box(tile.mesh, region.box);
+    });
     nest_tile_boxes(set.tiles);
     return set;
 }

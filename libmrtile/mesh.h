@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cstddef>
+#include <mutex>
 
 namespace mrt {
 
@@ -55,29 +56,53 @@ inline constexpr const char* kFaceGap = "f:gap";
 
 //! Silences OpenMesh's console streams for its lifetime (the library never prints; OpenMesh writes
 //! "complex edge" and reader/writer chatter to omerr/omlog). Restores their previous state.
+//! \details The streams are global and stages run on several threads at once (levels, tiles), so the
+//! guards are counted: the first to start silences, the last to end restores. A per-guard save and
+//! restore would let one thread's guard switch the streams back on under another's add_face calls.
 class QuietOpenMesh
 {
 public:
-    QuietOpenMesh() : log_(omlog().is_enabled()), out_(omout().is_enabled()), err_(omerr().is_enabled())
+    QuietOpenMesh()
     {
-        omlog().disable();
-        omout().disable();
-        omerr().disable();
+        const std::lock_guard<std::mutex> hold(state().lock);
+        State& s = state();
+        if (s.guards++ == 0) {
+            s.log = omlog().is_enabled();
+            s.out = omout().is_enabled();
+            s.err = omerr().is_enabled();
+            omlog().disable();
+            omout().disable();
+            omerr().disable();
+        }
     }
     ~QuietOpenMesh()
     {
-        if (log_)
-            omlog().enable();
-        if (out_)
-            omout().enable();
-        if (err_)
-            omerr().enable();
+        const std::lock_guard<std::mutex> hold(state().lock);
+        State& s = state();
+        if (--s.guards == 0) {
+            if (s.log)
+                omlog().enable();
+            if (s.out)
+                omout().enable();
+            if (s.err)
+                omerr().enable();
+        }
     }
     QuietOpenMesh(const QuietOpenMesh&) = delete;
     QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
 
 private:
-    bool log_, out_, err_;
+    struct State
+    {
+        std::mutex lock;
+        std::size_t guards = 0;
+        bool log = true, out = true, err = true;
+    };
+    static State& state()
+    {
+        static State s;
+        return s;
+    }
 };
 
 } // namespace mrt

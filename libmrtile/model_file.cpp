@@ -5,6 +5,7 @@
 #include "libmrtile/atomic_file.h"
 #include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/parallel.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <zlib.h>
@@ -13,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <limits>
 
@@ -250,13 +252,130 @@ void write_levels(Writer& w, std::string& out, const StoredLevels& stored)
     w.patch_u64(size_at, out.size() - size_at - 8);
 }
 
+// The bytes of a level's mesh, once its declared counts are known to fit the `left` bytes. Counts below
+// 2^31 keep the byte count below 2^38: it cannot overflow.
+std::size_t level_mesh_bytes(const Reader& r, std::size_t left, const std::string& which, std::uint64_t vertices,
+                             std::uint64_t faces, std::uint32_t colored)
+{
+    const std::size_t vertex_bytes = kStoredVertexBytes + (colored ? 4 : 0);
+    if (colored > 1 || vertices > std::numeric_limits<std::int32_t>::max() ||
+        faces > std::numeric_limits<std::int32_t>::max() || vertices * vertex_bytes + faces * kStoredFaceBytes > left)
+        r.fail(which + "declared " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
+               " faces do not fit the file");
+    return static_cast<std::size_t>(vertices * vertex_bytes + faces * kStoredFaceBytes);
+}
+
+// The bytes from the reader's position to `end`, the end of the levels section.
+std::size_t bytes_left(const Reader& r, std::size_t end, const std::string& which)
+{
+    if (r.position() > end)
+        r.fail(which + "runs past the end of the stored levels");
+    return end - r.position();
+}
+
+// A level's cut size, once known to fit the bytes left before `end`.
+std::size_t level_cut_size(Reader& r, std::size_t end, const std::string& which)
+{
+    const std::uint64_t cut_size = r.u64();
+    if (cut_size == 0 || cut_size > bytes_left(r, end, which) / 4)
+        r.fail(which + "cut of " + std::to_string(cut_size) + " nodes does not fit");
+    return static_cast<std::size_t>(cut_size);
+}
+
+// Level l of the section, from its first byte: header, cut, mesh.
+void read_level(Reader& r, std::size_t end, const Hierarchy& h, std::uint32_t l, LodLevel& level)
+{
+    const std::size_t node_count = h.nodes.size();
+    const std::string which = "stored level " + std::to_string(l) + ": ";
+    auto left = [&] { return bytes_left(r, end, which); };
+    level.tolerance = r.f64();
+    level.geometric_error = r.f64();
+    level.max_plane_distance = r.f64();
+    if (!std::isfinite(level.tolerance) || !std::isfinite(level.geometric_error) || !std::isfinite(level.max_plane_distance))
+        r.fail(which + "non-finite error");
+    level.cut.resize(level_cut_size(r, end, which));
+    for (std::int32_t& id : level.cut) {
+        id = r.i32();
+        if (id < 0 || static_cast<std::size_t>(id) >= node_count)
+            r.fail(which + "cut names node " + std::to_string(id) + " of " + std::to_string(node_count));
+    }
+    if (!is_partition(h, level.cut))
+        r.fail(which + "the cut is not a partition of the points");
+    const std::uint64_t vertices = r.u64();
+    const std::uint64_t faces = r.u64();
+    const std::uint32_t colored = r.u32();
+    level_mesh_bytes(r, left(), which, vertices, faces, colored);
+    Mesh& m = level.mesh;
+    m.reserve(vertices, 3 * faces / 2 + 3, faces);
+    if (colored)
+        m.request_vertex_colors();
+    auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(m, kVertexCluster);
+    auto tile = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(m, kFaceTile);
+    auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(m, kFaceGap);
+    auto valid_id = [&](std::int32_t id) { return id >= -1 && id < static_cast<std::int64_t>(node_count); };
+    for (std::uint64_t i = 0; i < vertices; ++i) {
+        OpenMesh::Vec3d p, n;
+        for (int a = 0; a < 3; ++a)
+            p[a] = r.f64();
+        for (int a = 0; a < 3; ++a)
+            n[a] = r.f64();
+        if (!is_finite(to_vec3(p)) || !is_finite(to_vec3(n)))
+            r.fail(which + "non-finite vertex " + std::to_string(i));
+        const auto v = m.add_vertex(p);
+        m.set_normal(v, n);
+        const std::int32_t id = r.i32();
+        if (!valid_id(id))
+            r.fail(which + "vertex " + std::to_string(i) + " names node " + std::to_string(id));
+        cluster[v] = id;
+        if (colored) {
+            Mesh::Color c;
+            r.bytes(c.data(), 4);
+            m.set_color(v, c);
+        }
+    }
+    for (std::uint64_t i = 0; i < faces; ++i) {
+        std::array<Mesh::VertexHandle, 3> corner;
+        for (auto& c : corner) {
+            const std::uint32_t index = r.u32();
+            if (index >= vertices)
+                r.fail(which + "face " + std::to_string(i) + " names vertex " + std::to_string(index));
+            c = Mesh::VertexHandle(static_cast<int>(index));
+        }
+        if (corner[0] == corner[1] || corner[1] == corner[2] || corner[0] == corner[2]) // OpenMesh would loop an edge
+            r.fail(which + "face " + std::to_string(i) + " repeats a corner");
+        const auto f = m.add_face(corner[0], corner[1], corner[2]);
+        if (!f.is_valid())
+            r.fail(which + "face " + std::to_string(i) + " does not fit a manifold mesh");
+        const std::int32_t id = r.i32();
+        char g = 0;
+        r.bytes(&g, 1);
+        if (!valid_id(id) || (g != 0 && g != 1))
+            r.fail(which + "face " + std::to_string(i) + " has an invalid tile or gap flag");
+        tile[f] = id;
+        gap[f] = g != 0;
+    }
+    m.update_face_normals();
+}
+
+// Steps over level l, checking only that its counts fit: where the next level starts.
+void skip_level(Reader& r, std::size_t end, std::uint32_t l)
+{
+    const std::string which = "stored level " + std::to_string(l) + ": ";
+    auto left = [&] { return bytes_left(r, end, which); };
+    r.skip(24); // tolerance, geometric error, largest plane distance
+    r.skip(level_cut_size(r, end, which) * 4);
+    const std::uint64_t vertices = r.u64();
+    const std::uint64_t faces = r.u64();
+    const std::uint32_t colored = r.u32();
+    r.skip(level_mesh_bytes(r, left(), which, vertices, faces, colored));
+}
+
 // Reads the section write_levels wrote, checking every count against the bytes left before anything
 // is allocated from it, every id against the hierarchy, and every face as OpenMesh adds it.
 StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
 {
     StoredLevels stored;
-    const std::size_t node_count = h.nodes.size();
-    auto left = [&] { return end - r.position(); };
+    auto left = [&] { return bytes_left(r, end, "stored levels: "); };
     const std::uint32_t recipe = r.u32();
     if (recipe > kMaxRecipeBytes || recipe > left())
         r.fail("stored levels: recipe of " + std::to_string(recipe) + " bytes does not fit");
@@ -265,87 +384,29 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
     const std::uint32_t count = r.u32();
     if (count == 0 || count > kMaxStoredLevels)
         r.fail("stored levels: " + std::to_string(count) + " levels (expected 1 to " + std::to_string(kMaxStoredLevels) + ")");
-    const QuietOpenMesh quiet; // a refused face is reported below, as the file's fault
+    // Where each level starts, from the counts alone; then the levels are read each on its own, in
+    // parallel (adding a 1M-point set's faces to OpenMesh is most of a load). A damaged file is
+    // reported for its first damaged level, whatever the thread count.
+    std::vector<Reader> starts;
     for (std::uint32_t l = 0; l < count; ++l) {
-        const std::string which = "stored level " + std::to_string(l) + ": ";
-        LodLevel level;
-        level.tolerance = r.f64();
-        level.geometric_error = r.f64();
-        level.max_plane_distance = r.f64();
-        if (!std::isfinite(level.tolerance) || !std::isfinite(level.geometric_error) || !std::isfinite(level.max_plane_distance))
-            r.fail(which + "non-finite error");
-        const std::uint64_t cut_size = r.u64();
-        if (cut_size == 0 || cut_size > left() / 4)
-            r.fail(which + "cut of " + std::to_string(cut_size) + " nodes does not fit");
-        level.cut.resize(cut_size);
-        for (std::int32_t& id : level.cut) {
-            id = r.i32();
-            if (id < 0 || static_cast<std::size_t>(id) >= node_count)
-                r.fail(which + "cut names node " + std::to_string(id) + " of " + std::to_string(node_count));
-        }
-        if (!is_partition(h, level.cut))
-            r.fail(which + "the cut is not a partition of the points");
-        const std::uint64_t vertices = r.u64();
-        const std::uint64_t faces = r.u64();
-        const std::uint32_t colored = r.u32();
-        const std::size_t vertex_bytes = kStoredVertexBytes + (colored ? 4 : 0);
-        // Counts below 2^31 keep the byte count below 2^38: it cannot overflow.
-        if (colored > 1 || vertices > std::numeric_limits<std::int32_t>::max() ||
-            faces > std::numeric_limits<std::int32_t>::max() || vertices * vertex_bytes + faces * kStoredFaceBytes > left())
-            r.fail(which + "declared " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
-                   " faces do not fit the file");
-        Mesh& m = level.mesh;
-        m.reserve(vertices, 3 * faces / 2 + 3, faces);
-        if (colored)
-            m.request_vertex_colors();
-        auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(m, kVertexCluster);
-        auto tile = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(m, kFaceTile);
-        auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(m, kFaceGap);
-        auto valid_id = [&](std::int32_t id) { return id >= -1 && id < static_cast<std::int64_t>(node_count); };
-        for (std::uint64_t i = 0; i < vertices; ++i) {
-            OpenMesh::Vec3d p, n;
-            for (int a = 0; a < 3; ++a)
-                p[a] = r.f64();
-            for (int a = 0; a < 3; ++a)
-                n[a] = r.f64();
-            if (!is_finite(to_vec3(p)) || !is_finite(to_vec3(n)))
-                r.fail(which + "non-finite vertex " + std::to_string(i));
-            const auto v = m.add_vertex(p);
-            m.set_normal(v, n);
-            const std::int32_t id = r.i32();
-            if (!valid_id(id))
-                r.fail(which + "vertex " + std::to_string(i) + " names node " + std::to_string(id));
-            cluster[v] = id;
-            if (colored) {
-                Mesh::Color c;
-                r.bytes(c.data(), 4);
-                m.set_color(v, c);
-            }
-        }
-        for (std::uint64_t i = 0; i < faces; ++i) {
-            std::array<Mesh::VertexHandle, 3> corner;
-            for (auto& c : corner) {
-                const std::uint32_t index = r.u32();
-                if (index >= vertices)
-                    r.fail(which + "face " + std::to_string(i) + " names vertex " + std::to_string(index));
-                c = Mesh::VertexHandle(static_cast<int>(index));
-            }
-            if (corner[0] == corner[1] || corner[1] == corner[2] || corner[0] == corner[2]) // OpenMesh would loop an edge
-                r.fail(which + "face " + std::to_string(i) + " repeats a corner");
-            const auto f = m.add_face(corner[0], corner[1], corner[2]);
-            if (!f.is_valid())
-                r.fail(which + "face " + std::to_string(i) + " does not fit a manifold mesh");
-            const std::int32_t id = r.i32();
-            char g = 0;
-            r.bytes(&g, 1);
-            if (!valid_id(id) || (g != 0 && g != 1))
-                r.fail(which + "face " + std::to_string(i) + " has an invalid tile or gap flag");
-            tile[f] = id;
-            gap[f] = g != 0;
-        }
-        m.update_face_normals();
-        stored.levels.push_back(std::move(level));
+        starts.push_back(r);
+        skip_level(r, end, l);
     }
+    const QuietOpenMesh quiet; // a refused face is reported below, as the file's fault
+    // Each level is read into its place: an OpenMesh mesh has no move constructor, so moving a level
+    // into the vector (or the vector growing) would copy its mesh.
+    stored.levels.resize(count);
+    std::vector<std::exception_ptr> failures(count);
+    run_parallel(count, 0, [&](std::size_t l) {
+        try {
+            read_level(starts[l], end, h, static_cast<std::uint32_t>(l), stored.levels[l]);
+        } catch (...) {
+            failures[l] = std::current_exception();
+        }
+    });
+    for (const std::exception_ptr& failure : failures)
+        if (failure)
+            std::rethrow_exception(failure);
     return stored;
 }
 

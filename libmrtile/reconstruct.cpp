@@ -116,6 +116,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
             result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             return result;
         }
+        result.mesh = Mesh(); // no hull: the tiles below build the mesh afresh
     }
     std::vector<Tile> tiles = make_tiles(h, result.cut, options.tiles);
     for (int round = 0; round < options.small_object_rounds && options.tiles.voronoi_trim; ++round) {
@@ -136,7 +137,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         tiles = make_tiles(h, result.cut, options.tiles);
     }
     result.tiles = tiles.size();
-    result.mesh = build_surface(h, tiles, options.surface, &result.surface);
+    build_surface(h, tiles, result.mesh, options.surface, &result.surface);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     // A height field stays a graph through both: every face they change faces up its axis.
     FitOptions fit = options.fit;

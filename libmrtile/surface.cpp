@@ -203,6 +203,16 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
 
 Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options, SurfaceStats* stats)
 {
+    Mesh mesh;
+    build_surface(h, tiles, mesh, options, stats);
+    return mesh;
+}
+
+void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mesh, const SurfaceOptions& options,
+                   SurfaceStats* stats)
+{
+    if (mesh.n_vertices() > 0)
+        throw InvalidInput("build_surface: the mesh to build into must be empty");
     const auto start = std::chrono::steady_clock::now();
     if (tiles.empty())
         throw InvalidInput("build_surface: the cut has no tiles");
@@ -434,7 +444,6 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     }
     roots.erase(std::remove_if(roots.begin(), roots.end(), [&](std::uint32_t r) { return dropped[r]; }), roots.end());
 
-    Mesh mesh;
     auto cluster = OpenMesh::getOrMakeProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster);
     auto tile_of_face = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
@@ -564,7 +573,6 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (stats)
         *stats = st;
-    return mesh;
 }
 
 } // namespace mrt

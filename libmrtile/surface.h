@@ -139,4 +139,9 @@ struct SurfaceStats
 Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options = {},
                    SurfaceStats* stats = nullptr);
 
+//! \brief The same, built into `mesh`, which must be empty: for a caller that keeps the mesh in a
+//! struct (an OpenMesh mesh has no move constructor, so assigning a returned one copies it).
+void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mesh, const SurfaceOptions& options = {},
+                   SurfaceStats* stats = nullptr);
+
 } // namespace mrt

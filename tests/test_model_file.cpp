@@ -3,6 +3,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/shapes.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
@@ -294,6 +295,21 @@ TEST(ModelFile, damaged_stored_levels_are_rejected)
     for (int i = 0; i < 4; ++i)
         bad_node[node0 + static_cast<std::size_t>(i)] = static_cast<char>(0x7f);
     rejected(bad_node, "cut names node");
+    // Two levels damaged: the first is the one reported, on one thread or several (levels are read in
+    // parallel).
+    std::string both = bad_node;
+    both.replace(faces_end - 17 + 4, 4, bytes.substr(faces_end - 17, 4));
+    refresh_checksum(both);
+    for (const std::size_t threads : {1u, 4u}) {
+        set_default_threads(threads);
+        try {
+            deserialize_model_with_levels(both, "levels.mrt");
+            ADD_FAILURE() << "accepted with two damaged levels";
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("stored level 0: cut names node"), std::string::npos) << e.what();
+        }
+    }
+    set_default_threads(0);
     // Flipped bytes without a matching checksum, and truncation: rejected too.
     for (std::size_t at = level0; at < faces_end; at += 4099) {
         std::string flipped = bytes;

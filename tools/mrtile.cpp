@@ -387,33 +387,10 @@ struct AlsoWrite
     OutputArgs args;
 };
 
-// Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`.
-nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const MeshArgs& mesh_args,
-                              const OutputArgs& out_args, const fs::path& out, const std::vector<AlsoWrite>& also = {})
+// Measure + write a cut's mesh: the second half of mesh_and_write.
+nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshArgs& mesh_args, const OutputArgs& out_args,
+                            const fs::path& out, const std::vector<AlsoWrite>& also, Clock::time_point start)
 {
-    const auto start = Clock::now();
-    Cut cut;
-    MeshResult r;
-    if (cut_args.triangles > 0) {
-        TriangleCountResult t = mesh_to_triangle_count(h, cut_args.triangles, mesh_args.options());
-        cut = std::move(t.cut);
-        r = std::move(t.result);
-    } else {
-        cut = cut_args.cut(h);
-        r = mesh_cut(h, cut, mesh_args.options());
-        // Tiles of a plain tolerance cut that only their noise floor kept from refining.
-        const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
-        const double limit = (cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance) * h.scale;
-        std::size_t stopped = 0;
-        for (std::int32_t id : cut) {
-            const Node& n = h.nodes[static_cast<std::size_t>(id)];
-            stopped += plain && !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
-        }
-        if (stopped > 0)
-            std::printf("note: the points are noisy: %zu of %zu tiles stop at their noise floor (up to %.3g of the "
-                        "size); --below-noise goes on\n",
-                        stopped, cut.size(), max_noise_floor(h) / h.scale);
-    }
     QualityReport q;
     if (!mesh_args.no_quality)
         q = measure_quality(h, r.cut, r.mesh);
@@ -428,6 +405,34 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
         std::printf("wrote %s: the same mesh (%.2f s)\n", a.path.string().c_str(), seconds_since(again));
     }
     return j;
+}
+
+// Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`. The mesh is used where it
+// was made: an OpenMesh mesh has no move constructor, so moving a MeshResult into a variable declared
+// earlier would copy it.
+nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const MeshArgs& mesh_args,
+                              const OutputArgs& out_args, const fs::path& out, const std::vector<AlsoWrite>& also = {})
+{
+    const auto start = Clock::now();
+    if (cut_args.triangles > 0) {
+        const TriangleCountResult t = mesh_to_triangle_count(h, cut_args.triangles, mesh_args.options());
+        return write_meshed(h, t.result, mesh_args, out_args, out, also, start);
+    }
+    const Cut cut = cut_args.cut(h);
+    const MeshResult r = mesh_cut(h, cut, mesh_args.options());
+    // Tiles of a plain tolerance cut that only their noise floor kept from refining.
+    const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
+    const double limit = (cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance) * h.scale;
+    std::size_t stopped = 0;
+    for (std::int32_t id : cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        stopped += plain && !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
+    }
+    if (stopped > 0)
+        std::printf("note: the points are noisy: %zu of %zu tiles stop at their noise floor (up to %.3g of the "
+                    "size); --below-noise goes on\n",
+                    stopped, cut.size(), max_noise_floor(h) / h.scale);
+    return write_meshed(h, r, mesh_args, out_args, out, also, start);
 }
 
 struct ExportArgs
