@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -571,14 +572,40 @@ struct LevelStore
 {
     StoredLevels from_model;
     bool keep = false;
-    StoredLevels kept;
+    StoredLevels kept; // its recipe is set when the export meshes levels that are to be kept
+    // Where kept levels go: the model file, with the hierarchy as the model holds it (its own CRS, not
+    // an export's --crs) and these save options.
+    fs::path model;
+    Hierarchy* hierarchy = nullptr;
+    std::string model_crs;
+    SaveOptions save;
+    std::size_t stored = 0; // levels stored
 
-    // The LOD set's levels once the export is done with them, when they are to be kept (moved, not
-    // copied: they are the largest thing the export holds).
-    void take_back(std::vector<LodLevel>& levels)
+    // Stores the LOD set's levels in the model before the export writes anything, so that a model that
+    // cannot be written leaves no output behind. The levels are lent to the save (moved, not copied:
+    // a vector's move keeps its meshes where they are) and handed back.
+    void store(std::vector<LodLevel>& levels)
     {
-        if (keep && !kept.recipe.empty())
-            kept.levels = std::move(levels);
+        if (!keep || kept.recipe.empty())
+            return;
+        assert(hierarchy != nullptr && !model.empty());
+        kept.levels = std::move(levels);
+        const std::string export_crs = hierarchy->cloud.crs;
+        hierarchy->cloud.crs = model_crs;
+        SaveOptions options = save;
+        options.levels = &kept;
+        try {
+            save_model(*hierarchy, model, options);
+        } catch (...) {
+            hierarchy->cloud.crs = export_crs;
+            levels = std::move(kept.levels);
+            throw;
+        }
+        hierarchy->cloud.crs = export_crs;
+        levels = std::move(kept.levels);
+        stored = levels.size();
+        std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", stored,
+                    model.string().c_str());
     }
 };
 
@@ -608,24 +635,16 @@ std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, cons
         show_level_progress(options, g);
         levels = make_lod_levels(h, options);
         if (store.keep)
-            store.kept.recipe = recipe; // the levels follow through take_back
+            store.kept.recipe = recipe; // LevelStore::store saves them once the set is made
     }
     return levels;
 }
 
-// --store-levels after an export or reconstruct: the levels it meshed go into `model` with `h` (and
-// `save`'s other options), or a note says why there are none (not a LOD set). Nothing is written when
-// the export reused the model's own stored levels.
-void store_kept_levels(const Hierarchy& h, const fs::path& model, LevelStore& store, bool lod_set, SaveOptions save)
+// --store-levels on an export that made no LOD set: a note says why nothing was stored.
+void note_nothing_stored(const LevelStore& store, bool lod_set)
 {
-    if (!store.kept.levels.empty()) {
-        save.levels = &store.kept;
-        save_model(h, model, save);
-        std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", store.kept.levels.size(),
-                    model.string().c_str());
-    } else if (store.keep && !lod_set) {
+    if (store.keep && !lod_set && store.stored == 0)
         std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
-    }
 }
 
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
@@ -664,6 +683,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     const LodSetOptions options = e.options(m);
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    stored.store(set.levels);
     Vec3 origin = h.cloud.origin;
     std::optional<GeoPlacement> placed;
     if (crs) {
@@ -686,7 +706,6 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         }
     std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
                 dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
-    stored.take_back(set.levels);
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
@@ -698,6 +717,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     options.tileset = false;
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    stored.store(set.levels);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
         fine_to_coarse.push_back(&set.levels[l].mesh);
@@ -706,7 +726,6 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     write_glb_lods(fine_to_coarse, h.cloud.origin, out, lod_options);
     std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
                 seconds_since(start));
-    stored.take_back(set.levels);
 }
 
 void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
@@ -769,7 +788,7 @@ struct ProduceArgs
     }
 
     //! `stored`: levels stored with the model (reused when made with the same options); with
-    //! stored.keep, the levels meshed here are left in stored.kept.
+    //! stored.keep, the levels meshed here are stored in stored.model before anything is written.
     void write(const Hierarchy& h, const Globals& g, const fs::path& out, LevelStore& stored) const
     {
         if (exp.format == "3dtiles")
@@ -1136,8 +1155,11 @@ int run(int argc, char** argv)
             save_model(h, rec_model);
         LevelStore store;
         store.keep = rec_store_levels;
+        store.model = rec_model;
+        store.hierarchy = &h;
+        store.model_crs = h.cloud.crs;
         naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
-        store_kept_levels(h, rec_model, store, rec_args.exp.lod_set(), SaveOptions{});
+        note_nothing_stored(store, rec_args.exp.lod_set());
         return 0;
     }
     if (*lods) {
@@ -1163,12 +1185,13 @@ int run(int argc, char** argv)
         LevelStore store;
         store.from_model = std::move(model.levels);
         store.keep = exp_store_levels;
-        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, store); });
         // Back into the model as it was loaded (an export's --crs places this tileset only).
-        h.cloud.crs = model_crs;
-        SaveOptions keep_time;
-        keep_time.record_build_time = std::isfinite(h.info.build_seconds);
-        store_kept_levels(h, exp_in, store, lod_set, keep_time);
+        store.model = exp_in;
+        store.hierarchy = &h;
+        store.model_crs = model_crs;
+        store.save.record_build_time = std::isfinite(h.info.build_seconds);
+        naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, store); });
+        note_nothing_stored(store, lod_set);
         return 0;
     }
     if (*demo) {
