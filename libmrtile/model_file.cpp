@@ -140,8 +140,62 @@ std::uint32_t crc(const std::string& bytes, std::size_t length)
     return static_cast<std::uint32_t>(value);
 }
 
+// The stored statistics of every node, bounded by its points: a box that is exactly its points' (a leaf)
+// or its children's (else), and moments and errors that are finite and fit in that box. Cuts and
+// meshes size their work from these numbers; a forged file with NaN or huge ones would make them
+// allocate without bound. Runs after the point ranges are known to be valid; O(points + nodes).
+void check_node_statistics(const Hierarchy& h, const Reader& r)
+{
+    const std::vector<Vec3>& positions = h.cloud.positions;
+    for (std::size_t k = h.nodes.size(); k-- > 0;) { // children before parents
+        const Node& node = h.nodes[k];
+        const std::string which = "node " + std::to_string(k) + ": ";
+        BoundingBox box;
+        if (node.is_leaf()) {
+            box.min = box.max = positions[node.begin];
+            for (std::size_t i = node.begin; i < node.end; ++i) {
+                box.min = min(box.min, positions[i]);
+                box.max = max(box.max, positions[i]);
+            }
+        } else {
+            const BoundingBox& a = h.nodes[static_cast<std::size_t>(node.left)].box;
+            const BoundingBox& b = h.nodes[static_cast<std::size_t>(node.right)].box;
+            box.min = min(a.min, b.min);
+            box.max = max(a.max, b.max);
+        }
+        if (!(box.min == node.box.min) || !(box.max == node.box.max))
+            r.fail(which + "its box is not its points' box");
+        const Moments& m = node.moments;
+        const double diagonal = box.diagonal();
+        const double count = static_cast<double>(m.count);
+        // Rounding allowance: the mean may sit a hair outside a flat box; sums of squares carry rounding.
+        const double slack = 1e-9 * (diagonal + norm(box.max) + norm(box.min)) + 1e-300;
+        const Vec3 pad{slack, slack, slack};
+        if (!is_finite(m.mean) || !BoundingBox{box.min - pad, box.max + pad}.contains(m.mean))
+            r.fail(which + "its mean lies outside its points' box");
+        const double largest_square = count * (diagonal * diagonal + slack);
+        for (const double v : m.m2)
+            if (!std::isfinite(v) || std::abs(v) > largest_square * (1 + 1e-9))
+                r.fail(which + "second moments do not fit its points' box");
+        if (m.m2[0] < 0 || m.m2[3] < 0 || m.m2[5] < 0)
+            r.fail(which + "negative second moments");
+        // Paper eq. 1 sums distances to the centre (each at most the diagonal); it is kept up to date
+        // incrementally while points move between clusters, hence the factor 2 of room.
+        if (!(node.internal_error >= 0 && node.internal_error <= 2 * count * (diagonal + slack)) ||
+            !(node.max_plane_distance >= 0 && node.max_plane_distance <= 2 * diagonal + slack))
+            r.fail(which + "errors do not fit its points' box");
+    }
+}
+
 void check_structure(const Hierarchy& h, const Reader& r)
 {
+    // What a build would have refused (validate): a non-finite origin or point, an extent no mesh can
+    // have. Such a model was not written by save_model; meshing it would give non-finite vertices.
+    try {
+        validate(h.cloud, "the point cloud");
+    } catch (const InvalidInput& e) {
+        r.fail(e.what());
+    }
     const std::size_t n = h.cloud.positions.size();
     const std::size_t count = h.nodes.size();
     if (count == 0)
@@ -166,6 +220,7 @@ void check_structure(const Hierarchy& h, const Reader& r)
             rt.end != node.end || l.depth != node.depth + 1 || rt.depth != node.depth + 1)
             r.fail("node " + std::to_string(k) + " does not match its children");
     }
+    check_node_statistics(h, r);
     // Distinct input indices: a permutation of 0..n-1, or (merged duplicates) of a subset of a larger
     // range. The common case is checked with a bitmap, the other by sorting a copy.
     std::vector<bool> seen(n, false);
@@ -185,9 +240,6 @@ void check_structure(const Hierarchy& h, const Reader& r)
         if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
             r.fail("input indices repeat");
     }
-    for (const Vec3& p : h.cloud.positions)
-        if (!is_finite(p))
-            r.fail("non-finite coordinate");
 }
 
 

@@ -10,6 +10,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -40,10 +41,27 @@ void recenter(PointCloud& cloud)
 {
     if (cloud.empty())
         return;
-    const Vec3 c = bounding_box(cloud.positions).centre();
-    // A whole-number shift is exact in double for any realistic coordinate, so origin + position
-    // reproduces the input to the last bit the input had.
-    const Vec3 shift{std::round(c.x), std::round(c.y), std::round(c.z)};
+    // The median, not the box centre: a few stray points far away (a sensor glitch at 1e20) would put
+    // a box centre so far from the rest that, shifted by it, the real points lose their digits. A
+    // strided sample of at most 65,536 points keeps this cheap and deterministic.
+    const std::size_t stride = sample_stride(cloud.size(), 65536);
+    std::vector<double> axis;
+    auto median = [&](double Vec3::*coordinate) {
+        axis.clear();
+        for (std::size_t i = 0; i < cloud.size(); i += stride)
+            axis.push_back(cloud.positions[i].*coordinate);
+        const auto middle = axis.begin() + static_cast<std::ptrdiff_t>(axis.size() / 2);
+        std::nth_element(axis.begin(), middle, axis.end());
+        return *middle;
+    };
+    // An axis on which the points straddle 0 is left as it is: no shift, no rounding, every digit kept.
+    // Elsewhere (georeferenced input, 10^6 and up) a whole-number shift near the points keeps the
+    // digits that matter; origin + position gives the input back to within its last bit.
+    const BoundingBox box = bounding_box(cloud.positions);
+    auto shift_along = [&](double Vec3::*coordinate) {
+        return box.min.*coordinate <= 0.0 && box.max.*coordinate >= 0.0 ? 0.0 : std::round(median(coordinate));
+    };
+    const Vec3 shift{shift_along(&Vec3::x), shift_along(&Vec3::y), shift_along(&Vec3::z)};
     if (shift == Vec3{})
         return;
     for (Vec3& p : cloud.positions)
@@ -92,6 +110,22 @@ void validate(const PointCloud& cloud, const std::string& what)
     for (std::size_t i = 0; i < cloud.positions.size(); ++i)
         if (!is_finite(cloud.positions[i]))
             throw InvalidInput(what + ": point " + std::to_string(i) + " has a NaN or infinite coordinate");
+    // Finite is not enough: squared distances and the moments of the cut's clusters would overflow, and
+    // glTF's 32-bit floats end at 3.4e38. No scene spans 1e30 units; a file that does is corrupt or has
+    // stray points far from the rest.
+    const BoundingBox box = bounding_box(cloud.positions);
+    const Vec3 size = box.max - box.min;
+    const double side = std::max({size.x, size.y, size.z});
+    if (!(side <= kMaxExtent)) {
+        const int a = size.x == side ? 0 : size.y == side ? 1 : 2;
+        const char* names = "xyz";
+        auto coordinate = [&](const Vec3& p) { return a == 0 ? p.x : a == 1 ? p.y : p.z; };
+        char range[128];
+        std::snprintf(range, sizeof range, "%c from %.6g to %.6g", names[a], coordinate(cloud.origin + box.min),
+                      coordinate(cloud.origin + box.max));
+        throw InvalidInput(what + ": the points span " + range + ", more than the 1e30 units a mesh can have (a corrupt "
+                           "file, or stray points far from the rest: remove them)");
+    }
 }
 
 namespace {

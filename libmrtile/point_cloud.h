@@ -2,7 +2,7 @@
 //! \file point_cloud.h
 //! \brief The input of the pipeline: positions only (plus optional colours), with a double origin.
 //! \details Georeferenced scans have coordinates near 10^6..10^7. Every algorithm works on positions
-//! relative to `origin` (set to the bounding-box centre by recenter()), so that the same cloud far from
+//! relative to `origin` (set near the points' median by recenter()), so that the same cloud far from
 //! the origin gives the same hierarchy and meshes as near it. Writers add `origin` back (or emit it as a
 //! transform).
 
@@ -64,8 +64,10 @@ struct PointCloud
 //! Bounding box of the positions (relative to origin). An empty cloud gives a zero box.
 BoundingBox bounding_box(const std::vector<Vec3>& positions);
 
-//! Moves the origin to the bounding-box centre of the absolute coordinates, rounded to a whole number
-//! so that the origin is exact in every output format; positions change by the same offset.
+//! Moves the origin, per axis on which the points do not straddle 0, to the median of the absolute
+//! coordinates (of a strided sample of at most 65,536 points), rounded to a whole number so that the
+//! origin is exact in every output format; positions change by the same offset. The median, unlike the
+//! box centre, stays among the points when a few strays lie far away, so the points keep their digits.
 void recenter(PointCloud& cloud);
 
 //! \brief Appends `from` to `into` in absolute coordinates (positions rebased onto `into`'s origin; call
@@ -83,9 +85,13 @@ inline std::size_t sample_stride(std::size_t count, std::size_t max_points)
     return max_points == 0 || count <= max_points ? 1 : (count + max_points - 1) / max_points;
 }
 
+//! The largest extent (bounding-box side) a cloud may have, in its units.
+inline constexpr double kMaxExtent = 1e30;
+
 //! \brief Checks a cloud before building a hierarchy.
 //! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with
-//! its index), if colours do not match positions, or if the cloud is empty.
+//! its index), if the points span more than kMaxExtent, if colours do not match positions, or if the
+//! cloud is empty.
 void validate(const PointCloud& cloud, const std::string& what);
 
 //! \brief The length the scale-free tolerance is relative to: the largest side of the bounding box of

@@ -273,6 +273,33 @@ TEST(ClusterTree, degenerate_inputs)
     EXPECT_THROW(build_hierarchy(shapes::sphere(100), bad), InvalidInput);
 }
 
+// Finite coordinates that no scene has (a stray point at 1e200: its squared distances overflow) are
+// refused with the span named; a stray at 1e20 is not: the origin stays among the real points (the
+// median, not the box centre), so the sphere keeps its digits.
+TEST(ClusterTree, absurd_extents_are_refused_and_far_strays_keep_the_rest_exact)
+{
+    PointCloud absurd = shapes::sphere(2000);
+    absurd.positions.push_back({1e200, 0, 0});
+    try {
+        build_hierarchy(absurd);
+        ADD_FAILURE() << "a cloud spanning 1e200 was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("span x from"), std::string::npos) << e.what();
+    }
+    PointCloud stray = shapes::sphere(2000);
+    const std::vector<Vec3> sphere = stray.positions;
+    stray.positions.push_back({1e20, 0, 0});
+    recenter(stray);
+    EXPECT_EQ(stray.origin, Vec3(0, 0, 0)); // the points straddle 0: nothing to shift
+    shapes::translate(stray, {512345.0, 5412345.0, 250.0}); // far from 0: shifted, by the median
+    recenter(stray);
+    EXPECT_LT(std::abs(stray.origin.x - 512345.0), 2.0); // a box centre would be 5e19
+    for (std::size_t i = 0; i < sphere.size(); ++i)
+        EXPECT_NEAR(stray.positions[i].x + (stray.origin.x - 512345.0), sphere[i].x, 1e-9) << i;
+    const Hierarchy h = build_hierarchy(stray);
+    EXPECT_NEAR(h.scale, bounding_box(sphere).largest_side(), 1e-6); // the stray does not set the scale
+}
+
 // Far from the origin (UTM-like coordinates, recentred), the hierarchy is the one built near the origin.
 TEST(ClusterTree, far_from_origin_matches_near_origin)
 {

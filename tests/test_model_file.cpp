@@ -11,6 +11,8 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <limits>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -377,6 +379,37 @@ TEST(ModelFile, absurd_declared_sizes_are_rejected)
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos);
     }
+}
+
+// Forged files (checksum made to match) with values no build writes: a non-finite origin, a point far
+// beyond any scene, a node's NaN or huge statistics. Each is refused by name; meshing them would give
+// non-finite vertices or allocate without bound.
+TEST(ModelFile, forged_values_are_refused)
+{
+    const Hierarchy h = sample();
+    const std::string bytes = serialize_model(h);
+    auto refused = [&](std::size_t at, double value, const std::string& why) {
+        std::string forged = bytes;
+        std::memcpy(&forged[at], &value, 8);
+        refresh_checksum(forged);
+        try {
+            deserialize_model(forged, "forged.mrt");
+            ADD_FAILURE() << "accepted; expected: " << why;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    refused(56, inf, "origin is not finite");                   // origin.z (after magic, 4 words, 2 counts, x, y)
+    const std::size_t first_point = 104;                         // the header's size
+    refused(first_point + 24 * 5, 1e300, "the points span x");  // point 5's x
+    // Nodes close the file before its 8-byte trailer, 168 bytes each; the last is a leaf.
+    const std::size_t last = bytes.size() - 8 - 168;
+    const std::size_t mean_z = last + 6 * 4 + 8 + 16, m2_xx = mean_z + 8, box_max_x = last + 120 + 24;
+    refused(mean_z, nan, "mean lies outside");
+    refused(mean_z, 1e6, "mean lies outside");
+    refused(m2_xx, 1e250, "second moments do not fit");
+    refused(box_max_x, 1e200, "box is not its points' box");
 }
 
 // Missing files and unwritable destinations give IoErrors naming the path and leave nothing behind.

@@ -452,7 +452,7 @@ TEST(ReadPoints, many_points_cross_buffer_boundaries)
     const fs::path dir = test_dir();
     const std::vector<Vec3> pts = random_points(60000, {0, 0, 0}, 1000, 42);
     const DoubleFiles files = encode_doubles(pts, true);
-    // The bounding-box centre rounds to 0, so the origin stays 0 and every coordinate is exact.
+    // The points straddle 0 on every axis, so the origin stays 0 and every coordinate is exact.
     for (const fs::path& path : {write_file(dir / "big.xyz", files.xyz), write_gz(dir / "big.xyz.gz", files.xyz),
                                  write_file(dir / "big.ply", files.ply), write_gz(dir / "big.ply.gz", files.ply)}) {
         SCOPED_TRACE(path.string());
