@@ -113,6 +113,49 @@ Json tile_json(const std::vector<TilesetTile>& tiles, std::size_t t, const GltfO
     return out;
 }
 
+// The first entry of an existing output directory that a tileset of ours would not hold (anything but
+// tileset.json and tiles/<number>.glb), or "" if there is none. Replacing the directory removes it
+// as a whole, so a user's own files in it must stop the write.
+std::string foreign_entry(const fs::path& dir)
+{
+    std::error_code ec;
+    auto is_tile_name = [](const std::string& name) {
+        const std::size_t dot = name.find('.');
+        return dot > 0 && dot != std::string::npos && name.substr(dot) == ".glb" &&
+               std::all_of(name.begin(), name.begin() + static_cast<std::ptrdiff_t>(dot),
+                           [](char c) { return c >= '0' && c <= '9'; });
+    };
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (name == "tileset.json" && entry.is_regular_file(ec))
+            continue;
+        if (name == "tiles" && entry.is_directory(ec) && !entry.is_symlink(ec)) {
+            for (const fs::directory_entry& tile : fs::directory_iterator(entry.path(), ec))
+                if (!tile.is_regular_file(ec) || !is_tile_name(tile.path().filename().string()))
+                    return (fs::path("tiles") / tile.path().filename()).string();
+            continue;
+        }
+        return name;
+    }
+    return ec ? std::string("an unreadable entry (" + ec.message() + ")") : std::string();
+}
+
+// Refuses to replace anything that is not a tileset of ours: the target is removed as a whole.
+void check_replaceable(const fs::path& dir)
+{
+    std::error_code ec;
+    if (!fs::exists(dir, ec))
+        return;
+    if (!fs::is_directory(dir, ec))
+        throw IoError(dir.string() + ": exists and is not a directory");
+    if (!fs::is_empty(dir, ec) && !fs::exists(dir / "tileset.json", ec))
+        throw IoError(dir.string() + ": exists and is not a tileset (no tileset.json); refusing to replace it");
+    const std::string foreign = foreign_entry(dir);
+    if (!foreign.empty())
+        throw IoError(dir.string() + ": holds " + foreign + ", which is not part of a tileset we write; refusing "
+                      "to replace the directory (move it away or write elsewhere)");
+}
+
 void remove_quietly(const fs::path& path)
 {
     std::error_code ec;
@@ -160,20 +203,20 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
             if (!std::isfinite(v))
                 throw InvalidInput("TilesetOptions::root_transform: non-finite entry");
 
-    // Refuse to replace anything that is not a tileset: the target is removed as a whole.
+    check_replaceable(dir);
     std::error_code ec;
-    if (fs::exists(dir, ec)) {
-        if (!fs::is_directory(dir, ec))
-            throw IoError(dir.string() + ": exists and is not a directory");
-        if (!fs::is_empty(dir, ec) && !fs::exists(dir / "tileset.json", ec))
-            throw IoError(dir.string() + ": exists and is not a tileset (no tileset.json); refusing to replace it");
-    }
     fs::path built = dir;
     built += ".tmp." + std::to_string(static_cast<long>(::getpid()));
     remove_quietly(built); // a stale leftover of a killed run with the same pid
     if (!fs::create_directory(built, ec) || ec)
         throw IoError(dir.string() + ": cannot create the directory (" +
                       (ec ? ec.message() : std::string("already exists")) + ")");
+    remember_temporary(built); // removed if a signal stops the program before it is in place
+    struct Forget
+    {
+        const fs::path& path;
+        ~Forget() { forget_temporary(path); }
+    } forget{built};
     try {
         ensure_directory(built / "tiles");
         // Each tile is its own file, so they are encoded and written in parallel (Draco encoding is
@@ -233,6 +276,12 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
         remove_quietly(built);
         throw;
     }
+}
+
+void check_tileset_directory(const fs::path& dir)
+{
+    check_replaceable(dir);
+    check_writable_directory(dir);
 }
 
 std::array<double, 16> enu_to_ecef_transform(double longitude_deg, double latitude_deg, double height)

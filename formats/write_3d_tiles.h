@@ -55,6 +55,11 @@ struct TilesetOptions
 void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, const std::filesystem::path& dir,
                     const TilesetOptions& options = {});
 
+//! \brief Checks before any work that write_3d_tiles could write `dir`: an existing `dir` is a tileset
+//! of ours (tileset.json and tiles/<n>.glb only, so that replacing it removes nothing else) and its
+//! temporary directory can be created. \throw IoError naming `dir` and the cause.
+void check_tileset_directory(const std::filesystem::path& dir);
+
 //! \brief Column-major 4x4 matrix mapping local east-north-up metres at the WGS84 point
 //! (longitude, latitude in degrees, ellipsoidal height in metres) to ECEF (EPSG:4978), the frame of
 //! Cesium and other 3D Tiles clients. Pass it as TilesetOptions::root_transform when the mesh

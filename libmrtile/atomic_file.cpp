@@ -1,22 +1,154 @@
-// Output safety, required of every writer: write to a temporary file, rename on success.
+// Output safety, required of every writer: write to a temporary file, rename on success. A failure
+// removes the temporary; so does a signal that stops the program (install_signal_cleanup), so that an
+// interrupted run leaves no "<out>.tmp.<pid>" behind either.
 #include "libmrtile/atomic_file.h"
 
 #include "libmrtile/errors.h"
 
+#include <array>
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/syscall.h>
 #include <system_error>
 #include <unistd.h>
 
 namespace mrt {
 
-AtomicFile::AtomicFile(const std::filesystem::path& path) : path_(path)
+namespace {
+
+std::filesystem::path temporary_name(const std::filesystem::path& path)
 {
-    temp_ = path_;
-    temp_ += ".tmp." + std::to_string(static_cast<long>(::getpid()));
+    std::filesystem::path temp = path;
+    temp += ".tmp." + std::to_string(static_cast<long>(::getpid()));
+    return temp;
+}
+
+// The temporaries a signal handler removes: fixed slots, so that the handler needs no allocation or
+// lock. A slot is free (0), being written (1) or holds a path (2).
+constexpr std::size_t kSlots = 128; // temporaries alive at once: one per thread and a few
+constexpr std::size_t kPathBytes = 4096;
+struct Slot
+{
+    std::atomic<int> state{0};
+    char path[kPathBytes];
+};
+std::array<Slot, kSlots> g_slots;
+
+// Removes `name` under directory `dir` (a file, or a directory and what it holds, `depth` levels deep
+// at most) with async-signal-safe calls only.
+void remove_at(int dir, const char* name, int depth)
+{
+    if (::unlinkat(dir, name, 0) == 0 || depth <= 0)
+        return;
+    const int fd = ::openat(dir, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0)
+        return;
+    alignas(8) char buffer[4096];
+    for (;;) {
+        const long n = ::syscall(SYS_getdents64, fd, buffer, sizeof buffer);
+        if (n <= 0)
+            break;
+        for (long at = 0; at < n;) {
+            struct Entry
+            {
+                std::uint64_t inode;
+                std::int64_t offset;
+                unsigned short length;
+                unsigned char type;
+                char name[1];
+            };
+            const auto* e = reinterpret_cast<const Entry*>(buffer + at);
+            at += e->length;
+            if (std::strcmp(e->name, ".") == 0 || std::strcmp(e->name, "..") == 0)
+                continue;
+            remove_at(fd, e->name, depth - 1);
+        }
+    }
+    ::close(fd);
+    ::unlinkat(dir, name, AT_REMOVEDIR);
+}
+
+extern "C" void remove_temporaries_and_die(int signal)
+{
+    for (Slot& slot : g_slots)
+        if (slot.state.load(std::memory_order_acquire) == 2)
+            remove_at(AT_FDCWD, slot.path, 3);
+    ::signal(signal, SIG_DFL);
+    ::raise(signal);
+}
+
+} // namespace
+
+void remember_temporary(const std::filesystem::path& path)
+{
+    const std::string text = path.string();
+    if (text.size() >= kPathBytes)
+        return;
+    for (Slot& slot : g_slots) {
+        int free = 0;
+        if (slot.state.compare_exchange_strong(free, 1, std::memory_order_acquire)) {
+            std::memcpy(slot.path, text.c_str(), text.size() + 1);
+            slot.state.store(2, std::memory_order_release);
+            return;
+        }
+    }
+}
+
+void forget_temporary(const std::filesystem::path& path)
+{
+    const std::string text = path.string();
+    for (Slot& slot : g_slots) {
+        int held = 2;
+        if (slot.state.load(std::memory_order_acquire) == 2 && std::strcmp(slot.path, text.c_str()) == 0 &&
+            slot.state.compare_exchange_strong(held, 1, std::memory_order_acq_rel)) {
+            slot.state.store(0, std::memory_order_release);
+            return;
+        }
+    }
+}
+
+void install_signal_cleanup()
+{
+    struct sigaction action {};
+    action.sa_handler = remove_temporaries_and_die;
+    sigemptyset(&action.sa_mask);
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP})
+        ::sigaction(signal, &action, nullptr);
+}
+
+void check_writable_file(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw IoError(path.string() + ": is a directory");
+    AtomicFile probe(path); // removed again, uncommitted
+}
+
+void check_writable_directory(const std::filesystem::path& dir)
+{
+    const std::filesystem::path temp = temporary_name(dir);
+    std::error_code ec;
+    std::filesystem::remove_all(temp, ec); // a stale leftover of a killed run with the same pid
+    if (!std::filesystem::create_directory(temp, ec) || ec)
+        throw IoError(dir.string() + ": cannot create the directory (" +
+                      (ec ? ec.message() : std::string("already exists")) + ")");
+    std::filesystem::remove(temp, ec);
+}
+
+AtomicFile::AtomicFile(const std::filesystem::path& path) : path_(path), temp_(temporary_name(path))
+{
+    remember_temporary(temp_);
     out_.open(temp_, std::ios::binary | std::ios::trunc);
-    if (!out_)
-        throw IoError(path_.string() + ": cannot create file (" + std::strerror(errno) + ")");
+    if (!out_) {
+        const int error = errno;
+        forget_temporary(temp_);
+        throw IoError(path_.string() + ": cannot create file (" + std::strerror(error) + ")");
+    }
 }
 
 AtomicFile::~AtomicFile()
@@ -25,6 +157,7 @@ AtomicFile::~AtomicFile()
         out_.close();
         std::error_code ec;
         std::filesystem::remove(temp_, ec);
+        forget_temporary(temp_);
     }
 }
 
@@ -45,6 +178,7 @@ void AtomicFile::commit()
     if (ec)
         throw IoError(path_.string() + ": cannot rename temporary file into place (" + ec.message() + ")");
     committed_ = true;
+    forget_temporary(temp_);
 }
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& bytes)

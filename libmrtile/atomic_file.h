@@ -39,4 +39,25 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
 //! Creates the directory (and parents). \throw IoError naming it if that fails or it is a file.
 void ensure_directory(const std::filesystem::path& dir);
 
+//! \brief Checks before any work that `path` can be written as AtomicFile writes it (its temporary file
+//! is created and removed again) and is not a directory. A program that writes several outputs checks
+//! each first, so that one unwritable output does not leave the others written.
+//! \throw IoError naming `path` and the cause.
+void check_writable_file(const std::filesystem::path& path);
+
+//! \brief The same for an output directory built aside as "<dir>.tmp.<pid>" and moved into place
+//! (write_3d_tiles): its parent must exist, and the temporary directory can be created.
+void check_writable_directory(const std::filesystem::path& dir);
+
+//! \brief Names a temporary file or directory to remove if the program is stopped by a signal
+//! (install_signal_cleanup) before it is renamed into place; forget_temporary when it is gone or moved.
+//! Cheap, thread-safe, best effort (a fixed number of slots).
+void remember_temporary(const std::filesystem::path& path);
+void forget_temporary(const std::filesystem::path& path);
+
+//! \brief For programs: on SIGINT, SIGTERM or SIGHUP, removes the remembered temporaries (with
+//! async-signal-safe calls only) and then dies of the signal as it would have. A library never
+//! installs handlers itself.
+void install_signal_cleanup();
+
 } // namespace mrt

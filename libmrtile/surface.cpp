@@ -67,6 +67,7 @@
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <cassert>
 #include <chrono>
@@ -560,6 +561,14 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
     st.height_field_used = projection.used;
     st.height_field_axis = projection.axis;
     st.alpha = alpha;
+    if (mesh.n_faces() == 0) {
+        // Every piece was a small detached island (see SurfaceOptions): the tiles never joined.
+        char why[200];
+        std::snprintf(why, sizeof why, "%s the automatic alpha is %.3g",
+                      options.alpha > 0.0 ? "the given alpha is far below the tiles' spacing;" : "", options.alpha_factor * layout.mean_edge);
+        throw InvalidInput(std::string("build_surface: no surface is left: every piece of the cut is a small detached "
+                                       "island (") + why + ")");
+    }
     {
         auto visited = OpenMesh::makeTemporaryProperty<OpenMesh::HalfedgeHandle, bool>(mesh);
         for (auto heh : mesh.halfedges()) {

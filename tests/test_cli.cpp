@@ -136,6 +136,36 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     EXPECT_FALSE(fs::exists(dir / "line.ply"));
 }
 
+// Every output is checked before any work, so that a command that cannot write one of its outputs
+// writes none: an unwritable --stats-json leaves no mesh, an unwritable mesh leaves no --model.
+// Outputs that would overwrite an input or are not model files are usage errors; a surface that
+// comes out empty (alpha far too small) is an error, not an empty file.
+TEST(Cli, outputs_are_checked_before_any_work)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 2000);
+    const std::string in = xyz.string(), mesh = (dir / "m.ply").string(), model = (dir / "m.mrt").string();
+    auto expect_code = [&](const std::string& args, int code, const std::string& needle) {
+        const Result r = mrtile(args, dir);
+        EXPECT_EQ(r.code, code) << args << "\n" << r.out << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(mesh)) << args;
+        EXPECT_FALSE(fs::exists(model)) << args;
+    };
+    expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + (dir / "no" / "s.json").string(), 1, "s.json");
+    expect_code("reconstruct " + in + " -o " + (dir / "no" / "m.ply").string() + " --model " + model, 1, "m.ply");
+    expect_code("reconstruct " + in + " -o " + mesh + " --model " + in, 2, "ends in .mrt");
+    expect_code("reconstruct " + in + " -o " + in, 2, "is also an input");
+    expect_code("build " + in + " -o " + mesh, 2, "ends in .mrt");
+    expect_code("reconstruct " + in + " -o " + mesh + " --alpha 1e-9", 1, "no surface is left");
+    expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + mesh, 2, "two outputs");
+    ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "a.mrt").string(), dir).code, 0);
+    expect_code("lods " + (dir / "a.mrt").string() + " -o " + (dir / "no" / "lods").string(), 1, "lods");
+    expect_code("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "a.mrt").string(), 2, "is also an input");
+    EXPECT_FALSE(fs::exists(dir / "no"));
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

@@ -2,6 +2,7 @@
 // and reports. It is the only place that prints and picks exit codes (0 ok, 1 error, 2 usage).
 #include "formats/lod_tileset.h"
 #include "formats/read_points.h"
+#include "formats/write_3d_tiles.h"
 #include "formats/write_gltf.h"
 #include "formats/write_mesh.h"
 #include "libmrtile/atomic_file.h"
@@ -71,6 +72,18 @@ struct Globals
     bool below_noise = false; //!< cut below the nodes' noise floors
     bool progress() const { return !quiet && ::isatty(2); }
 };
+
+// An output directory of several files: made if missing, but not its parents (like every other
+// output, whose directory must exist).
+void make_output_directory(const fs::path& dir)
+{
+    std::error_code ec;
+    if (fs::is_directory(dir, ec))
+        return;
+    if (!fs::create_directory(dir, ec) || ec)
+        throw IoError(dir.string() + ": cannot create directory (" +
+                      (ec ? ec.message() : std::string("exists and is not a directory")) + ")");
+}
 
 std::string lower_extension(const fs::path& p)
 {
@@ -749,7 +762,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
             break;
         }
     }
-    ensure_directory(dir);
+    make_output_directory(dir);
     nlohmann::json index = nlohmann::json::array();
     const std::string ext = lower_extension(dir / ("x." + (e.format.empty() || e.format == "lods" ? std::string("ply") : e.format)));
     for (std::size_t level = 0; level < quality.size(); ++level) {
@@ -999,6 +1012,49 @@ int run_info(const fs::path& model, bool json)
     return 0;
 }
 
+// What a command writes, checked before any work (outputs_checked): so that an unwritable output
+// fails at once, and never after another output of the same command was written.
+struct Output
+{
+    enum class Kind { file, model, tileset, directory };
+    fs::path path;
+    Kind kind = Kind::file;
+};
+
+bool same_file(const fs::path& a, const fs::path& b)
+{
+    std::error_code ec;
+    return fs::equivalent(a, b, ec) && !ec;
+}
+
+void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output>& outputs)
+{
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        const Output& o = outputs[i];
+        if (o.path.empty())
+            continue;
+        if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
+            throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
+        for (const fs::path& in : inputs)
+            if (same_file(in, o.path))
+                throw UsageError(o.path.string() + ": is also an input of this command; write to another file");
+        for (std::size_t j = 0; j < i; ++j)
+            if (outputs[j].path == o.path || same_file(outputs[j].path, o.path))
+                throw UsageError(o.path.string() + ": named for two outputs");
+        switch (o.kind) {
+        case Output::Kind::file:
+        case Output::Kind::model: check_writable_file(o.path); break;
+        case Output::Kind::tileset: check_tileset_directory(o.path); break;
+        case Output::Kind::directory: {
+            std::error_code ec;
+            if (!fs::is_directory(o.path, ec))
+                check_writable_directory(o.path);
+            break;
+        }
+        }
+    }
+}
+
 int run(int argc, char** argv)
 {
     CLI::App app{"mrtile: point clouds to multiresolution meshes, glTF and 3D Tiles "
@@ -1108,6 +1164,22 @@ int run(int argc, char** argv)
         return code == 0 ? 0 : 2;
     }
     set_default_threads(threads);
+
+    const auto output_kind = [](const ProduceArgs& a) {
+        return a.exp.format == "3dtiles" ? Output::Kind::tileset : Output::Kind::file;
+    };
+    if (*build)
+        check_outputs(build_in, {{build_out, Output::Kind::model}});
+    if (*mesh)
+        check_outputs({mesh_in}, {{mesh_out, Output::Kind::file}, {mesh_args.stats_json, Output::Kind::file}});
+    if (*rec)
+        check_outputs(rec_in, {{rec_out, output_kind(rec_args)},
+                               {rec_model, Output::Kind::model},
+                               {rec_args.mesh.stats_json, Output::Kind::file}});
+    if (*lods)
+        check_outputs({lods_in}, {{lods_out, Output::Kind::directory}});
+    if (*exp)
+        check_outputs({exp_in}, {{exp_out, output_kind(exp_args)}, {exp_args.mesh.stats_json, Output::Kind::file}});
 
     if (*build) {
         Hierarchy h;
@@ -1227,6 +1299,7 @@ int run(int argc, char** argv)
 
 int main(int argc, char** argv)
 {
+    mrt::install_signal_cleanup(); // an interrupted run leaves no temporary file or directory behind
     try {
         return run(argc, argv);
     } catch (const UsageError& e) {

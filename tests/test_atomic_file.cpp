@@ -1,0 +1,108 @@
+// Output safety: outputs checked before any work, temporaries removed when a signal stops the program,
+// and a tileset directory replaced only when it holds nothing but a tileset of ours.
+#include "formats/write_3d_tiles.h"
+#include "libmrtile/atomic_file.h"
+#include "libmrtile/errors.h"
+#include "test_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace mrt {
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_text(const fs::path& path, const std::string& text)
+{
+    std::ofstream(path) << text;
+}
+
+std::size_t entries(const fs::path& dir)
+{
+    std::size_t n = 0;
+    for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it)
+        ++n;
+    return n;
+}
+
+// The probe names the path and its cause and leaves nothing behind, whether it passes or fails.
+TEST(AtomicFile, outputs_are_checked_without_a_trace)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    check_writable_file(dir / "ok.ply");
+    check_writable_directory(dir / "tiles");
+    EXPECT_EQ(entries(dir), 0u);
+    for (const fs::path& bad : {dir / "missing" / "x.ply", dir}) {
+        try {
+            check_writable_file(bad);
+            ADD_FAILURE() << bad;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_THROW(check_writable_directory(dir / "missing" / "tiles"), IoError);
+    EXPECT_EQ(entries(dir), 0u);
+}
+
+// A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
+// directory (with a subdirectory, as a tileset has) leaves neither, and still dies of the signal.
+TEST(AtomicFile, a_signal_removes_the_temporaries)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        install_signal_cleanup();
+        AtomicFile file(dir / "mesh.ply");
+        file.write("ply\n", 4);
+        const fs::path built = dir / "tiles.tmp.1";
+        fs::create_directories(built / "tiles");
+        write_text(built / "tileset.json", "{}");
+        write_text(built / "tiles" / "0.glb", "glTF");
+        remember_temporary(built);
+        ::raise(SIGTERM);
+        ::_exit(0); // not reached
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status));
+    EXPECT_EQ(WTERMSIG(status), SIGTERM);
+    EXPECT_EQ(entries(dir), 0u);
+}
+
+// Replacing a tileset directory removes it as a whole: it is refused when the directory holds a file
+// we would not have written, and accepted when it holds only a tileset of ours.
+TEST(AtomicFile, a_tileset_directory_with_other_files_is_not_replaced)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    const fs::path ours = dir / "ours", theirs = dir / "theirs", nested = dir / "nested";
+    for (const fs::path& d : {ours, theirs, nested}) {
+        fs::create_directories(d / "tiles");
+        write_text(d / "tileset.json", "{}");
+        write_text(d / "tiles" / "0.glb", "glTF");
+        write_text(d / "tiles" / "17.glb", "glTF");
+    }
+    write_text(theirs / "notes.txt", "keep me");
+    write_text(nested / "tiles" / "readme.md", "keep me");
+    check_tileset_directory(ours);
+    check_tileset_directory(dir / "new");
+    for (const auto& [d, entry] : {std::pair{theirs, std::string("notes.txt")}, std::pair{nested, std::string("readme.md")}}) {
+        try {
+            check_tileset_directory(d);
+            ADD_FAILURE() << d;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(entry), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_TRUE(fs::exists(theirs / "notes.txt"));
+    EXPECT_FALSE(fs::exists(dir / "new"));
+}
+
+} // namespace
+} // namespace mrt
