@@ -163,6 +163,11 @@ TEST(Cli, outputs_are_checked_before_any_work)
     ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "a.mrt").string(), dir).code, 0);
     expect_code("lods " + (dir / "a.mrt").string() + " -o " + (dir / "no" / "lods").string(), 1, "lods");
     expect_code("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "a.mrt").string(), 2, "is also an input");
+    expect_code("export " + (dir / "a.mrt").string() + " -o " + mesh + " --crs EPSG:32632", 2, "no effect");
+    expect_code("export " + (dir / "a.mrt").string() + " -o " + (dir / "t").string() +
+                    " --format 3dtiles --crs EPSG:32632 --enu 7,45,0",
+                2, "give one");
+    EXPECT_FALSE(fs::exists(dir / "t"));
     EXPECT_FALSE(fs::exists(dir / "no"));
 }
 

@@ -1241,6 +1241,10 @@ int run(int argc, char** argv)
         return 0;
     }
     if (*exp) {
+        if (!exp_crs.empty() && exp_args.exp.format != "3dtiles")
+            throw UsageError("--crs: places a 3D Tiles set on the globe; it has no effect on other formats");
+        if (!exp_crs.empty() && !exp_args.exp.enu.empty())
+            throw UsageError("--crs and --enu: both place the tileset; give one");
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
         // Stored levels serve LOD sets only; a single mesh leaves them unread (a second or so per million points).
         const bool lod_set = exp_args.exp.lod_set();
