@@ -162,6 +162,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
     expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + mesh, 2, "two outputs");
     ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "a.mrt").string(), dir).code, 0);
     expect_code("lods " + (dir / "a.mrt").string() + " -o " + (dir / "no" / "lods").string(), 1, "lods");
+    expect_code("lods " + (dir / "a.mrt").string() + " -o " + in, 1, "not a directory");
     expect_code("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "a.mrt").string(), 2, "is also an input");
     expect_code("export " + (dir / "a.mrt").string() + " -o " + mesh + " --crs EPSG:32632", 2, "no effect");
     expect_code("export " + (dir / "a.mrt").string() + " -o " + (dir / "t").string() +

@@ -1047,6 +1047,8 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
         case Output::Kind::tileset: check_tileset_directory(o.path); break;
         case Output::Kind::directory: {
             std::error_code ec;
+            if (fs::exists(o.path, ec) && !fs::is_directory(o.path, ec))
+                throw IoError(o.path.string() + ": exists and is not a directory");
             if (!fs::is_directory(o.path, ec))
                 check_writable_directory(o.path);
             break;
