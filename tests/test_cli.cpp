@@ -155,7 +155,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
     };
     expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + (dir / "no" / "s.json").string(), 1, "s.json");
     expect_code("reconstruct " + in + " -o " + (dir / "no" / "m.ply").string() + " --model " + model, 1, "m.ply");
-    expect_code("reconstruct " + in + " -o " + mesh + " --model " + in, 2, "ends in .mrt");
+    expect_code("reconstruct " + in + " -o " + mesh + " --model " + (dir / "x.ply").string(), 2, "ends in .mrt");
+    expect_code("reconstruct " + in + " -o " + mesh + " --model " + in, 2, "is also an input");
     expect_code("reconstruct " + in + " -o " + in, 2, "is also an input");
     expect_code("build " + in + " -o " + mesh, 2, "ends in .mrt");
     expect_code("reconstruct " + in + " -o " + mesh + " --alpha 1e-9", 1, "no surface is left");
@@ -170,6 +171,60 @@ TEST(Cli, outputs_are_checked_before_any_work)
                 2, "give one");
     EXPECT_FALSE(fs::exists(dir / "t"));
     EXPECT_FALSE(fs::exists(dir / "no"));
+    // Option values that cannot work, or that the output would ignore, are usage errors before any work.
+    const std::string a = "mesh " + (dir / "a.mrt").string() + " -o " + mesh;
+    const std::string tiles = "export " + (dir / "a.mrt").string() + " -o " + (dir / "t").string() + " --format 3dtiles";
+    const std::string glb = "export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string();
+    const std::pair<std::string, std::string> usage_errors[] = {
+        {a + " --focus 0,0,0,0.2:", "--focus"},
+        {a + " --camera 3,0,0:0,0,0:0:1080", "field of view"},
+        {a + " --camera 3,0,0:0,0,0:60:-5", "viewport height"},
+        {a + " --tiles 18446744073709551616", "--tiles"},
+        {a + " --camera ''", "must not be empty"},
+        {a + " --stats-json ''", "must not be empty"},
+        {"mesh " + (dir / "a.mrt").string() + " -o " + (dir / "x.txt").string(), "unknown output extension"},
+        {tiles + " --levels 10000000", "--levels"},
+        {tiles + " --levels 2 --lod-tolerances 0.01,0.001", "excludes"},
+        {tiles + " --lod-tolerances 0.001,0.01", "decrease"},
+        {tiles + " --max-tile-triangles 63", "--max-tile-triangles"},
+        {tiles + " --tolerance 0.05", "cut options"},
+        {tiles + " --enu 400,45,0", "--enu"},
+        {tiles + " --stats-json " + (dir / "s.json").string(), "--stats-json"},
+        {glb + " --levels 3", "applies to LOD sets"},
+        {glb + " --enu 7,45,0", "no effect"},
+        {glb + " --format ply", "does not match"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "use export"},
+    };
+    for (const auto& [args, needle] : usage_errors)
+        expect_code(args, 2, needle);
+    for (const char* name : {"t", "x.glb", "x.txt", "l", "s.json"})
+        EXPECT_FALSE(fs::exists(dir / name)) << name;
+}
+
+// --tolerance 0 is the finest cut (not the default); --no-quality keeps the topology keys and writes
+// null for the distances it skips; a triangle target no cut reaches is said so.
+TEST(Cli, tolerance_zero_no_quality_and_unreachable_triangles)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 3000);
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + (dir / "a.mrt").string(), dir).code, 0);
+    const Result info = mrtile("info --json " + (dir / "a.mrt").string(), dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    const std::size_t leaves = nlohmann::json::parse(info.out)["leaves"].get<std::size_t>();
+    const std::string mesh = "mesh " + (dir / "a.mrt").string() + " -o " + (dir / "m.ply").string() + " --stats-json " +
+                             (dir / "s.json").string();
+    ASSERT_EQ(mrtile(mesh + " --tolerance 0 --no-quality", dir).code, 0);
+    const nlohmann::json finest = nlohmann::json::parse(slurp(dir / "s.json"));
+    EXPECT_EQ(finest["tiles"].get<std::size_t>(), leaves);
+    EXPECT_EQ(finest["genus"].get<int>(), 0);
+    EXPECT_EQ(finest["nonmanifold_edges"].get<int>(), 0);
+    EXPECT_TRUE(finest["e_rms"].is_null());
+    EXPECT_TRUE(finest["mean_distance"].is_null());
+    ASSERT_EQ(mrtile(mesh, dir).code, 0);
+    EXPECT_LT(nlohmann::json::parse(slurp(dir / "s.json"))["tiles"].get<std::size_t>(), leaves); // the default 0.002
+    const Result few = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "f.ply").string() + " --triangles 2", dir);
+    ASSERT_EQ(few.code, 0) << few.err;
+    EXPECT_NE(few.out.find("no cut meshes to 2 triangles or fewer"), std::string::npos) << few.out;
 }
 
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
@@ -268,7 +323,7 @@ TEST(Cli, mesh_to_a_triangle_count)
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
     const Result zero = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "n.ply").string() + " --triangles 0", dir);
     EXPECT_EQ(zero.code, 2);
-    EXPECT_NE(zero.err.find("--triangles: '0' is not a number > 0"), std::string::npos) << zero.err;
+    EXPECT_NE(zero.err.find("--triangles: '0' is not a whole number from 1"), std::string::npos) << zero.err;
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
 }
 

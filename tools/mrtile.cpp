@@ -54,6 +54,25 @@ CLI::Validator number_check(bool allow_zero)
 const CLI::Validator kPositive = number_check(false);
 const CLI::Validator kNonNegative = number_check(true);
 
+// Whole numbers in [lo, hi], written as digits: CLI11 would let "-1" wrap and 2^64 saturate in a size_t.
+CLI::Validator integer_check(unsigned long long lo, unsigned long long hi)
+{
+    return CLI::Validator(
+        [lo, hi](std::string& text) -> std::string {
+            const bool digits = !text.empty() && text.size() <= 19 &&
+                                std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+            const unsigned long long v = digits ? std::stoull(text) : 0;
+            if (digits && v >= lo && v <= hi)
+                return std::string();
+            return "'" + text + "' is not a whole number from " + std::to_string(lo) + " to " + std::to_string(hi);
+        },
+        "INTEGER in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+// A text option given as "" would read as not given at all.
+const CLI::Validator kNonEmpty(
+    [](std::string& text) { return text.empty() ? std::string("must not be empty") : std::string(); }, "TEXT");
+
 using namespace mrt;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -136,9 +155,11 @@ struct BuildArgs
         auto* t = cmd->add_option("--" + prefix + "tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
                       ->check(kPositive);
         tol->excludes(t);
-        cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")->capture_default_str();
+        cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")
+            ->check(integer_check(0, 1ull << 40))
+            ->capture_default_str();
         cmd->add_option("--min-cluster", min_cluster, "clusters up to this size are not split")
-            ->check(kPositive)
+            ->check(integer_check(1, 1ull << 31))
             ->capture_default_str();
         cmd->add_flag("--no-reclassify", no_reclassify, "skip the Gabriel-neighbour reclassification");
         cmd->add_flag("--keep-duplicates", keep_duplicates, "do not merge points at exactly the same position");
@@ -146,10 +167,12 @@ struct BuildArgs
                       "scan lists (.conf): read the scans that exist, leave out the missing ones");
         cmd->add_option("--viewpoint", viewpoint,
                         "X,Y,Z where the scanner stood (input coordinates): open surfaces face it (default: from "
-                        "the file, as a PTX scan or an organized PCD tells it)");
+                        "the file, as a PTX scan or an organized PCD tells it)")
+            ->check(kNonEmpty);
         cmd->add_option("--crs", crs,
                         "coordinate system of the input: EPSG:N, WKT, or a .prj/.wkt file holding WKT (default: "
-                        "from the file, as a LAS file tells it); 3D Tiles are placed on the globe by it");
+                        "from the file, as a LAS file tells it); 3D Tiles are placed on the globe by it")
+            ->check(kNonEmpty);
         const OutlierOptions outliers;
         cmd->add_flag("--remove-outliers", remove_outliers,
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
@@ -174,65 +197,80 @@ struct BuildArgs
 
 struct CutArgs
 {
-    double tolerance = 0.0;
+    double tolerance = -1.0; // not given: kDefaultTolerance; 0: the finest cut
     double tau = 0.0;
     std::size_t tiles = 0;
     std::size_t triangles = 0;
     std::vector<std::string> focus;
     std::string camera;
+    std::vector<CLI::Option*> given; // every cut option, to tell whether any was used
 
     static constexpr double kDefaultTolerance = 0.002;
 
     void add(CLI::App* cmd)
     {
         auto* tol = cmd->add_option("--tolerance", tolerance,
-                                    "cut: RMS plane distance / largest bbox side (default 0.002)")
+                                    "cut: RMS plane distance / largest bbox side (default 0.002; 0: the finest cut)")
                         ->check(kNonNegative);
         auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
                       ->check(kPositive);
-        auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(kPositive);
+        auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(integer_check(1, 1ull << 40));
         auto* tri = cmd->add_option("--triangles", triangles,
                                     "cut: the finest best-N cut whose mesh has at most this many triangles")
-                        ->check(kPositive);
+                        ->check(integer_check(1, 1ull << 40));
         tri->excludes(tol)->excludes(t)->excludes(n);
-        auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)");
-        auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
+        auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)")
+                      ->check(kNonEmpty);
+        auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]")
+                      ->check(kNonEmpty);
         tol->excludes(t)->excludes(n);
         t->excludes(n);
         c->excludes(f)->excludes(n)->excludes(t)->excludes(tri);
         f->excludes(tri);
+        given = {tol, t, n, tri, f, c};
     }
 
-    Cut cut(const Hierarchy& h) const
+    bool any_given() const
     {
-        const Vec3 origin = h.cloud.origin;
-        if (!camera.empty()) {
-            std::vector<std::string> parts;
-            std::stringstream ss(camera);
-            std::string part;
-            while (std::getline(ss, part, ':'))
-                parts.push_back(part);
-            if (parts.size() < 4 || parts.size() > 5)
-                throw UsageError("--camera: expected X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
-            const auto p = parse_numbers(parts[0], ',', "--camera position");
-            const auto target = parse_numbers(parts[1], ',', "--camera target");
-            if (p.size() != 3 || target.size() != 3)
-                throw UsageError("--camera: position and target need three coordinates each");
-            Camera cam;
-            cam.position = Vec3{p[0], p[1], p[2]} - origin;
-            cam.fov_y_degrees = parse_numbers(parts[2], ',', "--camera fov").at(0);
-            cam.viewport_height = parse_numbers(parts[3], ',', "--camera height").at(0);
-            if (parts.size() == 5)
-                cam.max_pixel_error = parse_numbers(parts[4], ',', "--camera pixels").at(0);
-            return cut_for_camera(h, cam);
-        }
-        if (tiles > 0)
-            return cut_by_budget(h, tiles);
-        if (tau > 0)
-            return cut_by_tau(h, tau);
-        const double base = tolerance > 0 ? tolerance : kDefaultTolerance;
-        if (focus.empty())
-            return cut_by_tolerance(h, base);
+        return std::any_of(given.begin(), given.end(), [](const CLI::Option* o) { return o != nullptr && o->count() > 0; });
+    }
+
+    // The camera as given (absolute coordinates). \throw UsageError for a malformed or meaningless one.
+    Camera parsed_camera() const
+    {
+        std::vector<std::string> parts;
+        std::stringstream ss(camera);
+        std::string part;
+        while (std::getline(ss, part, ':'))
+            parts.push_back(part);
+        if (parts.size() < 4 || parts.size() > 5)
+            throw UsageError("--camera: expected X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]");
+        const auto p = parse_numbers(parts[0], ',', "--camera position");
+        const auto target = parse_numbers(parts[1], ',', "--camera target");
+        if (p.size() != 3 || target.size() != 3)
+            throw UsageError("--camera: position and target need three coordinates each");
+        auto one = [&](const std::string& text, const char* what) {
+            const auto v = parse_numbers(text, ',', what);
+            if (v.size() != 1)
+                throw UsageError(std::string(what) + ": expected one number, got '" + text + "'");
+            return v[0];
+        };
+        Camera cam;
+        cam.position = Vec3{p[0], p[1], p[2]};
+        cam.fov_y_degrees = one(parts[2], "--camera fov");
+        cam.viewport_height = one(parts[3], "--camera height");
+        if (parts.size() == 5)
+            cam.max_pixel_error = one(parts[4], "--camera pixels");
+        if (!(cam.fov_y_degrees > 0 && cam.fov_y_degrees < 180))
+            throw UsageError("--camera: the field of view must be between 0 and 180 degrees");
+        if (!(cam.viewport_height > 0) || !(cam.max_pixel_error > 0))
+            throw UsageError("--camera: the viewport height and the pixel error must be > 0");
+        return cam;
+    }
+
+    // The focus regions as given (absolute coordinates). \throw UsageError for a malformed one.
+    std::vector<FocusRegion> parsed_focus() const
+    {
         std::vector<FocusRegion> regions;
         for (const std::string& spec : focus) {
             const std::size_t colon = spec.find(':');
@@ -240,12 +278,47 @@ struct CutArgs
             if (v.size() != 4 || v[3] < 0)
                 throw UsageError("--focus: expected X,Y,Z,R[:TOL] with R >= 0, got '" + spec + "'");
             FocusRegion r;
-            r.centre = Vec3{v[0], v[1], v[2]} - origin;
+            r.centre = Vec3{v[0], v[1], v[2]};
             r.radius = v[3];
-            r.tolerance = colon == std::string::npos ? 0.0 : parse_numbers(spec.substr(colon + 1), ',', "--focus tolerance").at(0);
+            if (colon != std::string::npos) {
+                const auto t = parse_numbers(spec.substr(colon + 1), ',', "--focus tolerance");
+                if (t.size() != 1 || t[0] < 0)
+                    throw UsageError("--focus: the tolerance after ':' must be one number >= 0, got '" + spec + "'");
+                r.tolerance = t[0];
+            }
             regions.push_back(r);
         }
-        return cut_by_regions(h, base, regions);
+        return regions;
+    }
+
+    // Everything that can be checked without the model, before any work.
+    void validate() const
+    {
+        if (!camera.empty())
+            parsed_camera();
+        parsed_focus();
+    }
+
+    double base_tolerance() const { return tolerance >= 0 ? tolerance : kDefaultTolerance; }
+
+    Cut cut(const Hierarchy& h) const
+    {
+        const Vec3 origin = h.cloud.origin;
+        if (!camera.empty()) {
+            Camera cam = parsed_camera();
+            cam.position = cam.position - origin;
+            return cut_for_camera(h, cam);
+        }
+        if (tiles > 0)
+            return cut_by_budget(h, tiles);
+        if (tau > 0)
+            return cut_by_tau(h, tau);
+        if (focus.empty())
+            return cut_by_tolerance(h, base_tolerance());
+        std::vector<FocusRegion> regions = parsed_focus();
+        for (FocusRegion& r : regions)
+            r.centre = r.centre - origin;
+        return cut_by_regions(h, base_tolerance(), regions);
     }
 };
 
@@ -269,7 +342,7 @@ struct MeshArgs
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
         cmd->add_flag("--keep-steps", keep_steps, "height fields: keep step discontinuities open (paper Fig. 9b)");
-        cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file");
+        cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file")->check(kNonEmpty);
         cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
@@ -321,6 +394,17 @@ struct OutputArgs
     }
 };
 
+const char* const kMeshExtensionHelp =
+    "unknown output extension (use .ply .obj .off .stl .om .glb .gltf .drc, or --format 3dtiles with a directory)";
+
+bool is_mesh_extension(const std::string& ext)
+{
+    for (const char* known : {".glb", ".gltf", ".drc", ".ply", ".obj", ".off", ".stl", ".om"})
+        if (ext == known)
+            return true;
+    return false;
+}
+
 // Writes a mesh to any supported single-file format, chosen by extension.
 void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, const OutputArgs& args)
 {
@@ -334,7 +418,7 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
     } else if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".om") {
         write_mesh(mesh, origin, out);
     } else {
-        throw UsageError(out.string() + ": unknown output extension (use .ply .obj .off .stl .om .glb .gltf .drc, or --format 3dtiles with a directory)");
+        throw UsageError(out.string() + ": " + kMeshExtensionHelp);
     }
 }
 
@@ -376,6 +460,17 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["p99_distance"] = q->point_to_mesh.p99;
         j["mesh_to_points_mean"] = q->mesh_to_points.mean;
         j["mesh_to_points_max"] = q->mesh_to_points.max;
+    } else {
+        // --no-quality skips the distances (null), not the topology, which is cheap and documented.
+        const TopologyStats t = topology_stats(r.mesh);
+        j["boundary_loops"] = t.boundary_loops;
+        j["genus"] = t.genus;
+        j["components"] = t.components;
+        j["nonmanifold_edges"] = t.nonmanifold_edges;
+        j["nonmanifold_vertices"] = t.nonmanifold_vertices;
+        j["consistently_oriented"] = t.consistently_oriented;
+        for (const char* key : {"e_rms", "mean_distance", "max_distance"})
+            j[key] = nullptr;
     }
     j["seconds"] = seconds;
     return j;
@@ -385,7 +480,11 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
 {
     std::printf("wrote %s: %zu tiles, %zu vertices, %zu faces", out.string().c_str(), j["tiles"].get<std::size_t>(),
                 j["vertices"].get<std::size_t>(), j["faces"].get<std::size_t>());
-    if (j.contains("genus"))
+    if (j.contains("genus") && j["e_rms"].is_null())
+        std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices",
+                    j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
+                    j["nonmanifold_vertices"].get<std::size_t>());
+    else if (j.contains("genus"))
         std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices, E_RMS %.3g, "
                     "mean/max distance %.3g/%.3g of the diagonal (mesh to points: max %.3g)",
                     j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
@@ -430,13 +529,16 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     const auto start = Clock::now();
     if (cut_args.triangles > 0) {
         const TriangleCountResult t = mesh_to_triangle_count(h, cut_args.triangles, mesh_args.options());
+        if (t.result.mesh.n_faces() > cut_args.triangles)
+            std::printf("note: no cut meshes to %zu triangles or fewer; this is the coarsest one found\n",
+                        cut_args.triangles);
         return write_meshed(h, t.result, mesh_args, out_args, out, also, start);
     }
     const Cut cut = cut_args.cut(h);
     const MeshResult r = mesh_cut(h, cut, mesh_args.options());
     // Tiles of a plain tolerance cut that only their noise floor kept from refining.
     const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
-    const double limit = (cut_args.tolerance > 0 ? cut_args.tolerance : CutArgs::kDefaultTolerance) * h.scale;
+    const double limit = cut_args.base_tolerance() * h.scale;
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
@@ -463,17 +565,65 @@ struct ExportArgs
         cmd->add_option("--format", format,
                         "3dtiles (a directory), lod-glb (one .glb with every level, MSFT_lod), or by the output's extension")
             ->check(CLI::IsMember({"3dtiles", "lod-glb", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om", "lods"}));
-        cmd->add_option("--enu", enu,
-                        "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); the root "
-                        "transform maps it to ECEF");
-        cmd->add_option("--geoid-height", geoid_height,
-                        "3D Tiles placed by the model's CRS: metres added to every height (the geoid's height above "
-                        "the ellipsoid, for orthometric heights)");
-        cmd->add_option("--max-tile-triangles", max_tile_triangles, "largest number of triangles in one 3D Tiles tile")
-            ->check(kPositive)
-            ->capture_default_str();
-        cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)");
-        cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")->delimiter(',');
+        enu_option = cmd->add_option("--enu", enu,
+                                     "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); "
+                                     "the root transform maps it to ECEF")
+                         ->check(kNonEmpty);
+        geoid_option = cmd->add_option("--geoid-height", geoid_height,
+                                       "3D Tiles placed by the model's CRS: metres added to every height (the geoid's "
+                                       "height above the ellipsoid, for orthometric heights; |M| <= 10000)");
+        lod_options.push_back(cmd->add_option("--max-tile-triangles", max_tile_triangles,
+                                              "largest number of triangles in one 3D Tiles tile")
+                                  ->check(integer_check(64, 1ull << 31))
+                                  ->capture_default_str());
+        auto* l = cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)")
+                      ->check(integer_check(0, kMaxLevels));
+        auto* t = cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")
+                      ->delimiter(',')
+                      ->check(kNonNegative);
+        l->excludes(t);
+        lod_options.push_back(l);
+        lod_options.push_back(t);
+    }
+
+    static constexpr unsigned long long kMaxLevels = 32; // a level halves the error: 2^-32 is below any scan's noise
+    CLI::Option* enu_option = nullptr;
+    CLI::Option* geoid_option = nullptr;
+    std::vector<CLI::Option*> lod_options;
+
+    //! Checks what can be checked before any work: the format against the output's name, options that
+    //! the format ignores, --enu's numbers. `lods_command`: the `lods` command (mesh files only).
+    void validate(const fs::path& out, bool lods_command) const
+    {
+        const auto given = [](const CLI::Option* o) { return o != nullptr && o->count() > 0; };
+        const std::string ext = lower_extension(out);
+        if (lods_command) {
+            if (format == "3dtiles" || format == "lod-glb")
+                throw UsageError("--format " + format + ": lods writes one mesh file per level; use export for " + format);
+        } else if (format == "lods") {
+            throw UsageError("--format lods: for the lods command");
+        } else if (format == "lod-glb" && ext != ".glb") {
+            throw UsageError(out.string() + ": --format lod-glb writes a .glb file");
+        } else if (!format.empty() && !lod_set() && ext != "." + format) {
+            throw UsageError(out.string() + ": --format " + format + " does not match the file's extension");
+        }
+        if (!lods_command && !lod_set())
+            for (const CLI::Option* o : lod_options)
+                if (given(o))
+                    throw UsageError(o->get_name() + ": applies to LOD sets (--format 3dtiles or lod-glb), not one mesh");
+        if (format != "3dtiles" && (given(enu_option) || given(geoid_option)))
+            throw UsageError(std::string(given(enu_option) ? "--enu" : "--geoid-height") +
+                             ": places a 3D Tiles set on the globe; it has no effect on other formats");
+        for (std::size_t i = 1; i < tolerances.size(); ++i)
+            if (!(tolerances[i] < tolerances[i - 1]))
+                throw UsageError("--lod-tolerances: must decrease strictly, coarse to fine");
+        if (!enu.empty()) {
+            const auto v = parse_numbers(enu, ',', "--enu");
+            if (v.size() != 3 || std::abs(v[1]) > 90 || std::abs(v[0]) > 180 || std::abs(v[2]) > 1e7)
+                throw UsageError("--enu: expected LON,LAT,HEIGHT with |LON| <= 180, |LAT| <= 90 and |HEIGHT| <= 1e7 m");
+        }
+        if (!(std::abs(geoid_height) <= 1e4))
+            throw UsageError("--geoid-height: expected metres within +-10000 (the geoid stays within about 110 m)");
     }
 
     //! Whether the output is a LOD set (the formats stored levels serve).
@@ -800,6 +950,19 @@ struct ProduceArgs
         exp.add(cmd);
     }
 
+    //! Before any work: options that contradict each other or that the output would ignore.
+    void validate(const fs::path& out, bool lods_command) const
+    {
+        cut.validate();
+        exp.validate(out, lods_command);
+        if (exp.lod_set() && cut.any_given())
+            throw UsageError("cut options (--tolerance, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
+                             "a LOD set's levels are chosen by --levels or --lod-tolerances");
+        if ((exp.lod_set() || lods_command) && !mesh.stats_json.empty())
+            throw UsageError(std::string("--stats-json: describes one mesh; ") +
+                             (lods_command ? "lods writes each level's statistics to DIR/index.json" : "not a LOD set"));
+    }
+
     //! `stored`: levels stored with the model (reused when made with the same options); with
     //! stored.keep, the levels meshed here are stored in stored.model before anything is written.
     void write(const Hierarchy& h, const Globals& g, const fs::path& out, LevelStore& stored) const
@@ -1016,7 +1179,7 @@ int run_info(const fs::path& model, bool json)
 // fails at once, and never after another output of the same command was written.
 struct Output
 {
-    enum class Kind { file, model, tileset, directory };
+    enum class Kind { file, mesh, model, tileset, directory };
     fs::path path;
     Kind kind = Kind::file;
 };
@@ -1033,16 +1196,19 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
         const Output& o = outputs[i];
         if (o.path.empty())
             continue;
-        if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
-            throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
         for (const fs::path& in : inputs)
             if (same_file(in, o.path))
                 throw UsageError(o.path.string() + ": is also an input of this command; write to another file");
+        if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
+            throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
+        if (o.kind == Output::Kind::mesh && !is_mesh_extension(lower_extension(o.path)))
+            throw UsageError(o.path.string() + ": " + kMeshExtensionHelp);
         for (std::size_t j = 0; j < i; ++j)
             if (outputs[j].path == o.path || same_file(outputs[j].path, o.path))
                 throw UsageError(o.path.string() + ": named for two outputs");
         switch (o.kind) {
         case Output::Kind::file:
+        case Output::Kind::mesh:
         case Output::Kind::model: check_writable_file(o.path); break;
         case Output::Kind::tileset: check_tileset_directory(o.path); break;
         case Output::Kind::directory: {
@@ -1148,7 +1314,8 @@ int run(int argc, char** argv)
                   "level and mesh options only cut tiles");
     exp->add_option("--crs", exp_crs,
                     "3D Tiles: the model's coordinate system (EPSG:N, WKT, or a .prj/.wkt file), in place of the "
-                    "one stored in it");
+                    "one stored in it")
+        ->check(kNonEmpty);
 
     // demo
     auto* demo = app.add_subcommand("demo", "the whole pipeline on a built-in genus-3 test shape");
@@ -1168,12 +1335,26 @@ int run(int argc, char** argv)
     set_default_threads(threads);
 
     const auto output_kind = [](const ProduceArgs& a) {
-        return a.exp.format == "3dtiles" ? Output::Kind::tileset : Output::Kind::file;
+        return a.exp.format == "3dtiles" ? Output::Kind::tileset : Output::Kind::mesh;
     };
+    // Option values first (usage errors, exit 2), then the outputs (exit 1), all before any work.
+    if (*mesh)
+        mesh_cut_args.validate();
+    if (*rec)
+        rec_args.validate(rec_out, false);
+    if (*lods)
+        lods_args.validate(lods_out, true);
+    if (*exp) {
+        exp_args.validate(exp_out, false);
+        if (!exp_crs.empty() && exp_args.exp.format != "3dtiles")
+            throw UsageError("--crs: places a 3D Tiles set on the globe; it has no effect on other formats");
+        if (!exp_crs.empty() && !exp_args.exp.enu.empty())
+            throw UsageError("--crs and --enu: both place the tileset; give one");
+    }
     if (*build)
         check_outputs(build_in, {{build_out, Output::Kind::model}});
     if (*mesh)
-        check_outputs({mesh_in}, {{mesh_out, Output::Kind::file}, {mesh_args.stats_json, Output::Kind::file}});
+        check_outputs({mesh_in}, {{mesh_out, Output::Kind::mesh}, {mesh_args.stats_json, Output::Kind::file}});
     if (*rec)
         check_outputs(rec_in, {{rec_out, output_kind(rec_args)},
                                {rec_model, Output::Kind::model},
@@ -1225,8 +1406,6 @@ int run(int argc, char** argv)
             throw UsageError("--store-levels: needs --model M.mrt (the levels are stored in it)");
         Hierarchy h = build_from_points(rec_in, rec_build, g);
         apply_globals(h);
-        if (!rec_model.empty())
-            save_model(h, rec_model);
         LevelStore store;
         store.keep = rec_store_levels;
         store.model = rec_model;
@@ -1234,6 +1413,12 @@ int run(int argc, char** argv)
         store.model_crs = h.cloud.crs;
         naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
         note_nothing_stored(store, rec_args.exp.lod_set());
+        // Last, so that a failed command leaves no model either (with --store-levels it is already
+        // written, with its levels, before the tileset).
+        if (!rec_model.empty() && store.stored == 0) {
+            save_model(h, rec_model);
+            std::printf("wrote %s\n", rec_model.string().c_str());
+        }
         return 0;
     }
     if (*lods) {
@@ -1243,10 +1428,6 @@ int run(int argc, char** argv)
         return 0;
     }
     if (*exp) {
-        if (!exp_crs.empty() && exp_args.exp.format != "3dtiles")
-            throw UsageError("--crs: places a 3D Tiles set on the globe; it has no effect on other formats");
-        if (!exp_crs.empty() && !exp_args.exp.enu.empty())
-            throw UsageError("--crs and --enu: both place the tileset; give one");
         const std::string crs = exp_crs.empty() ? std::string() : crs_argument(exp_crs);
         // Stored levels serve LOD sets only; a single mesh leaves them unread (a second or so per million points).
         const bool lod_set = exp_args.exp.lod_set();
