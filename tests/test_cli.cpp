@@ -193,6 +193,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {glb + " --levels 3", "applies to LOD sets"},
         {glb + " --enu 7,45,0", "no effect"},
         {glb + " --format ply", "does not match"},
+        {glb + " --quantize 12", "add --draco"},
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "use export"},
     };
     for (const auto& [args, needle] : usage_errors)

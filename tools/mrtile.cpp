@@ -376,11 +376,21 @@ struct OutputArgs
     bool draco = false;
     int quantize = 14;
     std::string up = "z";
+    CLI::Option* quantize_option = nullptr;
+
+    // --quantize acts on Draco only: without --draco it would be ignored, except in a .drc file.
+    void validate(const fs::path& out) const
+    {
+        if (quantize_option != nullptr && quantize_option->count() > 0 && !draco && lower_extension(out) != ".drc")
+            throw UsageError("--quantize: sets Draco's quantization; add --draco (or write a .drc file)");
+    }
 
     void add(CLI::App* cmd)
     {
         cmd->add_flag("--draco", draco, "Draco-compress glTF/GLB and 3D Tiles content");
-        cmd->add_option("--quantize", quantize, "Draco position quantization bits")->check(CLI::Range(1, 30))->capture_default_str();
+        quantize_option = cmd->add_option("--quantize", quantize, "Draco position quantization bits (with --draco or .drc)")
+                              ->check(CLI::Range(1, 30))
+                              ->capture_default_str();
         cmd->add_option("--up", up, "up axis of the input (glTF is y-up): z or y")->check(CLI::IsMember({"z", "y"}))->capture_default_str();
     }
 
@@ -954,6 +964,7 @@ struct ProduceArgs
     void validate(const fs::path& out, bool lods_command) const
     {
         cut.validate();
+        output.validate(out);
         exp.validate(out, lods_command);
         if (exp.lod_set() && cut.any_given())
             throw UsageError("cut options (--tolerance, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
@@ -1338,8 +1349,10 @@ int run(int argc, char** argv)
         return a.exp.format == "3dtiles" ? Output::Kind::tileset : Output::Kind::mesh;
     };
     // Option values first (usage errors, exit 2), then the outputs (exit 1), all before any work.
-    if (*mesh)
+    if (*mesh) {
         mesh_cut_args.validate();
+        mesh_out_args.validate(mesh_out);
+    }
     if (*rec)
         rec_args.validate(rec_out, false);
     if (*lods)
