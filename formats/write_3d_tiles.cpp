@@ -204,78 +204,63 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
                 throw InvalidInput("TilesetOptions::root_transform: non-finite entry");
 
     check_replaceable(dir);
-    std::error_code ec;
-    fs::path built = dir;
-    built += ".tmp." + std::to_string(static_cast<long>(::getpid()));
-    remove_quietly(built); // a stale leftover of a killed run with the same pid
-    if (!fs::create_directory(built, ec) || ec)
-        throw IoError(dir.string() + ": cannot create the directory (" +
-                      (ec ? ec.message() : std::string("already exists")) + ")");
-    remember_temporary(built); // removed if a signal stops the program before it is in place
-    struct Forget
-    {
-        const fs::path& path;
-        ~Forget() { forget_temporary(path); }
-    } forget{built};
-    try {
-        ensure_directory(built / "tiles");
-        // Each tile is its own file, so they are encoded and written in parallel (Draco encoding is
-        // most of an export's time). A failure is reported for the lowest failing tile, as a serial
-        // loop would, whatever the thread count.
-        std::vector<std::exception_ptr> failures(tiles.size());
-        run_parallel(tiles.size(), options.threads, [&](std::size_t t) {
-            if (tiles[t].mesh == nullptr)
-                return;
-            try {
-                // Origin 0: the positions stay relative to the tileset origin, which the root
-                // transform carries; the per-file offset keeps float precision inside the tile.
-                write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), options.gltf);
-            } catch (const InvalidInput& e) {
-                failures[t] = std::make_exception_ptr(
-                    InvalidInput("write_3d_tiles: tile " + std::to_string(t) + ": " + e.what()));
-            } catch (...) {
-                failures[t] = std::current_exception();
-            }
-        });
-        for (const std::exception_ptr& failure : failures)
-            if (failure)
-                std::rethrow_exception(failure);
-
-        Json root = tile_json(tiles, 0, options.gltf);
-        std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-        if (options.root_transform) {
-            transform = *options.root_transform;
-        } else {
-            const Vec3 t = to_tileset_frame(origin, up);
-            transform[12] = t.x;
-            transform[13] = t.y;
-            transform[14] = t.z;
+    // Built aside and swapped into place; on failure (or a signal) the half-built directory goes.
+    const TemporaryDirectory temporary(dir);
+    const fs::path& built = temporary.path();
+    ensure_directory(built / "tiles");
+    // Each tile is its own file, so they are encoded and written in parallel (Draco encoding is
+    // most of an export's time). A failure is reported for the lowest failing tile, as a serial
+    // loop would, whatever the thread count.
+    std::vector<std::exception_ptr> failures(tiles.size());
+    run_parallel(tiles.size(), options.threads, [&](std::size_t t) {
+        if (tiles[t].mesh == nullptr)
+            return;
+        try {
+            // Origin 0: the positions stay relative to the tileset origin, which the root
+            // transform carries; the per-file offset keeps float precision inside the tile.
+            write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), options.gltf);
+        } catch (const InvalidInput& e) {
+            failures[t] = std::make_exception_ptr(
+                InvalidInput("write_3d_tiles: tile " + std::to_string(t) + ": " + e.what()));
+        } catch (...) {
+            failures[t] = std::current_exception();
         }
-        Json ordered_root;
-        ordered_root["boundingVolume"] = root["boundingVolume"];
-        ordered_root["geometricError"] = root["geometricError"];
-        ordered_root["refine"] = "REPLACE";
-        ordered_root["transform"] = transform;
-        for (const char* key : {"content", "children"})
-            if (root.contains(key))
-                ordered_root[key] = root[key];
+    });
+    for (const std::exception_ptr& failure : failures)
+        if (failure)
+            std::rethrow_exception(failure);
 
-        const TilesetTile& r = tiles[0];
-        const double top_error = options.tileset_geometric_error
-                                     ? *options.tileset_geometric_error
-                                     : std::max(r.geometric_error, r.box.diagonal());
-        if (!std::isfinite(top_error) || top_error < r.geometric_error)
-            throw InvalidInput("TilesetOptions::tileset_geometric_error: must be finite and >= the root's error");
-        Json tileset;
-        tileset["asset"] = Json{{"version", "1.1"}, {"generator", "libmrtile"}};
-        tileset["geometricError"] = top_error;
-        tileset["root"] = std::move(ordered_root);
-        write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n");
-        swap_into_place(built, dir);
-    } catch (...) {
-        remove_quietly(built);
-        throw;
+    Json root = tile_json(tiles, 0, options.gltf);
+    std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    if (options.root_transform) {
+        transform = *options.root_transform;
+    } else {
+        const Vec3 t = to_tileset_frame(origin, up);
+        transform[12] = t.x;
+        transform[13] = t.y;
+        transform[14] = t.z;
     }
+    Json ordered_root;
+    ordered_root["boundingVolume"] = root["boundingVolume"];
+    ordered_root["geometricError"] = root["geometricError"];
+    ordered_root["refine"] = "REPLACE";
+    ordered_root["transform"] = transform;
+    for (const char* key : {"content", "children"})
+        if (root.contains(key))
+            ordered_root[key] = root[key];
+
+    const TilesetTile& r = tiles[0];
+    const double top_error = options.tileset_geometric_error
+                                 ? *options.tileset_geometric_error
+                                 : std::max(r.geometric_error, r.box.diagonal());
+    if (!std::isfinite(top_error) || top_error < r.geometric_error)
+        throw InvalidInput("TilesetOptions::tileset_geometric_error: must be finite and >= the root's error");
+    Json tileset;
+    tileset["asset"] = Json{{"version", "1.1"}, {"generator", "libmrtile"}};
+    tileset["geometricError"] = top_error;
+    tileset["root"] = std::move(ordered_root);
+    write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n");
+    swap_into_place(built, dir);
 }
 
 void check_tileset_directory(const fs::path& dir)

@@ -131,13 +131,24 @@ void check_writable_file(const std::filesystem::path& path)
 
 void check_writable_directory(const std::filesystem::path& dir)
 {
-    const std::filesystem::path temp = temporary_name(dir);
+    const TemporaryDirectory probe(dir); // removed again
+}
+
+TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir) : path_(temporary_name(dir))
+{
     std::error_code ec;
-    std::filesystem::remove_all(temp, ec); // a stale leftover of a killed run with the same pid
-    if (!std::filesystem::create_directory(temp, ec) || ec)
+    std::filesystem::remove_all(path_, ec); // a stale leftover of a killed run with the same pid
+    if (!std::filesystem::create_directory(path_, ec) || ec)
         throw IoError(dir.string() + ": cannot create the directory (" +
                       (ec ? ec.message() : std::string("already exists")) + ")");
-    std::filesystem::remove(temp, ec);
+    remember_temporary(path_);
+}
+
+TemporaryDirectory::~TemporaryDirectory()
+{
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+    forget_temporary(path_);
 }
 
 AtomicFile::AtomicFile(const std::filesystem::path& path) : path_(path), temp_(temporary_name(path))

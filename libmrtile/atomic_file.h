@@ -46,8 +46,26 @@ void ensure_directory(const std::filesystem::path& dir);
 void check_writable_file(const std::filesystem::path& path);
 
 //! \brief The same for an output directory built aside as "<dir>.tmp.<pid>" and moved into place
-//! (write_3d_tiles): its parent must exist, and the temporary directory can be created.
+//! (TemporaryDirectory): its parent must exist, and the temporary directory can be created.
 void check_writable_directory(const std::filesystem::path& dir);
+
+//! \brief "<dir>.tmp.<pid>", an output directory built aside (a stale one of a killed run with the same
+//! pid is replaced) and removed with everything in it when this object ends, or by a signal
+//! (install_signal_cleanup). Whoever moves it into place first leaves nothing to remove.
+class TemporaryDirectory
+{
+public:
+    //! \throw IoError naming `dir` if the temporary directory cannot be created.
+    explicit TemporaryDirectory(const std::filesystem::path& dir);
+    ~TemporaryDirectory();
+    TemporaryDirectory(const TemporaryDirectory&) = delete;
+    TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
 
 //! \brief Names a temporary file or directory to remove if the program is stopped by a signal
 //! (install_signal_cleanup) before it is renamed into place; forget_temporary when it is gone or moved.

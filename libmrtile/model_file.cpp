@@ -339,7 +339,6 @@ void read_level(Reader& r, std::size_t end, const Hierarchy& h, std::uint32_t l,
 {
     const std::size_t node_count = h.nodes.size();
     const std::string which = "stored level " + std::to_string(l) + ": ";
-    auto left = [&] { return bytes_left(r, end, which); };
     level.tolerance = r.f64();
     level.geometric_error = r.f64();
     level.max_plane_distance = r.f64();
@@ -356,7 +355,7 @@ void read_level(Reader& r, std::size_t end, const Hierarchy& h, std::uint32_t l,
     const std::uint64_t vertices = r.u64();
     const std::uint64_t faces = r.u64();
     const std::uint32_t colored = r.u32();
-    level_mesh_bytes(r, left(), which, vertices, faces, colored);
+    level_mesh_bytes(r, bytes_left(r, end, which), which, vertices, faces, colored);
     Mesh& m = level.mesh;
     m.reserve(vertices, 3 * faces / 2 + 3, faces);
     if (colored)
@@ -413,13 +412,12 @@ void read_level(Reader& r, std::size_t end, const Hierarchy& h, std::uint32_t l,
 void skip_level(Reader& r, std::size_t end, std::uint32_t l)
 {
     const std::string which = "stored level " + std::to_string(l) + ": ";
-    auto left = [&] { return bytes_left(r, end, which); };
     r.skip(24); // tolerance, geometric error, largest plane distance
     r.skip(level_cut_size(r, end, which) * 4);
     const std::uint64_t vertices = r.u64();
     const std::uint64_t faces = r.u64();
     const std::uint32_t colored = r.u32();
-    r.skip(level_mesh_bytes(r, left(), which, vertices, faces, colored));
+    r.skip(level_mesh_bytes(r, bytes_left(r, end, which), which, vertices, faces, colored));
 }
 
 // Reads the section write_levels wrote, checking every count against the bytes left before anything

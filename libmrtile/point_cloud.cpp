@@ -114,15 +114,13 @@ void validate(const PointCloud& cloud, const std::string& what)
     // glTF's 32-bit floats end at 3.4e38. No scene spans 1e30 units; a file that does is corrupt or has
     // stray points far from the rest.
     const BoundingBox box = bounding_box(cloud.positions);
-    const Vec3 size = box.max - box.min;
-    const double side = std::max({size.x, size.y, size.z});
+    const double side = box.largest_side();
     if (!(side <= kMaxExtent)) {
+        const Vec3 size = box.size();
         const int a = size.x == side ? 0 : size.y == side ? 1 : 2;
-        const char* names = "xyz";
-        auto coordinate = [&](const Vec3& p) { return a == 0 ? p.x : a == 1 ? p.y : p.z; };
         char range[128];
-        std::snprintf(range, sizeof range, "%c from %.6g to %.6g", names[a], coordinate(cloud.origin + box.min),
-                      coordinate(cloud.origin + box.max));
+        std::snprintf(range, sizeof range, "%c from %.6g to %.6g", "xyz"[a], (cloud.origin + box.min)[a],
+                      (cloud.origin + box.max)[a]);
         throw InvalidInput(what + ": the points span " + range + ", more than the 1e30 units a mesh can have (a corrupt "
                            "file, or stray points far from the rest: remove them)");
     }

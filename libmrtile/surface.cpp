@@ -67,12 +67,12 @@
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
 #include <algorithm>
-#include <cstdio>
 #include <array>
 #include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <string>

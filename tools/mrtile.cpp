@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cctype>
 #include <chrono>
@@ -68,6 +69,9 @@ CLI::Validator integer_check(unsigned long long lo, unsigned long long hi)
         },
         "INTEGER in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
 }
+
+// Whether an option appeared on the command line (its value alone cannot tell a default from a choice).
+bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
 // A text option given as "" would read as not given at all.
 const CLI::Validator kNonEmpty(
@@ -203,7 +207,7 @@ struct CutArgs
     std::size_t triangles = 0;
     std::vector<std::string> focus;
     std::string camera;
-    std::vector<CLI::Option*> given; // every cut option, to tell whether any was used
+    std::vector<CLI::Option*> options; // every cut option, to tell whether any was used
 
     static constexpr double kDefaultTolerance = 0.002;
 
@@ -227,12 +231,12 @@ struct CutArgs
         t->excludes(n);
         c->excludes(f)->excludes(n)->excludes(t)->excludes(tri);
         f->excludes(tri);
-        given = {tol, t, n, tri, f, c};
+        options = {tol, t, n, tri, f, c};
     }
 
     bool any_given() const
     {
-        return std::any_of(given.begin(), given.end(), [](const CLI::Option* o) { return o != nullptr && o->count() > 0; });
+        return std::any_of(options.begin(), options.end(), given);
     }
 
     // The camera as given (absolute coordinates). \throw UsageError for a malformed or meaningless one.
@@ -381,7 +385,7 @@ struct OutputArgs
     // --quantize acts on Draco only: without --draco it would be ignored, except in a .drc file.
     void validate(const fs::path& out) const
     {
-        if (quantize_option != nullptr && quantize_option->count() > 0 && !draco && lower_extension(out) != ".drc")
+        if (given(quantize_option) && !draco && lower_extension(out) != ".drc")
             throw UsageError("--quantize: sets Draco's quantization; add --draco (or write a .drc file)");
     }
 
@@ -425,7 +429,7 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
         DracoOptions d;
         d.position_bits = args.quantize;
         write_drc(mesh, origin, out, d);
-    } else if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".om") {
+    } else if (is_mesh_extension(ext)) { // OpenMesh's writers: .ply .obj .off .stl .om
         write_mesh(mesh, origin, out);
     } else {
         throw UsageError(out.string() + ": " + kMeshExtensionHelp);
@@ -605,7 +609,6 @@ struct ExportArgs
     //! the format ignores, --enu's numbers. `lods_command`: the `lods` command (mesh files only).
     void validate(const fs::path& out, bool lods_command) const
     {
-        const auto given = [](const CLI::Option* o) { return o != nullptr && o->count() > 0; };
         const std::string ext = lower_extension(out);
         if (lods_command) {
             if (format == "3dtiles" || format == "lod-glb")
@@ -627,13 +630,19 @@ struct ExportArgs
         for (std::size_t i = 1; i < tolerances.size(); ++i)
             if (!(tolerances[i] < tolerances[i - 1]))
                 throw UsageError("--lod-tolerances: must decrease strictly, coarse to fine");
-        if (!enu.empty()) {
-            const auto v = parse_numbers(enu, ',', "--enu");
-            if (v.size() != 3 || std::abs(v[1]) > 90 || std::abs(v[0]) > 180 || std::abs(v[2]) > 1e7)
-                throw UsageError("--enu: expected LON,LAT,HEIGHT with |LON| <= 180, |LAT| <= 90 and |HEIGHT| <= 1e7 m");
-        }
+        if (!enu.empty())
+            enu_anchor();
         if (!(std::abs(geoid_height) <= 1e4))
             throw UsageError("--geoid-height: expected metres within +-10000 (the geoid stays within about 110 m)");
+    }
+
+    //! --enu's LON, LAT, HEIGHT. \throw UsageError unless three numbers in range.
+    std::array<double, 3> enu_anchor() const
+    {
+        const auto v = parse_numbers(enu, ',', "--enu");
+        if (v.size() != 3 || std::abs(v[1]) > 90 || std::abs(v[0]) > 180 || std::abs(v[2]) > 1e7)
+            throw UsageError("--enu: expected LON,LAT,HEIGHT with |LON| <= 180, |LAT| <= 90 and |HEIGHT| <= 1e7 m");
+        return {v[0], v[1], v[2]};
     }
 
     //! Whether the output is a LOD set (the formats stored levels serve).
@@ -842,9 +851,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     // Placement is settled before the (long) meshing, so that a usage error comes at once.
     std::optional<ProjectedCrs> crs;
     if (!e.enu.empty()) {
-        const auto v = parse_numbers(e.enu, ',', "--enu");
-        if (v.size() != 3 || std::abs(v[1]) > 90)
-            throw UsageError("--enu: expected LON,LAT,HEIGHT with |LAT| <= 90");
+        const std::array<double, 3> v = e.enu_anchor();
         t.root_transform = enu_to_ecef_transform(v[0], v[1], v[2]);
     } else {
         crs = placement_crs(h);
