@@ -1,5 +1,7 @@
 // Tests of parallel.h: every job runs exactly once whatever the thread count, and a job's exception
-// reaches the caller after the others have run, and the default thread count can be bounded.
+// reaches the caller after the others have run, and the default thread count can be bounded; and
+// QuietOpenMesh, the one guard of global state that parallel stages share.
+#include "libmrtile/mesh.h"
 #include "libmrtile/parallel.h"
 
 #include <gtest/gtest.h>
@@ -7,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -63,6 +66,22 @@ TEST(Parallel, the_default_thread_count_can_be_bounded)
     EXPECT_GT(threads_used(3), 1u); // an explicit count is kept
     set_default_threads(0);
     EXPECT_EQ(default_threads_setting().load(), 0u);
+}
+
+// Guards on different threads end in any order (tiles are cut in parallel, each under its own guard):
+// OpenMesh's error stream stays silent while any guard lives, and is switched back on by the last one.
+TEST(Parallel, quiet_openmesh_guards_overlap)
+{
+    ASSERT_TRUE(omerr().is_enabled());
+    std::optional<QuietOpenMesh> first, second;
+    first.emplace();
+    second.emplace();
+    first.reset(); // the first guard ends while the second still lives
+    EXPECT_FALSE(omerr().is_enabled());
+    second.reset();
+    EXPECT_TRUE(omerr().is_enabled());
+    run_parallel(64, 4, [](std::size_t) { const QuietOpenMesh quiet; });
+    EXPECT_TRUE(omerr().is_enabled());
 }
 
 } // namespace
