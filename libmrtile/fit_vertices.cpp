@@ -396,7 +396,7 @@ void move_vertices(Mesh& mesh, const std::vector<double>& heights, const std::ve
 // through another one that was clear of it), each later one only the faces near what the previous one put
 // back. Pairs the surface had before the fit stay: their corners are already at their start. Returns the
 // number of vertices put back.
-std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& start_position)
+std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& start_position, FitStats& stats)
 {
     constexpr int kMaxPasses = 4;
     constexpr double kSignificantMove = 0.1;
@@ -412,6 +412,11 @@ std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& star
         if ((mesh.point(vh) - start_position[v]).norm() > kSignificantMove * shortest[v])
             mark_around(vh);
     }
+    // The first pass tests the whole mesh (it costs the same as testing the faces near moved vertices,
+    // which are nearly all of them), acts on the pairs among those faces only, and keeps every pair:
+    // with the faces the reverts change since, they give the pairs at the end (FitStats::pairs_known).
+    std::vector<std::pair<int, int>> all_pairs;
+    std::vector<char> changed(mesh.n_faces(), 0);
     std::size_t reverted = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
         std::vector<int> among;
@@ -420,17 +425,44 @@ std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& star
                 among.push_back(static_cast<int>(f));
         if (among.empty())
             break;
+        std::vector<std::pair<int, int>> pairs;
+        if (pass == 0) {
+            all_pairs = self_intersecting_faces(mesh);
+            stats.pairs_known = true;
+            for (const auto& p : all_pairs)
+                if (near[static_cast<std::size_t>(p.first)] && near[static_cast<std::size_t>(p.second)])
+                    pairs.push_back(p);
+        } else {
+            pairs = self_intersecting_faces(mesh, &among);
+        }
         std::fill(near.begin(), near.end(), false); // the next pass looks only around what this one moves
-        for (const auto& [a, b] : self_intersecting_faces(mesh, &among))
+        for (const auto& [a, b] : pairs)
             for (const int f : {a, b})
                 for (const auto vh : mesh.fv_range(Mesh::FaceHandle(f))) {
                     const Mesh::Point& start = start_position[static_cast<std::size_t>(vh.idx())];
                     if (mesh.point(vh) != start) {
                         mesh.point(vh) = start;
                         mark_around(vh);
+                        for (const auto g : mesh.vf_range(vh))
+                            changed[static_cast<std::size_t>(g.idx())] = 1;
                         ++reverted;
                     }
                 }
+    }
+    if (stats.pairs_known) {
+        // Pairs of unchanged faces are as they were; any other pair has a changed face.
+        std::vector<int> moved;
+        for (std::size_t f = 0; f < changed.size(); ++f)
+            if (changed[f])
+                moved.push_back(static_cast<int>(f));
+        for (const auto& p : all_pairs)
+            if (!changed[static_cast<std::size_t>(p.first)] && !changed[static_cast<std::size_t>(p.second)])
+                stats.intersecting_pairs.push_back(p);
+        for (const auto& p : intersecting_pairs_with(mesh, moved))
+            stats.intersecting_pairs.push_back(p);
+        std::sort(stats.intersecting_pairs.begin(), stats.intersecting_pairs.end());
+        stats.intersecting_pairs.erase(std::unique(stats.intersecting_pairs.begin(), stats.intersecting_pairs.end()),
+                                       stats.intersecting_pairs.end());
     }
     return reverted;
 }
@@ -494,7 +526,7 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         ++stats.rounds;
     }
     if (options.revert_intersections)
-        stats.reverted = revert_intersecting(mesh, start_position);
+        stats.reverted = revert_intersecting(mesh, start_position, stats);
     stats.mean_move = moved_count > 0 ? moved_sum / static_cast<double>(moved_count) : 0.0;
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     mesh.update_normals();

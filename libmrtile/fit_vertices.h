@@ -25,6 +25,7 @@
 #include "libmrtile/vec3.h"
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace mrt {
@@ -59,8 +60,9 @@ struct FitOptions
     Vec3 axis{0, 0, 1}; //!< the "up" of `vertical` (mesh_cut passes the surface's height-field axis)
     //! After the rounds, vertices of faces that intersect other faces go back to where they started
     //! (repeated while that changes something, at most 4 times): the fit never adds self-intersections
-    //! (at sharp edges, points of one side can pull the other side's faces across). Costs one or two
-    //! self-intersection tests of the whole mesh (CGAL; ~0.3 s per 100k faces).
+    //! (at sharp edges, points of one side can pull the other side's faces across). Costs one
+    //! self-intersection test of the whole mesh (CGAL; ~0.26 s per 100k faces) and small ones around
+    //! what is put back; the pairs left are kept (pairs_known) for untangle.
     bool revert_intersections = true;
     //! Threads for the closest-face queries (0 = one per hardware thread). The result does not depend
     //! on it.
@@ -82,6 +84,11 @@ struct FitStats
     std::size_t reverted = 0;   //!< vertices put back to undo self-intersections
     RelaxStats relax;           //!< the relaxation: moves and refusals summed over rounds, creases of the last
     double seconds = 0.0;       //!< wall time
+    //! With revert_intersections: whether intersecting_pairs holds every pair of faces that intersect at
+    //! the end (self_intersecting_faces), known because the pass tested the whole mesh; untangle can
+    //! start from them (mesh_cut does) instead of testing it again.
+    bool pairs_known = false;
+    std::vector<std::pair<int, int>> intersecting_pairs;
 };
 
 //! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates

@@ -50,6 +50,16 @@ inline std::array<Vec3, 3> face_corners(const Mesh& mesh, Mesh::FaceHandle f)
     return p;
 }
 
+//! The corner vertices of triangle f, in its winding.
+inline std::array<Mesh::VertexHandle, 3> face_vertices(const Mesh& mesh, Mesh::FaceHandle f)
+{
+    std::array<Mesh::VertexHandle, 3> v;
+    std::size_t k = 0;
+    for (const auto vh : mesh.fv_range(f))
+        v[k++] = vh;
+    return v;
+}
+
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";
 inline constexpr const char* kFaceGap = "f:gap";

@@ -10,6 +10,9 @@
 #include "libmrtile/union_find.h"
 
 #include <CGAL/AABB_traits.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/box_intersection_d.h>
+#include <CGAL/intersections.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/AABB_tree.h>
@@ -19,8 +22,10 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <tuple>
@@ -474,6 +479,99 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     for (std::size_t i = 0; i < points.size(); ++i)
         squared[i] = squared_norm(points[i] - closest[i].second);
     return summarize(squared, diagonal);
+}
+
+namespace {
+
+using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
+using ExactPoint = Epick::Point_3;
+
+} // namespace
+
+// Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
+// intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
+// touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
+bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
+{
+    const auto a = face_vertices(mesh, f), b = face_vertices(mesh, g);
+    int shared = 0;
+    std::array<int, 3> in_b{-1, -1, -1}; // for each corner of f, its position in g (-1: none)
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (a[static_cast<std::size_t>(i)] == b[static_cast<std::size_t>(j)]) {
+                in_b[static_cast<std::size_t>(i)] = j;
+                ++shared;
+            }
+    const auto p = [&](Mesh::VertexHandle v) { const auto& q = mesh.point(v); return ExactPoint(q[0], q[1], q[2]); };
+    const Epick::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+    if (ta.is_degenerate() || tb.is_degenerate())
+        return false; // no area: nothing to cross (the callers never make such faces)
+    if (shared == 0)
+        return CGAL::do_intersect(ta, tb);
+    if (shared == 1) {
+        int i = 0;
+        while (in_b[static_cast<std::size_t>(i)] < 0)
+            ++i;
+        const int j = in_b[static_cast<std::size_t>(i)];
+        const Epick::Segment_3 opposite_a(p(a[static_cast<std::size_t>((i + 1) % 3)]), p(a[static_cast<std::size_t>((i + 2) % 3)]));
+        const Epick::Segment_3 opposite_b(p(b[static_cast<std::size_t>((j + 1) % 3)]), p(b[static_cast<std::size_t>((j + 2) % 3)]));
+        return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
+    }
+    if (shared == 2) {
+        Mesh::VertexHandle r, s, e0, e1;
+        for (int i = 0; i < 3; ++i)
+            if (in_b[static_cast<std::size_t>(i)] < 0)
+                r = a[static_cast<std::size_t>(i)];
+        for (const auto v : b)
+            if (v != a[0] && v != a[1] && v != a[2])
+                s = v;
+        bool first = true;
+        for (int i = 0; i < 3; ++i)
+            if (in_b[static_cast<std::size_t>(i)] >= 0) {
+                (first ? e0 : e1) = a[static_cast<std::size_t>(i)];
+                first = false;
+            }
+        return CGAL::coplanar(p(e0), p(e1), p(r), p(s)) &&
+               CGAL::coplanar_orientation(p(e0), p(e1), p(r), p(s)) == CGAL::POSITIVE;
+    }
+    return false; // the same corners: a duplicate face, which a manifold mesh does not have
+}
+
+std::vector<std::pair<int, int>> intersecting_pairs_with(const Mesh& mesh, const std::vector<int>& faces)
+{
+    using FaceBox = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int>;
+    auto box_of = [&](int f) {
+        double lo[3], hi[3];
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::numeric_limits<double>::max();
+            hi[k] = std::numeric_limits<double>::lowest();
+        }
+        for (const auto v : mesh.fv_range(Mesh::FaceHandle(f)))
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(lo[k], mesh.point(v)[k]);
+                hi[k] = std::max(hi[k], mesh.point(v)[k]);
+            }
+        return FaceBox(lo, hi, f);
+    };
+    std::vector<int> chosen = faces;
+    std::sort(chosen.begin(), chosen.end());
+    chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+    std::vector<FaceBox> some, all;
+    for (const int f : chosen)
+        if (f >= 0 && static_cast<std::size_t>(f) < mesh.n_faces() && !mesh.status(Mesh::FaceHandle(f)).deleted())
+            some.push_back(box_of(f));
+    if (some.empty())
+        return {};
+    for (const auto f : mesh.faces())
+        all.push_back(box_of(f.idx()));
+    std::vector<std::pair<int, int>> out;
+    CGAL::box_intersection_d(some.begin(), some.end(), all.begin(), all.end(), [&](const FaceBox& a, const FaceBox& b) {
+        if (a.info() != b.info() && faces_intersect(mesh, Mesh::FaceHandle(a.info()), Mesh::FaceHandle(b.info())))
+            out.push_back({std::min(a.info(), b.info()), std::max(a.info(), b.info())});
+    });
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
 }
 
 std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const std::vector<int>* among)

@@ -87,6 +87,17 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& 
 //! \throw InvalidInput if the mesh is not a manifold triangle mesh.
 std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const std::vector<int>* among = nullptr);
 
+//! \brief Whether faces f and g meet other than in the corners and edges they share: the test
+//! self_intersecting_faces applies (CGAL's strict face intersection, exact predicates). No shared
+//! corner: any contact; one: the edge opposite it in either face touching the other face; an edge: the
+//! two faces folded onto each other. Faces without area never intersect.
+bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g);
+
+//! \brief The pairs of self_intersecting_faces that have at least one face in `faces` (smaller index
+//! first, sorted): after an edit that moved only those faces, the pairs that can have changed, found by
+//! box intersection of those faces against all faces instead of a test of the whole mesh.
+std::vector<std::pair<int, int>> intersecting_pairs_with(const Mesh& mesh, const std::vector<int>& faces);
+
 //! The point of a mesh's surface closest to a query point, and the face it lies on.
 struct ClosestPoint
 {

@@ -153,7 +153,10 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     result.fit = fit_vertices(result.mesh, h.cloud.positions, fit);
     // Last of the geometry: the fit's flips can also cross a thin part (it reverts only its moves).
     if (untangle_options.max_rounds > 0)
-        result.untangle = untangle(result.mesh, untangle_options);
+        result.untangle = result.fit.pairs_known ? untangle(result.mesh, untangle_options, std::move(result.fit.intersecting_pairs))
+                                                 : untangle(result.mesh, untangle_options);
+    result.fit.intersecting_pairs.clear(); // handed on (or not needed): the stats keep the counts
+    result.fit.pairs_known = false;
     color_vertices(result.mesh, h.cloud, options.colors);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

@@ -1,14 +1,13 @@
 // Beyond the paper (its §6 lists holes and non-manifold output; we also rule out self-intersections):
 // the surface stage builds an oriented 2-manifold, but where the sample is thinner than a tile a gap
 // face may cross a fan of the other side. This pass finds the intersecting pairs once with CGAL's box
-// intersection (self_intersecting_faces) and then repairs them with local edits, each judged by exact
-// triangle-triangle tests against the faces near it (a uniform grid over face boxes finds those).
+// intersection (self_intersecting_faces; or takes them from the vertex fit, which has just tested the
+// whole mesh) and then repairs them with local edits, each judged by exact triangle-triangle tests
+// (faces_intersect) against the faces near it (a uniform grid over face boxes finds those). After each
+// round only the faces an edit changed are tested again: every other pair is as it was.
 #include "libmrtile/untangle.h"
 
 #include "libmrtile/mesh_stats.h"
-
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <array>
@@ -25,69 +24,6 @@ constexpr std::uint8_t kMaxTries = 2;
 // The work bound's floor (UntangleOptions::tests_per_face), about a twentieth of a second: a small
 // mesh's crossings get the same chance as a large one's.
 constexpr std::size_t kMinTests = 100000;
-
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-
-Point cgal(const OpenMesh::Vec3d& p) { return Point(p[0], p[1], p[2]); }
-
-std::array<Mesh::VertexHandle, 3> corners_of(const Mesh& mesh, Mesh::FaceHandle f)
-{
-    std::array<Mesh::VertexHandle, 3> v;
-    std::size_t k = 0;
-    for (const auto vh : mesh.fv_range(f))
-        v[k++] = vh;
-    return v;
-}
-
-// Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
-// intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
-// touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
-bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
-{
-    const auto a = corners_of(mesh, f), b = corners_of(mesh, g);
-    int shared = 0;
-    std::array<int, 3> in_b{-1, -1, -1}; // for each corner of f, its position in g (-1: none)
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (a[static_cast<std::size_t>(i)] == b[static_cast<std::size_t>(j)]) {
-                in_b[static_cast<std::size_t>(i)] = j;
-                ++shared;
-            }
-    const auto p = [&](Mesh::VertexHandle v) { return cgal(mesh.point(v)); };
-    const Kernel::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
-    if (ta.is_degenerate() || tb.is_degenerate())
-        return false; // no area: nothing to cross (the callers never make such faces)
-    if (shared == 0)
-        return CGAL::do_intersect(ta, tb);
-    if (shared == 1) {
-        int i = 0;
-        while (in_b[static_cast<std::size_t>(i)] < 0)
-            ++i;
-        const int j = in_b[static_cast<std::size_t>(i)];
-        const Kernel::Segment_3 opposite_a(p(a[static_cast<std::size_t>((i + 1) % 3)]), p(a[static_cast<std::size_t>((i + 2) % 3)]));
-        const Kernel::Segment_3 opposite_b(p(b[static_cast<std::size_t>((j + 1) % 3)]), p(b[static_cast<std::size_t>((j + 2) % 3)]));
-        return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
-    }
-    if (shared == 2) {
-        Mesh::VertexHandle r, s, e0, e1;
-        for (int i = 0; i < 3; ++i)
-            if (in_b[static_cast<std::size_t>(i)] < 0)
-                r = a[static_cast<std::size_t>(i)];
-        for (const auto v : b)
-            if (v != a[0] && v != a[1] && v != a[2])
-                s = v;
-        bool first = true;
-        for (int i = 0; i < 3; ++i)
-            if (in_b[static_cast<std::size_t>(i)] >= 0) {
-                (first ? e0 : e1) = a[static_cast<std::size_t>(i)];
-                first = false;
-            }
-        return CGAL::coplanar(p(e0), p(e1), p(r), p(s)) &&
-               CGAL::coplanar_orientation(p(e0), p(e1), p(r), p(s)) == CGAL::POSITIVE;
-    }
-    return false; // the same corners: a duplicate face, which a manifold mesh does not have
-}
 
 struct Box
 {
@@ -188,6 +124,33 @@ public:
     // Triangle pairs tested so far; repair stops trying once `budget` is spent.
     std::size_t tests() const { return tests_; }
 
+    // The intersecting pairs now, from `pairs` (those before this round's edits): pairs of faces no
+    // edit changed are still there, and any other pair has a changed face, whose current box the grid
+    // knows. Costs the changed faces' neighbourhoods instead of a test of the whole mesh.
+    std::vector<std::pair<int, int>> update_pairs(const std::vector<std::pair<int, int>>& pairs)
+    {
+        std::vector<char> changed(mesh_.n_faces(), 0);
+        for (const auto f : changed_)
+            changed[static_cast<std::size_t>(f.idx())] = 1;
+        std::vector<std::pair<int, int>> out;
+        for (const auto& p : pairs)
+            if (!changed[static_cast<std::size_t>(p.first)] && !changed[static_cast<std::size_t>(p.second)])
+                out.push_back(p);
+        std::sort(changed_.begin(), changed_.end());
+        changed_.erase(std::unique(changed_.begin(), changed_.end()), changed_.end());
+        for (const auto c : changed_)
+            for (const int g : grid_.near(face_box(mesh_, c))) {
+                if (g == c.idx() || (changed[static_cast<std::size_t>(g)] && g < c.idx()))
+                    continue; // itself, or a pair of two changed faces seen from the other one
+                if (faces_intersect(mesh_, c, Mesh::FaceHandle(g)))
+                    out.push_back({std::min(c.idx(), g), std::max(c.idx(), g)});
+            }
+        changed_.clear();
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+        return out;
+    }
+
     // Tries the edits for face f, keeps the first that lowers its faces' intersections.
     void repair(Mesh::FaceHandle f, UntangleStats& stats, std::size_t budget)
     {
@@ -207,7 +170,7 @@ public:
         // Moves toward the centre of the neighbours (smoothing pulls a crossing apart), then across the
         // surface either way (a fold held by its neighbours), corners first, then the ring around them:
         // at a thin tip the crossing can hinge on a vertex next to the faces.
-        const auto corners = corners_of(mesh_, f);
+        const auto corners = face_vertices(mesh_, f);
         std::vector<Mesh::VertexHandle> ring;
         for (const auto v : corners)
             for (const auto w : mesh_.vv_range(v))
@@ -261,7 +224,7 @@ private:
     // stricter than vec3.h's has_area, which only tells area from rounding noise.
     bool has_area(Mesh::FaceHandle f) const
     {
-        const auto c = corners_of(mesh_, f);
+        const auto c = face_vertices(mesh_, f);
         const OpenMesh::Vec3d a = mesh_.point(c[0]), b = mesh_.point(c[1]), d = mesh_.point(c[2]);
         const double longest = std::max({(b - a).sqrnorm(), (d - b).sqrnorm(), (a - d).sqrnorm()});
         return OpenMesh::cross(b - a, d - a).norm() > 2e-6 * longest;
@@ -280,7 +243,7 @@ private:
         if (before == 0)
             return false;
         const OpenMesh::Vec3d old_normal = (mesh_.calc_face_normal(f0) + mesh_.calc_face_normal(f1)).normalized();
-        auto corners0 = corners_of(mesh_, f0);
+        auto corners0 = face_vertices(mesh_, f0);
         std::sort(corners0.begin(), corners0.end());
         mesh_.flip(e);
         const OpenMesh::Vec3d n0 = mesh_.calc_face_normal(f0), n1 = mesh_.calc_face_normal(f1);
@@ -293,6 +256,8 @@ private:
             }
             grid_.insert(f0);
             grid_.insert(f1);
+            changed_.push_back(f0);
+            changed_.push_back(f1);
             return true;
         }
         // The other diagonal again: the same two triangles, but OpenMesh may hand them back to the
@@ -300,7 +265,7 @@ private:
         // in the grid (each now has the other's box).
         mesh_.flip(e);
         auto sorted_corners = [&](Mesh::FaceHandle f) {
-            auto c = corners_of(mesh_, f);
+            auto c = face_vertices(mesh_, f);
             std::sort(c.begin(), c.end());
             return c;
         };
@@ -314,6 +279,8 @@ private:
             }
             grid_.insert(f0);
             grid_.insert(f1);
+            changed_.push_back(f0); // the same two triangles, under each other's handle
+            changed_.push_back(f1);
         }
         return false;
     }
@@ -374,8 +341,10 @@ private:
         if (ok) {
             for (const auto f : faces)
                 grid_.insert(f);
-            if (hits(faces) < before)
+            if (hits(faces) < before) {
+                changed_.insert(changed_.end(), faces.begin(), faces.end());
                 return true;
+            }
         }
         mesh_.point(v) = start;
         return false;
@@ -388,6 +357,7 @@ private:
     OpenMesh::FPropHandleT<int> tile_;
     OpenMesh::FPropHandleT<bool> gap_;
     std::size_t tests_ = 0;
+    std::vector<Mesh::FaceHandle> changed_; // faces an edit changed since the last update_pairs
     std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
 };
 
@@ -395,8 +365,12 @@ private:
 
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
 {
+    return untangle(mesh, options, self_intersecting_faces(mesh));
+}
+
+UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<std::pair<int, int>> pairs)
+{
     UntangleStats stats;
-    std::vector<std::pair<int, int>> pairs = self_intersecting_faces(mesh);
     stats.pairs_before = pairs.size();
     if (pairs.empty())
         return stats;
@@ -415,7 +389,7 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
         const std::size_t edits = stats.flips + stats.moves;
         for (const int f : faces)
             untangler.repair(Mesh::FaceHandle(f), stats, budget);
-        pairs = self_intersecting_faces(mesh);
+        pairs = untangler.update_pairs(pairs);
         if (stats.flips + stats.moves == edits || untangler.tests() >= budget)
             break; // nothing more this way, or out of budget
     }

@@ -15,6 +15,8 @@
 #include "libmrtile/mesh.h"
 
 #include <cstddef>
+#include <utility>
+#include <vector>
 
 namespace mrt {
 
@@ -50,5 +52,9 @@ struct UntangleStats
 //! (f:tile -1, f:gap true), as fit_vertices does. Vertex and face normals of changed faces are updated.
 //! \throw InvalidInput if the mesh is not a manifold triangle mesh.
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options = {});
+
+//! The same, from the mesh's intersecting pairs as self_intersecting_faces gives them (a caller that
+//! has just found them, such as fit_vertices (FitStats::intersecting_pairs), spares the test of the whole mesh).
+UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<std::pair<int, int>> pairs);
 
 } // namespace mrt

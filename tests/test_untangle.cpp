@@ -4,6 +4,8 @@
 #include "formats/read_points.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
+#include "libmrtile/fit_vertices.h"
+#include "libmrtile/hierarchy.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
@@ -143,6 +145,97 @@ TEST(Untangle, real_scans_lose_their_self_intersections)
         const double without = point_to_mesh_distance(h.cloud.positions, tangled.mesh).mean;
         EXPECT_LT(with, 1.02 * without) << c.file;
     }
+}
+
+// A noisy sphere whose cut at 0.0005 lies below its noise floor: meshed without the pass, a crumpled
+// surface with a hundred or more crossings, for the bookkeeping tests below.
+Hierarchy noisy_sphere()
+{
+    PointCloud cloud = shapes::sphere(30000);
+    shapes::add_noise(cloud, 0.01);
+    Hierarchy h = build_hierarchy(cloud);
+    clear_noise_floor(h);
+    return h;
+}
+
+MeshResult crumpled_sphere(const Hierarchy& h)
+{
+    MeshOptions off;
+    off.untangle.max_rounds = 0;
+    return mesh_cut(h, cut_by_tolerance(h, 0.0005), off);
+}
+
+TEST(Untangle, pairs_near_changed_faces_match_a_test_of_the_whole_mesh)
+{
+    const MeshResult r = crumpled_sphere(noisy_sphere());
+    const auto all = self_intersecting_faces(r.mesh);
+    ASSERT_GT(all.size(), 50u);
+    // Brute force over every pair of faces with overlapping boxes agrees with CGAL's test.
+    std::vector<std::pair<int, int>> brute;
+    const int n = static_cast<int>(r.mesh.n_faces());
+    std::vector<std::array<OpenMesh::Vec3d, 2>> box(static_cast<std::size_t>(n));
+    for (const auto f : r.mesh.faces()) {
+        auto& b = box[static_cast<std::size_t>(f.idx())];
+        b = {OpenMesh::Vec3d(1e300), OpenMesh::Vec3d(-1e300)};
+        for (const auto v : r.mesh.fv_range(f)) {
+            b[0].minimize(r.mesh.point(v));
+            b[1].maximize(r.mesh.point(v));
+        }
+    }
+    for (int a = 0; a < n; ++a)
+        for (int b = a + 1; b < n; ++b) {
+            const auto &x = box[static_cast<std::size_t>(a)], &y = box[static_cast<std::size_t>(b)];
+            if (x[1][0] < y[0][0] || y[1][0] < x[0][0] || x[1][1] < y[0][1] || y[1][1] < x[0][1] || x[1][2] < y[0][2] || y[1][2] < x[0][2])
+                continue;
+            if (faces_intersect(r.mesh, Mesh::FaceHandle(a), Mesh::FaceHandle(b)))
+                brute.push_back({a, b});
+        }
+    EXPECT_EQ(brute, all);
+    // The pairs with a face in a subset are those of the whole test that touch the subset.
+    for (const int step : {7, 101, 1}) {
+        std::vector<int> some;
+        for (int f = step / 2; f < n; f += step)
+            some.push_back(f);
+        std::vector<char> in(static_cast<std::size_t>(n), 0);
+        for (const int f : some)
+            in[static_cast<std::size_t>(f)] = 1;
+        std::vector<std::pair<int, int>> expected;
+        for (const auto& p : all)
+            if (in[static_cast<std::size_t>(p.first)] || in[static_cast<std::size_t>(p.second)])
+                expected.push_back(p);
+        EXPECT_EQ(intersecting_pairs_with(r.mesh, some), expected) << "every " << step << "th face";
+    }
+    EXPECT_TRUE(intersecting_pairs_with(r.mesh, {}).empty());
+}
+
+TEST(Untangle, starting_from_known_pairs_gives_the_same_mesh)
+{
+    const MeshResult r = crumpled_sphere(noisy_sphere());
+    Mesh tested = r.mesh, given = r.mesh;
+    const UntangleStats a = untangle(tested, {});
+    const UntangleStats b = untangle(given, {}, self_intersecting_faces(given));
+    ASSERT_GT(a.pairs_before, 50u);
+    EXPECT_GT(a.flips + a.moves, 0u);
+    EXPECT_EQ(a.pairs_before, b.pairs_before);
+    EXPECT_EQ(a.pairs_after, b.pairs_after);
+    EXPECT_EQ(a.flips, b.flips);
+    EXPECT_EQ(a.moves, b.moves);
+    // The count left after the rounds (kept up from the changed faces) is that of a whole test.
+    EXPECT_EQ(a.pairs_after, self_intersecting_faces(tested).size());
+    ASSERT_EQ(tested.n_vertices(), given.n_vertices());
+    for (const auto v : tested.vertices())
+        EXPECT_EQ(tested.point(v), given.point(v));
+}
+
+TEST(Untangle, the_fit_hands_on_every_pair_it_leaves)
+{
+    const Hierarchy h = noisy_sphere();
+    MeshResult r = crumpled_sphere(h);
+    // mesh_cut hands the pairs on to untangle and clears them; fit again to see them.
+    const FitStats s = fit_vertices(r.mesh, h.cloud.positions);
+    ASSERT_TRUE(s.pairs_known);
+    EXPECT_GT(s.reverted + s.intersecting_pairs.size(), 0u);
+    EXPECT_EQ(s.intersecting_pairs, self_intersecting_faces(r.mesh));
 }
 
 } // namespace
