@@ -224,6 +224,12 @@ void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
 // correct it from the measured mesh (meshing a coarse cut is cheap). `finest`: cut_by_tolerance(h, 0),
 // the leaves or, for a noisy sample, the cut at its noise floor
 // (Node::noise_floor), below which levels would only mesh noise; no level is finer.
+// The finer levels are tolerance cuts, and a best-N cut is not one: where the sampling is uneven its
+// tolerance (that of its worst tile) may hold for far fewer tiles elsewhere, and the first halving is
+// then no finer than level 0 (a torus with one half ten times denser: 128 tiles at 0.0154, then 130 at
+// 0.0077, and `lods` stopped at one level, since the error did not fall). So level 0 becomes the
+// tolerance cut at the best-N cut's tolerance: every node of it lies at or above a node of the best-N
+// cut (that node meets the tolerance), so it has at most as many tiles and the levels nest.
 LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& finest)
 {
     const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
@@ -239,7 +245,13 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& fine
         tiles = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(tiles) * 0.9 * budget / faces));
     }
     level.tolerance = cut_tolerance(h, level.cut);
-    return level;
+    LodLevel nested;
+    nested.cut = cut_by_tolerance(h, level.tolerance);
+    if (nested.cut.size() >= level.cut.size())
+        return level; // the same cut (or, below a noise floor, not coarser): keep it
+    mesh_level(h, nested, o.mesh);
+    nested.tolerance = cut_tolerance(h, nested.cut);
+    return nested;
 }
 
 std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o, double first, std::size_t finest)

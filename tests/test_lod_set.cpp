@@ -2,6 +2,7 @@
 // the acceptance command: a Draco tileset of the Stanford bunny that real clients accept.
 #include "formats/lod_tileset.h"
 #include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/georef.h"
 #include "libmrtile/lod_set.h"
@@ -12,7 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <set>
 #include <sys/wait.h>
 
 namespace mrt {
@@ -73,6 +76,48 @@ TEST(LodSet, levels_are_consistent)
     EXPECT_EQ(make_lod_set(torus(), explicit_levels).levels.size(), 3u);
     explicit_levels.tolerances = {0.001, 0.01};
     EXPECT_THROW(make_lod_set(torus(), explicit_levels), InvalidInput);
+}
+
+// Unevenly sampled: a torus whose x < 0 half has a tenth of the points. Level 0 (a best-N cut) used to
+// carry the tolerance of its worst tile while far coarser tiles would meet it elsewhere; the first
+// halving was then no finer (128 tiles at 0.0154, 130 at 0.0077) and `lods` kept one level. The levels
+// must nest: every node of a level lies at or below a node of the one before (QA run, session 13).
+TEST(LodSet, uneven_sampling_still_gives_nested_levels)
+{
+    const PointCloud all = shapes::torus(110000);
+    PointCloud c;
+    for (std::size_t i = 0; i < all.size(); ++i)
+        if (all.positions[i].x > 0 || i % 10 == 0)
+            c.positions.push_back(all.positions[i]);
+    const Hierarchy h = build_hierarchy(c);
+    LodSetOptions o;
+    o.tileset = false;
+    o.first_level_triangles = 4096; // as `mrtile lods`
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_GE(set.levels.size(), 4u);
+    for (std::size_t l = 1; l < set.levels.size(); ++l) {
+        SCOPED_TRACE(l);
+        const Cut& coarse = set.levels[l - 1].cut;
+        EXPECT_GT(set.levels[l].cut.size(), coarse.size());
+        // Non-increasing (near the leaves a tile that cannot be split keeps the largest distance), and
+        // falling from level 0 to level 1.
+        EXPECT_LE(set.levels[l].geometric_error, set.levels[l - 1].geometric_error);
+        if (l == 1) {
+            EXPECT_LT(set.levels[l].geometric_error, set.levels[l - 1].geometric_error);
+        }
+        for (const std::int32_t id : set.levels[l].cut) {
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            const bool below = std::any_of(coarse.begin(), coarse.end(), [&](std::int32_t up) {
+                const Node& u = h.nodes[static_cast<std::size_t>(up)];
+                return u.begin <= n.begin && n.end <= u.end;
+            });
+            EXPECT_TRUE(below) << "node " << id;
+        }
+    }
+    // Level 0 is the tolerance cut at its own tolerance.
+    const Cut again = cut_by_tolerance(h, set.levels[0].tolerance);
+    EXPECT_EQ(std::set<std::int32_t>(again.begin(), again.end()),
+              std::set<std::int32_t>(set.levels[0].cut.begin(), set.levels[0].cut.end()));
 }
 
 // The Draco grid of a tileset spans its vertices, not its root's box: a stray point 50 radii away (in
