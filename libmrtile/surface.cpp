@@ -281,7 +281,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
     Front front(layout, tiles, surface, projection, positions, candidates, options.max_turn_degrees, orientation);
     front.run();
     {
-        Islands islands = find_islands(surface, tiles);
+        Islands islands = find_islands(surface, tiles, layout.tiles);
         const std::vector<bool> stranded = island_tiles(islands);
         if (std::find(stranded.begin(), stranded.end(), true) != stranded.end()) {
             remove_islands(surface, islands);
@@ -308,7 +308,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
     if (options.fill_holes) {
         fill(FillMode::Gaps);
         std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
-        const std::vector<bool> dropped = drop_islands(surface, tiles, removed);
+        const std::vector<bool> dropped = drop_islands(surface, tiles, layout.tiles, removed);
         islands = static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
         if (islands > 0) {
             // Two ways on from here; the one that leaves fewer tiles out wins, ties going to the first.
@@ -333,7 +333,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
                 front.regrow(dropped);
                 fill(FillMode::Gaps);
                 std::vector<std::vector<std::uint32_t>> removed_again;
-                const std::vector<bool> dropped_again = drop_islands(surface, tiles, removed_again);
+                const std::vector<bool> dropped_again = drop_islands(surface, tiles, layout.tiles, removed_again);
                 islands = static_cast<std::size_t>(std::count(dropped_again.begin(), dropped_again.end(), true));
                 restored_islands = 0;
                 if (islands > 0) {

@@ -20,10 +20,16 @@ namespace mrt::surface_detail {
 // ---------------------------------------------------------------------------------------------------
 // Step 4: boundary loops and hole filling.
 
-Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
+// See find_islands: a closed part with at least this many tiles and this share of the points is an
+// object of its own.
+constexpr std::size_t kMinObjectTiles = 3;
+constexpr double kMinObjectShare = 0.01;
+
+Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops)
 {
     const auto count = static_cast<std::uint32_t>(s.faces().size());
     UnionFind parts(count);
+    std::vector<bool> open_face(count, false);
     for (std::uint32_t f = 0; f < count; ++f) {
         if (!s.alive(f))
             continue;
@@ -32,6 +38,8 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
             const std::uint32_t g = s.face_of(t[(k + 1) % 3], t[k]);
             if (g != kNone)
                 parts.unite(f, g);
+            else
+                open_face[f] = true;
         }
     }
     std::vector<std::uint32_t> size(count, 0);
@@ -57,9 +65,28 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles)
     for (std::uint32_t f = 0; f < count; ++f)
         if (s.alive(f) && parts.find(f) == f && !has_fan[f] && f != largest)
             doomed[f] = true;
+    // A closed part of a few tiles or more that holds a fair share of the points is a separate object
+    // (a second sphere some ten point spacings from the first, whose facing tiles the coarse spacing of
+    // their point samples makes neighbours), not a piece broken off a larger surface: a broken piece is
+    // open where it broke off, and a bubble closed at a thin tip is a tile or two. (QA, session 13: of
+    // two unit spheres 5 to 12 spacings apart, one was dropped whole.)
+    std::vector<bool> closed(count, true);
+    std::vector<std::size_t> part_tiles(count, 0);
+    std::vector<double> part_share(count, 0.0);
+    for (std::uint32_t f = 0; f < count; ++f)
+        if (s.alive(f) && open_face[f])
+            closed[parts.find(f)] = false;
+    for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (part_of_tile[t] != kNone) {
+            ++part_tiles[part_of_tile[t]];
+            part_share[part_of_tile[t]] += loops[t].share;
+        }
+    auto separate_object = [&](std::uint32_t p) {
+        return closed[p] && part_tiles[p] >= kMinObjectTiles && part_share[p] >= kMinObjectShare;
+    };
     for (std::size_t t = 0; t < tiles.size(); ++t) {
         const std::uint32_t p = part_of_tile[t];
-        if (p == kNone)
+        if (p == kNone || separate_object(p))
             continue;
         for (std::uint32_t n : tiles[t].neighbours) {
             const std::uint32_t q = part_of_tile[n];
@@ -95,9 +122,10 @@ void remove_islands(Surface& s, Islands& islands)
 
 // Finds and removes the islands. Returns the tiles whose fans were removed; `removed` gets the (now
 // dead) face ids of each island, in face order.
-std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed)
+std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops,
+                               std::vector<std::vector<std::uint32_t>>& removed)
 {
-    Islands islands = find_islands(s, tiles);
+    Islands islands = find_islands(s, tiles, loops);
     std::map<std::uint32_t, std::size_t> index_of_part;
     for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
         if (!s.alive(f))

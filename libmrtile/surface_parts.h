@@ -646,10 +646,11 @@ struct Islands
     std::vector<std::uint32_t> part_of_tile; // kNone for tiles without faces
 };
 
-Islands find_islands(const Surface& s, const std::vector<Tile>& tiles);
+Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops);
 std::vector<bool> island_tiles(const Islands& islands);
 void remove_islands(Surface& s, Islands& islands);
-std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, std::vector<std::vector<std::uint32_t>>& removed);
+std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops,
+                               std::vector<std::vector<std::uint32_t>>& removed);
 
 std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,

@@ -192,6 +192,34 @@ TEST(Reconstruct, small_separate_objects_each_get_a_closed_surface)
     EXPECT_EQ(mesh_cut(one, two).cut, two);
 }
 
+// Two unit spheres of 50,000 points each, 5 and 10 point spacings apart: both are meshed, each closed.
+// Tiles on their facing sides counted as neighbours (a coarse tile's spacing comes from its point
+// sample, so the gap looked narrow), and the smaller sphere's whole surface was dropped as a piece
+// broken off the larger one (QA, session 13: components 1, half the points unmeshed, exit 0).
+TEST(Reconstruct, a_second_object_a_few_spacings_away_is_kept)
+{
+    for (const double gap_spacings : {5.0, 10.0}) {
+        const double spacing = std::sqrt(4.0 * M_PI / 50000.0);
+        const PointCloud a = shapes::sphere(50000, 1.0, 11);
+        PointCloud b = shapes::sphere(50000, 1.0, 12);
+        shapes::translate(b, {2.0 + gap_spacings * spacing, 0.0, 0.0});
+        PointCloud both;
+        for (std::size_t i = 0; i < a.size(); ++i) { // interleaved, as the QA file was
+            both.positions.push_back(a.positions[i]);
+            both.positions.push_back(b.positions[i]);
+        }
+        const Hierarchy h = build_hierarchy(both);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+        SCOPED_TRACE(gap_spacings);
+        const TopologyStats t = topology_stats(r.mesh);
+        EXPECT_EQ(t.components, 2u);
+        EXPECT_EQ(t.boundary_loops, 0u);
+        EXPECT_EQ(t.genus, 0);
+        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+        EXPECT_LT(point_to_mesh_distance(h.cloud.positions, r.mesh).max, 0.005);
+    }
+}
+
 // The same sphere as ten near-equal copies (each point repeated with noise of a millionth of the
 // radius, as repeated frames of one view): closed. The tile spacing counts a clump once; counted ten
 // times, the spacing was √10 too small and the gaps between tiles looked like holes (7 / 63 loops).
