@@ -228,9 +228,8 @@ void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
 // tolerance (that of its worst tile) may hold for far fewer tiles elsewhere, and the first halving is
 // then no finer than level 0 (a torus with one half ten times denser: 128 tiles at 0.0154, then 130 at
 // 0.0077, and `lods` stopped at one level, since the error did not fall). So level 0 becomes the
-// finest tolerance cut with at most the best-N cut's tiles. The tolerance cut at the best-N cut's own
-// tolerance is one: every node of it lies at or above a node of the best-N cut (that node meets the
-// tolerance), so it has at most as many tiles; a bisection finds a finer one.
+// tolerance cut at the best-N cut's tolerance: every node of it lies at or above a node of the best-N
+// cut (that node meets the tolerance), so it has at most as many tiles and the levels nest.
 LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& finest)
 {
     const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
@@ -246,27 +245,13 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& fine
         tiles = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(tiles) * 0.9 * budget / faces));
     }
     level.tolerance = cut_tolerance(h, level.cut);
-    const std::size_t tiles_fit = level.cut.size();
-    if (cut_by_tolerance(h, level.tolerance).size() >= tiles_fit)
+    LodLevel nested;
+    nested.cut = cut_by_tolerance(h, level.tolerance);
+    if (nested.cut.size() >= level.cut.size())
         return level; // the same cut (or, below a noise floor, not coarser): keep it
-    // The finest tolerance cut with at most as many tiles as the best-N cut that fits (bisection on the
-    // tolerance: cuts are cheap); if its mesh does not fit after all, the one at the best-N cut's own
-    // tolerance, which has at most as many tiles everywhere.
-    double fits = level.tolerance, too_fine = 0.0;
-    for (int step = 0; step < 40; ++step) {
-        const double mid = 0.5 * (fits + too_fine);
-        (cut_by_tolerance(h, mid).size() <= tiles_fit ? fits : too_fine) = mid;
-    }
-    for (const double tolerance : {fits, level.tolerance}) {
-        LodLevel nested;
-        nested.cut = cut_by_tolerance(h, tolerance);
-        mesh_level(h, nested, o.mesh);
-        if (static_cast<double>(nested.mesh.n_faces()) <= budget || tolerance == level.tolerance) {
-            nested.tolerance = cut_tolerance(h, nested.cut);
-            return nested;
-        }
-    }
-    return level; // not reached: the loop returns on its last tolerance
+    mesh_level(h, nested, o.mesh);
+    nested.tolerance = cut_tolerance(h, nested.cut);
+    return nested;
 }
 
 std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o, double first, std::size_t finest)
