@@ -95,7 +95,8 @@ bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g);
 
 //! \brief The pairs of self_intersecting_faces that have at least one face in `faces` (smaller index
 //! first, sorted): after an edit that moved only those faces, the pairs that can have changed, found by
-//! box intersection of those faces against all faces instead of a test of the whole mesh.
+//! box intersection of those faces against all faces instead of a test of the whole mesh. Entries that
+//! name no face of the mesh are ignored.
 std::vector<std::pair<int, int>> intersecting_pairs_with(const Mesh& mesh, const std::vector<int>& faces);
 
 //! The point of a mesh's surface closest to a query point, and the face it lies on.

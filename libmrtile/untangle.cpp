@@ -7,12 +7,14 @@
 // round only the faces an edit changed are tested again: every other pair is as it was.
 #include "libmrtile/untangle.h"
 
+#include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -370,6 +372,11 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
 
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<std::pair<int, int>> pairs)
 {
+    const auto faces = static_cast<int>(mesh.n_faces());
+    for (const auto& [a, b] : pairs)
+        if (a < 0 || b < 0 || a >= faces || b >= faces || a == b)
+            throw InvalidInput("untangle: a given pair (" + std::to_string(a) + ", " + std::to_string(b) +
+                               ") does not name two faces of the mesh");
     UntangleStats stats;
     stats.pairs_before = pairs.size();
     if (pairs.empty())

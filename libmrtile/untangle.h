@@ -55,6 +55,7 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options = {});
 
 //! The same, from the mesh's intersecting pairs as self_intersecting_faces gives them (a caller that
 //! has just found them, such as fit_vertices (FitStats::intersecting_pairs), spares the test of the whole mesh).
+//! \throw InvalidInput if a pair does not name two distinct faces of the mesh.
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<std::pair<int, int>> pairs);
 
 } // namespace mrt

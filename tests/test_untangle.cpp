@@ -4,6 +4,7 @@
 #include "formats/read_points.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
+#include "libmrtile/errors.h"
 #include "libmrtile/fit_vertices.h"
 #include "libmrtile/hierarchy.h"
 #include "libmrtile/mesh_stats.h"
@@ -222,6 +223,9 @@ TEST(Untangle, starting_from_known_pairs_gives_the_same_mesh)
     EXPECT_EQ(a.moves, b.moves);
     // The count left after the rounds (kept up from the changed faces) is that of a whole test.
     EXPECT_EQ(a.pairs_after, self_intersecting_faces(tested).size());
+    Mesh other = r.mesh;
+    EXPECT_THROW(untangle(other, {}, {{0, static_cast<int>(other.n_faces())}}), InvalidInput);
+    EXPECT_THROW(untangle(other, {}, {{-1, 3}}), InvalidInput);
     ASSERT_EQ(tested.n_vertices(), given.n_vertices());
     for (const auto v : tested.vertices())
         EXPECT_EQ(tested.point(v), given.point(v));
