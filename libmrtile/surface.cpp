@@ -307,7 +307,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
     front.finish();
     if (options.fill_holes) {
         fill(FillMode::Gaps);
-        std::vector<std::vector<std::uint32_t>> removed; // faces of each island dropped
+        std::vector<DroppedIsland> removed; // the islands dropped
         const std::vector<bool> dropped = drop_islands(surface, tiles, layout.tiles, removed);
         islands = static_cast<std::size_t>(std::count(dropped.begin(), dropped.end(), true));
         if (islands > 0) {
@@ -332,7 +332,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
                 filled = filled_after_drop;
                 front.regrow(dropped);
                 fill(FillMode::Gaps);
-                std::vector<std::vector<std::uint32_t>> removed_again;
+                std::vector<DroppedIsland> removed_again;
                 const std::vector<bool> dropped_again = drop_islands(surface, tiles, layout.tiles, removed_again);
                 islands = static_cast<std::size_t>(std::count(dropped_again.begin(), dropped_again.end(), true));
                 restored_islands = 0;

@@ -43,10 +43,13 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std
         }
     }
     std::vector<std::uint32_t> size(count, 0);
+    std::vector<bool> closed(count, true);
     std::vector<std::uint32_t> part_of_tile(tiles.size(), kNone);
     for (std::uint32_t f = 0; f < count; ++f)
         if (s.alive(f)) {
             ++size[parts.find(f)];
+            if (open_face[f])
+                closed[parts.find(f)] = false;
             if (s.face_tile()[f] >= 0)
                 part_of_tile[static_cast<std::size_t>(s.face_tile()[f])] = parts.find(f);
         }
@@ -70,12 +73,8 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std
     // their point samples makes neighbours), not a piece broken off a larger surface: a broken piece is
     // open where it broke off, and a bubble closed at a thin tip is a tile or two. (QA, session 13: of
     // two unit spheres 5 to 12 spacings apart, one was dropped whole.)
-    std::vector<bool> closed(count, true);
     std::vector<std::size_t> part_tiles(count, 0);
     std::vector<double> part_share(count, 0.0);
-    for (std::uint32_t f = 0; f < count; ++f)
-        if (s.alive(f) && open_face[f])
-            closed[parts.find(f)] = false;
     for (std::size_t t = 0; t < tiles.size(); ++t)
         if (part_of_tile[t] != kNone) {
             ++part_tiles[part_of_tile[t]];
@@ -100,7 +99,7 @@ Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std
             }
         }
     }
-    return Islands{std::move(parts), std::move(doomed), std::move(part_of_tile)};
+    return Islands{std::move(parts), std::move(doomed), std::move(closed), std::move(part_of_tile)};
 }
 
 // Tiles whose fans are in an island.
@@ -120,10 +119,9 @@ void remove_islands(Surface& s, Islands& islands)
             s.remove(f);
 }
 
-// Finds and removes the islands. Returns the tiles whose fans were removed; `removed` gets the (now
-// dead) face ids of each island, in face order.
+// Finds and removes the islands. Returns the tiles whose fans were removed; `removed` gets each island.
 std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops,
-                               std::vector<std::vector<std::uint32_t>>& removed)
+                               std::vector<DroppedIsland>& removed)
 {
     Islands islands = find_islands(s, tiles, loops);
     std::map<std::uint32_t, std::size_t> index_of_part;
@@ -135,8 +133,8 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const
             continue;
         const auto inserted = index_of_part.emplace(part, removed.size());
         if (inserted.second)
-            removed.emplace_back();
-        removed[inserted.first->second].push_back(f);
+            removed.push_back({{}, islands.closed[part]});
+        removed[inserted.first->second].faces.push_back(f);
         s.remove(f);
     }
     return island_tiles(islands);
@@ -154,12 +152,13 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const
 // away). Returns the number of islands put back; `restored_tiles` is set for each of their fans.
 constexpr std::size_t kMinRestoredTiles = 3;
 constexpr double kMinRestoredShare = 0.01;
-std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
+std::size_t restore_uncovered_islands(Surface& s, const std::vector<DroppedIsland>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
                                       std::vector<bool>& restored_tiles, double reach)
 {
     std::size_t restored = 0;
-    for (const std::vector<std::uint32_t>& island : removed) {
+    for (const DroppedIsland& dropped : removed) {
+        const std::vector<std::uint32_t>& island = dropped.faces;
         // Fan centres of the island (one per tile) and the box around them, widened by the reach.
         std::vector<std::pair<Vec3, double>> centres; // position, reach distance
         std::vector<std::int32_t> island_tiles;
@@ -181,19 +180,7 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<
             continue;
         // A closed island is a bubble (both sides of a thin tip closed onto each other instead of onto
         // the surface): put back, it would float beside the surface as a component of its own.
-        std::vector<std::uint64_t> edges;
-        for (std::uint32_t f : island)
-            for (int k = 0; k < 3; ++k)
-                edges.push_back(edge_key(s.faces()[f][k], s.faces()[f][(k + 1) % 3]));
-        std::sort(edges.begin(), edges.end());
-        const bool closed = std::all_of(island.begin(), island.end(), [&](std::uint32_t f) {
-            const Tri& t = s.faces()[f];
-            for (int k = 0; k < 3; ++k)
-                if (!std::binary_search(edges.begin(), edges.end(), edge_key(t[(k + 1) % 3], t[k])))
-                    return false;
-            return true;
-        });
-        if (closed)
+        if (dropped.closed)
             continue;
         Vec3 lo = centres[0].first, hi = lo;
         double margin = 0.0;

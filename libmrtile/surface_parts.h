@@ -638,21 +638,30 @@ Candidates local_candidates(const Hierarchy& h, const Pruner& pruner, const Layo
 // outside it, and a part of gap faces only. Such an island meets the rest of the surface in the
 // sampled data but failed to join it (typically at a thin or sharp feature), and the larger surface
 // around it then has a hole with the island inside that no disk can fill. Parts whose tiles have no
-// neighbours elsewhere (separate objects) are not islands.
+// neighbours elsewhere, or closed parts of a few tiles holding a fair share of the points (separate
+// objects), are not islands.
 struct Islands
 {
     UnionFind parts{0};                      // faces -> part
     std::vector<bool> doomed;                // per part root: an island
+    std::vector<bool> closed;                // per part root: no face of the part has a free edge
     std::vector<std::uint32_t> part_of_tile; // kNone for tiles without faces
+};
+
+// An island taken out of the surface: its (now dead) faces, in face order, and whether it was closed.
+struct DroppedIsland
+{
+    std::vector<std::uint32_t> faces;
+    bool closed = false;
 };
 
 Islands find_islands(const Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops);
 std::vector<bool> island_tiles(const Islands& islands);
 void remove_islands(Surface& s, Islands& islands);
 std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const std::vector<TileLoop>& loops,
-                               std::vector<std::vector<std::uint32_t>>& removed);
+                               std::vector<DroppedIsland>& removed);
 
-std::size_t restore_uncovered_islands(Surface& s, const std::vector<std::vector<std::uint32_t>>& removed,
+std::size_t restore_uncovered_islands(Surface& s, const std::vector<DroppedIsland>& removed,
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
                                       std::vector<bool>& restored_tiles, double reach = 2.0);
 
