@@ -9,6 +9,7 @@
 //    nearby centres. It only decides which points are reclassified, so locality is enough.
 #include "libmrtile/cluster_tree.h"
 
+#include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gabriel_graph.h"
 
@@ -85,6 +86,9 @@ public:
     }
 
     void run();
+    void split_failing();
+    bool mark_gaps();
+    double gap_of(std::uint32_t id) const;
 
     std::vector<std::int32_t> parent_of;
     std::vector<std::uint32_t> leaf_of_point;
@@ -112,6 +116,7 @@ private:
     std::uint64_t unsettled_ = 0;
     std::uint64_t splits_ = 0;
     std::uint64_t failing_clusters_ = 0; // while > 0 the paper's literal order keeps splitting
+    std::vector<std::uint32_t> gap_checked_; // per cluster: 1 + the version last judged by mark_gaps
 };
 
 bool Builder::is_flat(const Moments& m) const
@@ -422,19 +427,11 @@ void Builder::add_cluster()
     alive_.push_back(1);
 }
 
-void Builder::run()
+void Builder::split_failing()
 {
-    const std::size_t n = pos_.size();
-    add_cluster();
-    clusters_[0].members.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i)
-        clusters_[0].members[i] = {pos_[i], i};
-    parent_of.push_back(-1);
-    refresh(0);
-
     // Every split adds a cluster; reclassification can empty clusters but each split still removes
     // one unflat cluster from the queue, so 4n splits is an unreachable bound that guards the loop.
-    const std::uint64_t max_splits = 4 * static_cast<std::uint64_t>(n) + 16;
+    const std::uint64_t max_splits = 4 * static_cast<std::uint64_t>(pos_.size()) + 16;
     while (!queue_.empty() && failing_clusters_ > 0 && splits_ < max_splits) {
         const QueueEntry top = queue_.top();
         queue_.pop();
@@ -451,8 +448,83 @@ void Builder::run()
         split(top.id);
         ++splits_;
         if (options_.progress && (splits_ & 1023) == 0)
-            options_.progress(1.0 - static_cast<double>(unsettled_) / static_cast<double>(n));
+            options_.progress(1.0 - static_cast<double>(unsettled_) / static_cast<double>(pos_.size()));
     }
+}
+
+// The coverage gap of a cluster (coverage_gap.h) in its own plane; its Gabriel neighbours' points near
+// that plane fill the grid, so only surface nobody sampled counts.
+double Builder::gap_of(std::uint32_t id) const
+{
+    const Cluster& c = clusters_[id];
+    // Every point: this is the only time a leaf is judged at full resolution (set_coverage_gaps samples
+    // large nodes), and only flat clusters are judged, each once per change.
+    CoverageOptions options;
+    options.max_points = 0;
+    const std::size_t stride = 1;
+    std::vector<Vec3> points;
+    points.reserve(c.members.size() / stride + 1);
+    for (std::size_t i = 0; i < c.members.size(); i += stride)
+        points.push_back(c.members[i].p);
+    const Eigen3x3 frame = eigen_decomposition(c.moments);
+    const double alone = coverage_gap(points, frame.vectors[2], frame.vectors[1], options);
+    if (alone <= 0)
+        return 0.0;
+    const Vec3 normal = frame.vectors[0], centre = c.moments.mean;
+    double thickness = 0.0;
+    for (const Member& mb : c.members)
+        thickness = std::max(thickness, std::abs(dot(mb.p - centre, normal)));
+    thickness += 1e-9 * (c.radius + 1e-300);
+    std::vector<Vec3> fill;
+    for (std::uint32_t n : c.neighbours) {
+        const std::vector<Member>& list = clusters_[n].members;
+        for (std::size_t i = 0; i < list.size(); i += stride)
+            if (std::abs(dot(list[i].p - centre, normal)) <= thickness)
+                fill.push_back(list[i].p);
+    }
+    return coverage_gap(points, frame.vectors[2], frame.vectors[1], options, fill);
+}
+
+// Marks every flat, splittable cluster not judged since it last changed whose tile would cover a gap
+// as failing, and queues it. Returns whether any was.
+bool Builder::mark_gaps()
+{
+    gap_checked_.resize(clusters_.size(), 0);
+    bool any = false;
+    for (std::uint32_t id = 0; id < clusters_.size(); ++id) {
+        Cluster& c = clusters_[id];
+        if (!c.alive || c.failing || c.members.size() <= options_.min_cluster || gap_checked_[id] == c.version + 1)
+            continue;
+        gap_checked_[id] = c.version + 1;
+        if (gap_of(id) <= 0)
+            continue;
+        set_failing(id, true);
+        any = true;
+        if (!c.queued) {
+            queue_.push({c.internal_error, id, c.version});
+            c.queued = true;
+        }
+    }
+    return any;
+}
+
+void Builder::run()
+{
+    const std::size_t n = pos_.size();
+    add_cluster();
+    clusters_[0].members.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i)
+        clusters_[0].members[i] = {pos_[i], i};
+    parent_of.push_back(-1);
+    refresh(0);
+
+    split_failing();
+    // Flat clusters whose tiles would cover holes or notches are split too (BuildOptions::split_gaps),
+    // round by round: a split's children, and the neighbours it changed, are judged in the next round.
+    // The rounds are bounded (each splits at least one cluster; 64 is far more than the depth of a
+    // hole's splits) so that no input can make them run long.
+    for (int round = 0; round < 64 && options_.split_gaps && mark_gaps(); ++round)
+        split_failing();
 
     leaf_of_point.assign(n, 0);
     for (std::uint32_t id = 0; id < clusters_.size(); ++id)
@@ -625,6 +697,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         node.internal_error = error;
         node.max_plane_distance = max_plane;
     }
+    set_coverage_gaps(h);
     return h;
 }
 

@@ -58,6 +58,12 @@ struct BuildOptions
     //! coordinates, concatenated files) would end in leaves of one or two positions that span no
     //! tile, and the surface would break into holes (a sphere with every point ten times: 61 loops).
     bool merge_duplicates = true;
+    //! Beyond the paper: also split flat clusters whose tile (the convex hull of their points) would
+    //! cover a hole or notch of the sampled surface (coverage_gap.h: a window in a wall, a hole in a
+    //! plate, the inside corner of an L-shaped part), until no leaf does. The paper splits by flatness
+    //! alone, so such a cluster stays one tile and the hole is filled. Clouds without such holes get
+    //! the same hierarchy either way.
+    bool split_gaps = true;
     //! Called now and then with the fraction of points already in flat clusters (0..1).
     std::function<void(double)> progress;
 };

@@ -28,14 +28,33 @@ double distance_to_box(const Vec3& p, const BoundingBox& b)
     return norm(d);
 }
 
-// The refinement rule of every cut by tolerance, region or camera: the node's RMS plane distance is
-// above `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h).
+// Whether the node's coverage gap is what its tile's error is made of: larger than the distance of
+// its points to its plane. A cluster across a sharp edge is far from its plane anyway (and where the
+// sampling density jumps at the edge its sparse side can look empty); the gap of a flat one is all
+// there is to its error.
+bool gap_dominates(const Node& n) { return n.coverage_gap > n.max_plane_distance; }
+
+// The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above
+// `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h), or its
+// tile reaches farther than `limit` over a hole or notch of the surface, farther than its points lie
+// from its plane (Node::coverage_gap; holes are no noise, so no floor).
 bool rougher_than(const Node& n, double limit)
 {
-    return n.rms_plane_distance > std::max(limit, n.noise_floor);
+    return n.rms_plane_distance > std::max(limit, n.noise_floor) || (n.coverage_gap > limit && gap_dominates(n));
+}
+
+// What the budget cut refines by: the plane error λ_min, or, where the gap dominates, the node's
+// coverage gap counted like a plane distance of the same size at every point, whichever is larger.
+double budget_error(const Node& n)
+{
+    if (!gap_dominates(n))
+        return n.frame.values[0];
+    return std::max(n.frame.values[0], static_cast<double>(n.count()) * n.coverage_gap * n.coverage_gap);
 }
 
 } // namespace
+
+double node_error(const Node& n) { return std::max(n.max_plane_distance, n.coverage_gap); }
 
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
 {
@@ -88,7 +107,7 @@ Cut cut_by_budget(const Hierarchy& h, std::size_t tiles)
         if (n.is_leaf())
             done.push_back(id);
         else
-            open.push({n.frame.values[0], id});
+            open.push({budget_error(n), id});
     };
     push(0);
     while (!open.empty() && done.size() + open.size() < tiles) {
@@ -233,7 +252,7 @@ double screen_space_error(const Node& node, const Camera& camera)
     if (distance <= 0)
         return std::numeric_limits<double>::infinity();
     const double half_fov = camera.fov_y_degrees * 0.5 * 3.14159265358979323846 / 180.0;
-    return node.max_plane_distance * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
+    return node_error(node) * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
 }
 
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera)

@@ -13,7 +13,14 @@
 //!    as well as the parent's plane does, so refining always lowers the total Σ λ_min of a cut.
 //!  - RMS plane distance sqrt(λ_min / count), relative to Hierarchy::scale (tolerance): the bounding
 //!    box's largest side, far stray points aside (see tolerance_scale in point_cloud.h).
-//!  - geometric error (max distance of a point to its tile plane), for screen-space error.
+//!  - geometric error (node_error: max distance of a point to its tile plane, or the tile's coverage
+//!    gap if larger), for screen-space error and 3D Tiles.
+//!  - coverage gap (Node::coverage_gap): how far the tile reaches over a hole or notch of the surface.
+//!    Where it exceeds the node's largest plane distance (it dominates the tile's error), cuts by
+//!    tolerance and region also refine a node whose gap exceeds their limit, cuts by camera count it in
+//!    the screen-space error, and the budget cut weighs it like a plane distance, so holes stay open at
+//!    every level of detail fine enough to show them (a window of radius r: from tolerance
+//!    r / Hierarchy::scale down).
 //!
 //! Cuts by tolerance, by region and by camera never refine a node whose RMS plane distance is at
 //! or under its Node::noise_floor (0 where the sample is clean): below it a noisy sample's clusters are
@@ -35,15 +42,17 @@ using RefinePredicate = std::function<bool(const Hierarchy& h, std::int32_t node
 //! The general form: refine every internal node for which `refine` says yes.
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine);
 
-//! Scale-free: every tile's RMS plane distance is at most tolerance × Hierarchy::scale, or the tile
-//! is a leaf, or its parent's RMS plane distance is at most the parent's noise floor. \throw InvalidInput if tolerance is negative or not finite.
+//! Scale-free: every tile's RMS plane distance is at most tolerance × Hierarchy::scale, and so is its
+//! coverage gap where that exceeds its largest plane distance, or the tile is a leaf, or its parent
+//! meets the gap rule and its RMS plane distance is at most the parent's noise floor. \throw InvalidInput if tolerance is negative or not finite.
 Cut cut_by_tolerance(const Hierarchy& h, double tolerance);
 
 //! The paper's τ: every tile's λ_min(ΔᵀΔ) is at most tau (or the tile is a leaf).
 Cut cut_by_tau(const Hierarchy& h, double tau);
 
 //! The best cut with `tiles` nodes (or all leaves, if fewer): starting from the root, always refine
-//! the node with the largest plane error λ_min (ties: smaller id). Exactly min(tiles, leaves) nodes.
+//! the node with the largest plane error λ_min, or count × coverage gap² if larger and the gap exceeds
+//! the node's largest plane distance (ties: smaller id). Exactly min(tiles, leaves) nodes.
 //! \throw InvalidInput if tiles is 0.
 Cut cut_by_budget(const Hierarchy& h, std::size_t tiles);
 
@@ -74,7 +83,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
 Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const std::vector<FocusRegion>& regions);
 
 //! Incremental coarsening: groups of cut nodes are replaced by their highest common ancestor whose box
-//! lies inside `region` and whose RMS plane distance is at most tolerance × Hierarchy::scale.
+//! lies inside `region` and that meets the rule of cut_by_tolerance at `tolerance`.
 //! Nodes not inside the region never change.
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance);
 
@@ -87,8 +96,12 @@ struct Camera
     double max_pixel_error = 16.0;   //!< CesiumJS's default maximumScreenSpaceError
 };
 
+//! A node's geometric error in model units: the largest distance of its points to its tile plane,
+//! or its coverage gap if larger.
+double node_error(const Node& node);
+
 //! Screen-space error of a node seen from the camera: error × height / (distance × 2 tan(fov/2)),
-//! with error = the node's max plane distance and distance to the node's bounding box (0 inside).
+//! with error = node_error(node) and distance to the node's bounding box (0 inside).
 double screen_space_error(const Node& node, const Camera& camera);
 
 //! Refines every node whose screen-space error exceeds the camera's max_pixel_error (down to the

@@ -78,6 +78,30 @@ double floor_of(const Roughness& leaves, double region)
 
 } // namespace
 
+std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& box, std::size_t stride)
+{
+    std::vector<std::uint32_t> out;
+    if (h.nodes.empty())
+        return out;
+    const auto step = static_cast<std::uint32_t>(std::max<std::size_t>(1, stride));
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const Node& n = h.nodes[static_cast<std::size_t>(stack.back())];
+        stack.pop_back();
+        if (!n.box.meets(box))
+            continue;
+        if (!n.is_leaf()) {
+            stack.push_back(n.right); // left first: ascending indices
+            stack.push_back(n.left);
+            continue;
+        }
+        for (std::uint32_t i = n.begin; i < n.end; i += step)
+            if (box.contains(h.cloud.positions[i]))
+                out.push_back(i);
+    }
+    return out;
+}
+
 void update_derived(Hierarchy& h)
 {
     // Each node on its own (a loaded 1M-point model has 170k of them): in chunks, on every thread.

@@ -46,6 +46,11 @@ struct Node
     //! Axis-aligned bounding box of the node's points (relative to the cloud's origin). A child's box
     //! lies inside its parent's. Used by region and camera cuts and as 3D Tiles bounding volumes.
     BoundingBox box;
+    //! How far the node's tile reaches over surface that no point samples (model units; 0 for none):
+    //! the largest coverage gap (coverage_gap.h) of the node or a node under it, whose tiles its tile
+    //! covers. A hole or notch shows in a cut only where the tiles around it have gaps under the cut's
+    //! tolerance, so cuts refine by it as by the plane distance (cut.h).
+    double coverage_gap = 0.0;
 
     // Derived from `moments` when the hierarchy is built or loaded (not stored in the file).
     Eigen3x3 frame;                  //!< PCA: frame.vectors[0] = normal, frame.values[0] = λ_min(M)
@@ -93,6 +98,10 @@ struct Hierarchy
     //! divided by `largest_side` (pass Hierarchy::scale; Tolerance) or λ_min (Tau).
     double flatness(const Node& node, double largest_side) const;
 };
+
+//! \brief The points inside `box` (tree-order indices, ascending), found through the nodes' boxes;
+//! with `stride` > 1 only every stride-th point of each leaf met is looked at (a regular sample).
+std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& box, std::size_t stride = 1);
 
 //! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, then
 //! scale and the nodes' noise floors (derive_noise_floor).

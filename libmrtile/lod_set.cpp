@@ -44,13 +44,25 @@ double level_max_plane_distance(const Hierarchy& h, const Cut& cut)
     return m;
 }
 
-// The scale-free tolerance a cut satisfies: its largest tile RMS plane distance / largest side.
+// The level's geometric error: the largest node_error of its tiles.
+double level_node_error(const Hierarchy& h, const Cut& cut)
+{
+    double m = 0.0;
+    for (std::int32_t id : cut)
+        m = std::max(m, node_error(h.nodes[static_cast<std::size_t>(id)]));
+    return m;
+}
+
+// The scale-free tolerance a cut satisfies: its largest tile RMS plane distance, or coverage gap where
+// that exceeds the tile's largest plane distance, / largest side (cut_by_tolerance refines by both).
 double cut_tolerance(const Hierarchy& h, const Cut& cut)
 {
     const double side = h.scale;
     double m = 0.0;
-    for (std::int32_t id : cut)
-        m = std::max(m, h.nodes[static_cast<std::size_t>(id)].rms_plane_distance);
+    for (std::int32_t id : cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        m = std::max({m, n.rms_plane_distance, n.coverage_gap > n.max_plane_distance ? n.coverage_gap : 0.0});
+    }
     return side > 0 ? m / side : 0.0;
 }
 
@@ -352,7 +364,7 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
     double previous_error = std::numeric_limits<double>::infinity();
     for (LodLevel& level : levels) {
         level.max_plane_distance = level_max_plane_distance(h, level.cut);
-        level.geometric_error = std::min(previous_error, level.max_plane_distance);
+        level.geometric_error = std::min(previous_error, level_node_error(h, level.cut));
         previous_error = level.geometric_error;
     }
     if (!levels.empty())

@@ -12,9 +12,10 @@
 //! the next level fits `max_tile_triangles` (REPLACE refinement: the children together cover exactly
 //! the parent's points). Where a tile meets a tile of another level (a neighbour not yet refined),
 //! borders differ slightly; every tile carries a skirt (a strip hanging from its region borders along
-//! the surface normal, as deep as twice the level's geometric error) that hides those cracks.
-//! Geometric error of a level = the largest distance of a point to its tile plane over the level's cut
-//! (model units), forced non-increasing with the level; the finest level's tiles get 0.
+//! the surface normal, as deep as twice the level's largest plane distance) that hides those cracks.
+//! Geometric error of a level = the largest node_error (cut.h: distance of a point to its tile plane,
+//! or the tile's coverage gap) over the level's cut (model units), forced non-increasing with the
+//! level; the finest level's tiles get 0.
 
 #include "libmrtile/cut.h"
 #include "libmrtile/reconstruct.h"

@@ -2,6 +2,8 @@
 // checksummed binary file, explicit little-endian, validated before anything is allocated from it.
 #include "libmrtile/model_file.h"
 
+#include "libmrtile/coverage_gap.h"
+
 #include "libmrtile/atomic_file.h"
 #include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
@@ -25,7 +27,8 @@ constexpr char kMagic[8] = {'M', 'R', 'T', 'I', 'L', 'E', '\r', '\n'};
 constexpr char kEndMagic[4] = {'M', 'E', 'N', 'D'};
 constexpr std::uint32_t kEndianMarker = 0x01020304u;
 constexpr std::size_t kHeaderSize = 104;
-constexpr std::size_t kNodeSize = 168;
+constexpr std::size_t kNodeSize = 176;
+constexpr std::size_t kNodeSizeV1 = 168; // version 1: no coverage gap
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
 constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels;
@@ -182,7 +185,8 @@ void check_node_statistics(const Hierarchy& h, const Reader& r)
         // Paper eq. 1 sums distances to the centre (each at most the diagonal); it is kept up to date
         // incrementally while points move between clusters, hence the factor 2 of room.
         if (!(node.internal_error >= 0 && node.internal_error <= 2 * count * (diagonal + slack)) ||
-            !(node.max_plane_distance >= 0 && node.max_plane_distance <= 2 * diagonal + slack))
+            !(node.max_plane_distance >= 0 && node.max_plane_distance <= 2 * diagonal + slack) ||
+            !(node.coverage_gap >= 0 && node.coverage_gap <= 2 * diagonal + slack))
             r.fail(which + "errors do not fit its points' box");
     }
 }
@@ -519,6 +523,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
             w.f64(v->y);
             w.f64(v->z);
         }
+        w.f64(node.coverage_gap);
     }
     if (h.cloud.viewpoint) {
         w.f64(h.cloud.viewpoint->x);
@@ -552,9 +557,10 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     char magic[8];
     r.bytes(magic, 8);
     const std::uint32_t version = r.u32();
-    if (version != kModelFormatVersion)
-        r.fail("format version " + std::to_string(version) + " is not supported (this build reads version " +
+    if (version != kModelFormatVersion && version != 1)
+        r.fail("format version " + std::to_string(version) + " is not supported (this build reads versions 1 to " +
                std::to_string(kModelFormatVersion) + ")");
+    const std::size_t node_size = version == 1 ? kNodeSizeV1 : kNodeSize;
     if (r.u32() != kEndianMarker)
         r.fail("bad byte-order marker");
     if (r.u32() != kHeaderSize)
@@ -567,7 +573,7 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
-        kHeaderSize + n * per_point + node_count * kNodeSize + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
+        kHeaderSize + n * per_point + node_count * node_size + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -632,6 +638,8 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
             v->y = r.f64();
             v->z = r.f64();
         }
+        if (version >= 2)
+            node.coverage_gap = r.f64();
     }
     if (flags & kFlagViewpoint) {
         Vec3 v;
@@ -661,6 +669,8 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         r.fail("unexpected extra sections (written by a newer version?)");
     check_structure(h, r);
     update_derived(h);
+    if (version == 1)
+        set_coverage_gaps(h); // not stored before version 2
     if (levels_at > 0 && with_levels) {
         Reader levels(bytes, name);
         levels.skip(levels_at);

@@ -119,8 +119,16 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         result.mesh = Mesh(); // no hull: the tiles below build the mesh afresh
     }
     std::vector<Tile> tiles = make_tiles(h, result.cut, options.tiles);
-    for (int round = 0; round < options.small_object_rounds && options.tiles.voronoi_trim; ++round) {
-        const std::vector<bool> small = small_object_tiles(h, result.cut, tiles);
+    const int rounds = std::max(options.small_object_rounds, options.gap_rounds);
+    for (int round = 0; round < rounds && options.tiles.voronoi_trim; ++round) {
+        std::vector<bool> small = round < options.small_object_rounds ? small_object_tiles(h, result.cut, tiles)
+                                                                      : std::vector<bool>(tiles.size(), false);
+        if (round < options.gap_rounds)
+            for (std::size_t k = 0; k < tiles.size(); ++k) {
+                const Node& node = h.nodes[static_cast<std::size_t>(result.cut[k])];
+                if (!node.is_leaf() && tiles[k].coverage_gap > node_error(node))
+                    small[k] = true;
+            }
         if (std::none_of(small.begin(), small.end(), [](bool b) { return b; }))
             break;
         Cut refined; // children in place of the node: still in point order

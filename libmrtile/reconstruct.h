@@ -42,6 +42,12 @@ struct MeshOptions
     //! this many times before meshing (0 = mesh the cut as given). 50 unit spheres 5 apart at
     //! tolerance 0.01 (two tiles each): 33 were dropped; now all are closed.
     int small_object_rounds = 3;
+    //! A tile whose outline reaches over a hole of the sample farther than its node's geometric error
+    //! (Tile::coverage_gap > node_error, cut.h) is refined too, up to this many times (0 = never): its
+    //! Voronoi cell took in points across the hole, or the cut kept it although its gap is larger than
+    //! its node's error. A flat plate with holes 12 and 20 spacings wide: both covered by one tile each;
+    //! now open.
+    int gap_rounds = 6;
 };
 
 struct MeshResult

@@ -122,6 +122,20 @@ PointCloud smooth_height_field(std::size_t count, std::uint32_t seed)
     return c;
 }
 
+PointCloud flat_plate(std::size_t count, const std::function<bool(double, double)>& keep, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    PointCloud c;
+    c.positions.reserve(count);
+    // Rejection sampling; a keep that leaves (almost) nothing gives fewer points rather than no end.
+    for (std::size_t tries = 0; c.positions.size() < count && tries < 1000 * count + 1000; ++tries) {
+        const double x = uniform(rng), y = uniform(rng);
+        if (keep(x, y))
+            c.positions.push_back({x, y, 0.0});
+    }
+    return c;
+}
+
 PointCloud step_function(std::size_t count, std::uint32_t seed)
 {
     std::mt19937 rng(seed);

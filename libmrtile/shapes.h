@@ -4,6 +4,7 @@
 #include "libmrtile/point_cloud.h"
 
 #include <cstdint>
+#include <functional>
 
 namespace mrt::shapes {
 
@@ -26,6 +27,9 @@ PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed = 6
 //! area, except the face x = 0, which gets `dense_face_factor` times as many (a face a range scanner saw
 //! head-on beside faces it saw at a grazing angle: the density jumps at sharp edges).
 PointCloud box_surface(const Vec3& size, double density, double dense_face_factor = 1.0, std::uint32_t seed = 8);
+//! `count` uniform samples of the flat plate z = 0 over [0,1]^2 where keep(x, y) holds (holes, windows,
+//! notches: whatever keep leaves out is unsampled).
+PointCloud flat_plate(std::size_t count, const std::function<bool(double, double)>& keep, std::uint32_t seed = 9);
 //! Adds Gaussian noise of the given standard deviation along each axis.
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed = 7);
 //! Translates every position by `offset` (to test far-from-origin precision), keeping origin at zero.

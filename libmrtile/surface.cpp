@@ -100,6 +100,8 @@ std::uint64_t undirected_key(std::uint32_t a, std::uint32_t b)
 // Largest turn of a fan face when a loop point is collapsed away; a gap face (thin, its normal is noise)
 // only has to stay within 75 degrees of the surface around the point.
 constexpr double kMaxCollapseTurnDegrees = 20.0;
+// How far (in point spacings of its tile) a collapse may move the mesh's border.
+constexpr double kBorderSlackSpacings = 1.0;
 const double kMinGapFaceCos = std::cos(radians(75.0));
 
 // The ε-splitting of step 1 puts points on long hull edges so that the gap triangles are well shaped
@@ -117,8 +119,31 @@ const double kMinGapFaceCos = std::cos(radians(75.0));
 // two rim points: the strip of gap faces between two tiles is about one point spacing wide and costs two
 // faces per rim point while it carries almost no shape, so its rim points are merged pairwise (the
 // shortest such edge first) and neighbouring fans meet directly.
-std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const Projection& projection,
-                                 bool across_strips = false)
+// Whether collapsing the border point v into w keeps the border within `slack` of v: the border path
+// p, v, q becomes p, w, q (p, q when w is one of them), and v must lie within slack of it (a split point,
+// slack 0, on the straight segment: within a billionth of its length).
+bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHandle w, double slack)
+{
+    const Mesh::HalfedgeHandle out = mesh.halfedge_handle(v); // a border halfedge for a border vertex
+    if (!mesh.is_boundary(out))
+        return false;
+    const Vec3 at = to_vec3(mesh.point(v));
+    const Vec3 q = to_vec3(mesh.point(mesh.to_vertex_handle(out)));
+    const Vec3 p = to_vec3(mesh.point(mesh.from_vertex_handle(mesh.prev_halfedge_handle(out))));
+    const Vec3 m = to_vec3(mesh.point(w));
+    const auto segment_distance = [](const Vec3& x, const Vec3& a, const Vec3& b) {
+        const Vec3 d = b - a;
+        const double len2 = dot(d, d);
+        const double t = len2 > 0.0 ? std::clamp(dot(x - a, d) / len2, 0.0, 1.0) : 0.0;
+        return distance(x, a + d * t);
+    };
+    const bool along = w == mesh.to_vertex_handle(out) || w == mesh.from_vertex_handle(mesh.prev_halfedge_handle(out));
+    const double deviation = along ? segment_distance(at, p, q) : std::min(segment_distance(at, p, m), segment_distance(at, m, q));
+    return deviation <= std::max(slack, 1e-9 * (distance(at, p) + distance(at, q)));
+}
+
+std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const std::vector<double>& border_slack,
+                                 const Projection& projection, bool across_strips = false)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(radians(kMaxCollapseTurnDegrees));
@@ -186,8 +211,18 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
                 }
                 moved = std::min(moved, point_triangle_distance(at, after[0], after[1], after[2]));
             }
+            if (!keeps_shape || !(moved <= slack[i]))
+                continue;
+            // On the mesh's border the distance to the surface says nothing of the border itself: the
+            // faces around a border point may grow over the hole beside it (on a flat plate every
+            // collapse keeps the surface where it was, and rim points collapsed into a window). The
+            // border may move by its slack or by border_slack (about a point spacing of its tile: the
+            // strip between a tile's hull and the sample's own border is that wide).
+            if (mesh.is_boundary(v) &&
+                !border_keeps_shape(mesh, v, w, std::max(std::isfinite(slack[i]) ? slack[i] : 0.0, border_slack[i])))
+                continue;
             // The link condition last: it is the costliest test and the shape tests fail more often.
-            if (!keeps_shape || !(moved <= slack[i]) || !mesh.is_collapse_ok(h))
+            if (!mesh.is_collapse_ok(h))
                 continue;
             if (std::isfinite(slack[i])) // a split point moves nothing: its neighbours stay free
                 for (const Mesh::VertexHandle x : mesh.vv_range(v))
@@ -272,6 +307,8 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
     std::vector<Vec3> positions;
     for (const SurfaceVertex& v : layout.vertices)
         positions.push_back(v.position);
+    if (options.max_gap_width > 0.0)
+        drop_uncovered_candidates(h, layout, positions, options.threads, candidates);
     // The front runs on consensus candidates first. Where it strands tiles (at a thin feature such as
     // the tip of an ear, the planes of neighbouring tiles disagree too much for consensus, the tiles
     // are seeded one by one and end up as islands that would be dropped and covered over), it runs
@@ -498,6 +535,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
         // Split points may go wherever the shape allows (they carry none); input points on a loop
         // within collapse_tolerance × their tile's RMS plane distance; apexes and fanless points never.
         std::vector<double> slack(mesh.n_vertices(), -1.0), strip_slack(mesh.n_vertices(), -1.0);
+        std::vector<double> border_slack(mesh.n_vertices(), 0.0);
         for (std::uint32_t v = 0; v < origin.size(); ++v) {
             if (!used[v])
                 continue;
@@ -511,6 +549,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
                 slack[i] = options.collapse_tolerance * rms;
             if (sv.split || sv.loop_pos != kNone)
                 strip_slack[i] = options.strip_tolerance * rms;
+            border_slack[i] = kBorderSlackSpacings * tiles[t].spacing();
         }
         mesh.request_vertex_status();
         mesh.request_edge_status();
@@ -521,19 +560,19 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
         for (std::size_t i = 0; i < slack.size(); ++i)
             if (std::isinf(slack[i]))
                 std::swap(split_only[i], slack[i]);
-        st.collapsed_split_points = collapse_loop_points(mesh, split_only, projection);
+        st.collapsed_split_points = collapse_loop_points(mesh, split_only, border_slack, projection);
         // Three passes, halving the slack each time (a negative slack stays negative): a point removed in
         // one pass may be moved again by the later ones, so the surface moves from it by at most
         // 1.75 × collapse_tolerance × the RMS plane distance.
         for (int pass = 0; pass < 3; ++pass) {
-            st.collapsed_split_points += collapse_loop_points(mesh, slack, projection);
+            st.collapsed_split_points += collapse_loop_points(mesh, slack, border_slack, projection);
             for (double& x : slack)
                 x *= 0.5;
         }
         // Then the strips between tiles, in the same halving passes (after the loops, so that the rim
         // points that carry no shape are gone and the strips' remaining pairs are the ones merged).
         for (int pass = 0; pass < 3 && options.strip_tolerance > 0.0; ++pass) {
-            st.collapsed_split_points += collapse_loop_points(mesh, strip_slack, projection, true);
+            st.collapsed_split_points += collapse_loop_points(mesh, strip_slack, border_slack, projection, true);
             for (double& x : strip_slack)
                 x *= 0.5;
         }

@@ -610,9 +610,6 @@ void Front::grow()
 // ---------------------------------------------------------------------------------------------------
 // Step 2b: pruning of the Delaunay triangles (paper §4.3's removal rules, plus chords).
 
-namespace {
-
-// Circumradius of a triangle (infinite when degenerate).
 double circumradius(const Vec3& a, const Vec3& b, const Vec3& c)
 {
     const double la = distance(b, c), lb = distance(a, c), lc = distance(a, b);
@@ -621,8 +618,6 @@ double circumradius(const Vec3& a, const Vec3& b, const Vec3& c)
         return std::numeric_limits<double>::infinity();
     return la * lb * lc / (2.0 * twice_area);
 }
-
-} // namespace
 
 Pruner::Pruner(const Layout& layout, const std::vector<Tile>& tiles, const Projection& projection, double alpha,
                const SurfaceOptions& options)

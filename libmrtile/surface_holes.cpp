@@ -5,6 +5,9 @@
 // boundary loops.
 #include "libmrtile/surface_parts.h"
 
+#include "libmrtile/coverage_gap.h"
+#include "libmrtile/parallel.h"
+
 #include <algorithm>
 #include <array>
 #include <cassert>
@@ -515,30 +518,37 @@ bool adds_handle(const LocalTopology& before, const LocalTopology& after, std::s
     return -d_chi - d_b > 0;
 }
 
-// Whether the input points cover a hole: every spot of its fill patch (sampled about a spacing apart)
-// has an input point within 1.5 spacings. A hole in the sample (the bunny's base) has an empty middle;
-// a hole the tiles left in a sampled surface has points all over it: a tile built from a sample of
-// at most TileOptions::max_points of its node's points can leave a gap wider than a point spacing (a
-// uniformly sampled fandisk kept one 8 spacings wide in its flat top). Counting points inside instead
-// also filled real scan holes whose loops took in some sampled surface beside them, and a tunnel of
-// the 3-hole solid.
-bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing)
+// Spots of a patch: a barycentric grid on each triangle, its step at most `step` along every edge.
+std::vector<Vec3> patch_spots(const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double step)
 {
-    if (patch.empty() || !(spacing > 0.0))
-        return false;
-    const double reach = 1.5 * spacing;
-    // Spots: a barycentric grid on each patch triangle, its step at most a spacing along every edge.
     std::vector<Vec3> spots;
     for (const Tri& t : patch) {
         const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
         const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
-        const int steps = std::clamp(static_cast<int>(std::ceil(longest / spacing)), 1, 64);
+        const int steps = std::clamp(static_cast<int>(std::ceil(longest / step)), 1, 64);
         for (int i = 0; i <= steps; ++i)
             for (int j = 0; i + j <= steps; ++j) {
                 const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps;
                 spots.push_back(a + (b - a) * u + (c - a) * v);
             }
     }
+    return spots;
+}
+
+} // namespace
+
+// Whether the input points cover a hole: every spot of its fill patch (sampled about reach / 1.5
+// apart) has an input point within `reach` (1.5 spacings of the tiles). A hole in the sample (the bunny's base) has an empty middle;
+// a hole the tiles left in a sampled surface has points all over it: a tile built from a sample of
+// at most TileOptions::max_points of its node's points can leave a gap wider than a point spacing (a
+// uniformly sampled fandisk kept one 8 spacings wide in its flat top). Counting points inside instead
+// also filled real scan holes whose loops took in some sampled surface beside them, and a tunnel of
+// the 3-hole solid.
+bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double reach)
+{
+    if (patch.empty() || !(reach > 0.0))
+        return false;
+    const std::vector<Vec3> spots = patch_spots(positions, patch, reach / 1.5);
     BoundingBox box = bounding_box(spots);
     box.min = box.min - Vec3{reach, reach, reach};
     box.max = box.max + Vec3{reach, reach, reach};
@@ -550,21 +560,8 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
                                            static_cast<std::int64_t>(std::floor((p.z - box.min.z) / reach))};
     };
     std::map<std::array<std::int64_t, 3>, std::vector<Vec3>> cells;
-    std::vector<std::int32_t> stack{0};
-    while (!stack.empty()) {
-        const Node& node = h.nodes[static_cast<std::size_t>(stack.back())];
-        stack.pop_back();
-        if (!node.box.meets(box))
-            continue;
-        if (!node.is_leaf()) {
-            stack.push_back(node.right);
-            stack.push_back(node.left);
-            continue;
-        }
-        for (std::uint32_t i = node.begin; i < node.end; ++i)
-            if (box.contains(h.cloud.positions[i]))
-                cells[cell_of(h.cloud.positions[i])].push_back(h.cloud.positions[i]);
-    }
+    for (const std::uint32_t i : points_in_box(h, box))
+        cells[cell_of(h.cloud.positions[i])].push_back(h.cloud.positions[i]);
     const double reach2 = reach * reach;
     return std::all_of(spots.begin(), spots.end(), [&](const Vec3& spot) {
         const std::array<std::int64_t, 3> c = cell_of(spot);
@@ -581,7 +578,107 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
     });
 }
 
-} // namespace
+bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count, double radius)
+{
+    // Up to kLevels above each tile: a node at most about 2^kLevels tiles large (its stored gap is the
+    // largest of its subtree, so a node much higher up would answer for holes anywhere under it).
+    constexpr int kLevels = 4;
+    for (std::size_t i = 0; i < count; ++i) {
+        std::int32_t id = layout.tiles[static_cast<std::size_t>(tiles[i])].node;
+        for (int level = 0; level <= kLevels && id >= 0; ++level) {
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            if (n.coverage_gap >= radius)
+                return true;
+            id = n.parent;
+        }
+    }
+    return false;
+}
+
+bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,
+                        const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing)
+{
+    // A hole of the kind the tiles miss lies in a nearly flat stretch: judge it in the tiles' plane.
+    const double min_cos = std::cos(radians(30.0));
+    Vec3 normal{0, 0, 0};
+    for (std::size_t i = 0; i < count; ++i) {
+        const Vec3& n = layout.tiles[static_cast<std::size_t>(tiles[i])].normal;
+        const Vec3& first = layout.tiles[static_cast<std::size_t>(tiles[0])].normal;
+        if (std::abs(dot(n, first)) < min_cos)
+            return false;
+        normal += dot(n, first) < 0 ? -n : n;
+    }
+    // A spot of a counted empty region lies at least min_radius_spacings (4) local spacings, less a
+    // grid cell, from every point, the patch's corners included: narrower patches cannot reach one.
+    constexpr double kMinCircumradius = 2.5;
+    constexpr double kMaxThickness = 0.1; // RMS distance to the plane over the margin
+    if (patch.empty() || !(spacing > 0.0))
+        return false;
+    const bool wide = std::any_of(patch.begin(), patch.end(), [&](const Tri& t) {
+        return circumradius(positions[t[0]], positions[t[1]], positions[t[2]]) > kMinCircumradius * spacing;
+    });
+    if (!wide || !(norm(normal) > 0.0))
+        return false;
+    const std::vector<Vec3> spots = patch_spots(positions, patch, spacing);
+    normal = normalized(normal);
+    const Vec3 axis_u = normalized(std::abs(normal.x) < 0.9 ? cross(normal, Vec3{1, 0, 0}) : cross(normal, Vec3{0, 1, 0}));
+    const Vec3 axis_v = cross(normal, axis_u);
+    // The points around the patch, far enough out to see a hole whole and the density around it.
+    BoundingBox box = bounding_box(spots);
+    Vec3 centre{0, 0, 0};
+    for (const Vec3& p : spots)
+        centre += p;
+    centre = centre / static_cast<double>(spots.size());
+    const double margin = std::max(0.5 * box.diagonal(), 8.0 * spacing);
+    box.min = box.min - Vec3{margin, margin, margin};
+    box.max = box.max + Vec3{margin, margin, margin};
+    std::vector<Vec3> points;
+    for (const std::uint32_t i : points_in_box(h, box))
+        if (std::abs(dot(h.cloud.positions[i] - centre, normal)) <= margin)
+            points.push_back(h.cloud.positions[i]);
+    // Only where the surface around is flat: a curved stretch (the tip of an ear) projected into one
+    // plane leaves empty regions that are no holes.
+    double sum2 = 0.0;
+    for (const Vec3& p : points)
+        sum2 += dot(p - centre, normal) * dot(p - centre, normal);
+    if (points.empty() || std::sqrt(sum2 / static_cast<double>(points.size())) > kMaxThickness * margin)
+        return false;
+    const CoverageMap map(points, axis_u, axis_v);
+    const double min_radius = kMinHoleSpacings * spacing;
+    const bool hole = map.gap() >= min_radius &&
+                      std::any_of(spots.begin(), spots.end(), [&](const Vec3& p) { return map.in_gap(p, min_radius); });
+    return hole;
+}
+
+void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,
+                               std::size_t threads, Candidates& candidates)
+{
+    const std::size_t count = candidates.triangles.size();
+    std::vector<char> drop(count, 0);
+    constexpr std::size_t kBlock = 256;
+    run_parallel((count + kBlock - 1) / kBlock, threads, [&](std::size_t block) {
+        for (std::size_t i = block * kBlock; i < std::min(count, (block + 1) * kBlock); ++i) {
+            const Tri& t = candidates.triangles[i];
+            double spacing = 0.0, full_spacing = 0.0;
+            for (std::uint32_t v : t) {
+                const TileLoop& tile = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)];
+                spacing = std::max(spacing, tile.spacing);
+                full_spacing = std::max(full_spacing, tile.full_spacing);
+            }
+            const std::array<std::int32_t, 3> tiles{layout.vertices[t[0]].tile, layout.vertices[t[1]].tile, layout.vertices[t[2]].tile};
+            if (full_spacing > 0.0 && full_spacing < spacing && hole_among(h, layout, tiles.data(), 3, kMinHoleSpacings * full_spacing))
+                drop[i] = covers_sample_hole(h, layout, tiles.data(), 3, positions, {t}, full_spacing);
+        }
+    });
+    Candidates kept;
+    for (std::size_t i = 0; i < count; ++i)
+        if (!drop[i]) {
+            kept.triangles.push_back(candidates.triangles[i]);
+            kept.relative_radius.push_back(candidates.relative_radius[i]);
+            kept.fallback.push_back(candidates.fallback[i]);
+        }
+    candidates = std::move(kept);
+}
 
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
 // max_gap_width), or in FillMode::Close every hole up to SurfaceOptions::close_holes edges, widening those
@@ -617,7 +714,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             if (!current)
                 continue;
             std::vector<std::int32_t> loop_tiles;
-            double perimeter = 0.0, largest_tile = 0.0, spacing = 0.0;
+            double perimeter = 0.0, largest_tile = 0.0, spacing = 0.0, full_spacing = 0.0;
             bool was_widened = false, surrounded = true;
             for (std::size_t i = 0; i < n; ++i) {
                 // A height field's holes are measured in its domain: a gap at a jump is small there.
@@ -630,6 +727,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 surrounded = surrounded && !closing && interior[static_cast<std::size_t>(t)]; // unused when closing
                 largest_tile = std::max(largest_tile, layout.tiles[static_cast<std::size_t>(t)].perimeter);
                 spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(t)].spacing);
+                full_spacing = std::max(full_spacing, layout.tiles[static_cast<std::size_t>(t)].full_spacing);
                 was_widened = was_widened || widened[loop[i]];
             }
             std::sort(loop_tiles.begin(), loop_tiles.end());
@@ -650,7 +748,15 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
             }
             if (!closing && options.max_gap_width > 0.0 && spacing > 0.0 &&
-                2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, spacing))
+                2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, 1.5 * spacing))
+                continue;
+            // Tiles built from a sample leave gaps as wide as the sample's spacing, so the test above
+            // misses holes narrower than that but wider than the points' own spacing (a hole in a flat
+            // plate among coarse tiles): ask the points around the patch (a gap between tiles has
+            // points all over it).
+            if (!closing && options.max_gap_width > 0.0 && full_spacing > 0.0 && full_spacing < spacing &&
+                hole_among(h, layout, loop_tiles.data(), loop_tiles.size(), kMinHoleSpacings * full_spacing) &&
+                covers_sample_hole(h, layout, loop_tiles.data(), loop_tiles.size(), positions, patch, full_spacing))
                 continue;
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
             const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};

@@ -69,6 +69,12 @@ Layout make_layout(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
         }
         tl.perimeter = perimeter;
         tl.spacing = tile.spacing();
+        tl.node = tile.node;
+        tl.normal = tile.normal;
+        const std::uint32_t node_points = h.nodes[static_cast<std::size_t>(tile.node)].count();
+        tl.full_spacing = node_points > tile.points && tile.points > 0
+                              ? tl.spacing * std::sqrt(static_cast<double>(tile.points) / node_points)
+                              : tl.spacing;
         tl.edge_length = perimeter / static_cast<double>(tl.loop.size());
         total_length += perimeter;
         total_edges += tl.loop.size();

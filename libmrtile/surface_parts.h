@@ -65,6 +65,11 @@ struct TileLoop
     double perimeter = 0.0;
     double edge_length = 0.0;         // mean loop edge length (0 for fanless tiles)
     double spacing = 0.0;             // the tile's point spacing (Tile::spacing)
+    // The spacing of all its node's points: smaller than `spacing` where the tile was built from a
+    // sample (TileOptions::max_points), so that gaps between tiles are as wide as the sample's spacing.
+    double full_spacing = 0.0;
+    std::int32_t node = -1;           // the tile's hierarchy node
+    Vec3 normal{0, 0, 1};             // the tile's unit normal (Tile::normal; its sign is arbitrary)
     double share = 0.0;               // the fraction of the cloud's points in the tile's node
     bool placed = false;
 };
@@ -494,6 +499,41 @@ struct Candidates
     std::vector<double> relative_radius; // radius / local b, in (0, 1]
     std::vector<bool> fallback;          // proposed by some of its tiles but not all (local candidates)
 };
+
+// Circumradius of a triangle (infinite when degenerate).
+double circumradius(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Whether the input points cover the triangles of `patch` (over `positions`): every spot of it, about
+// reach / 1.5 apart, has an input point within `reach`.
+bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double reach);
+
+// A hole between tiles counts when a disc of this many of their points' spacings (TileLoop::
+// full_spacing, measured over whole tiles) fits in it: a remeshed part's flat faces leave empty strips
+// that are wide against the dense rims beside them but not against its tiles (the rocker arm, a
+// closed part, got 4 holes at 4 spacings).
+constexpr double kMinHoleSpacings = 5.0;
+
+// Whether the hierarchy saw a hole where these tiles are: the coverage gap of one of their nodes or of
+// an ancestor up to 4 levels above (whose tile covers theirs) is at least `radius`. The judgement by
+// density at node scale (coverage_gap.h) is what tells a hole from a sparse patch; the surface stage
+// only asks where a hole it was told of lies.
+bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count, double radius);
+
+// Whether a fill of `patch` (triangles over `positions`) would cover a hole of the sample: the input
+// points around it, projected into its plane, leave an empty region under it that their own density
+// says should hold points (coverage_gap.h), at least kMinHoleSpacings × `spacing` wide (the points'
+// spacing at the patch, TileLoop::full_spacing); only patches with a triangle wider than 2.5 spacings
+// are judged. Ask hole_among first: on its own this finds holes in real scans that are sparse patches.
+// The points are projected into the plane of the tiles `tiles`; where their normals differ by more
+// than 30 degrees (a fill across a sharp edge or the rim of a thin part) the patch is not judged.
+bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,
+                        const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing);
+
+// Drops the candidates that would cover a hole of the sample (covers_sample_hole) between tiles built
+// from samples (TileOptions::max_points): such tiles leave gaps as wide as their sample's spacing, and
+// the alpha test, which follows the tiles' sizes, keeps triangles across holes narrower than that.
+void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,
+                               std::size_t threads, Candidates& candidates);
 
 struct Candidate
 {

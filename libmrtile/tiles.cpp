@@ -21,6 +21,7 @@
 // time per tile, and a tile at an open border still reaches it.
 #include "libmrtile/tiles.h"
 
+#include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gabriel_graph.h"
 
@@ -257,6 +258,15 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
         if (!inside && twice > 0.0)
             t.apex = t.centre + t.axis_u * (cx / (3.0 * twice)) + t.axis_v * (cy / (3.0 * twice)) +
                      t.normal * dot(apex, t.normal);
+        if (options.measure_gaps) {
+            std::vector<Vec3> points(count);
+            for (std::size_t k = 0; k < count; ++k)
+                points[k] = h.cloud.positions[indices[k]];
+            CoverageOptions gap_options;
+            gap_options.max_points = 0; // a tile is already a sample of at most max_points
+            gap_options.sample_fraction = std::min(1.0, static_cast<double>(count) / h.nodes[static_cast<std::size_t>(node)].count());
+            t.coverage_gap = coverage_gap(points, t.axis_u, t.axis_v, gap_options);
+        }
     }
     return t;
 }
@@ -444,9 +454,24 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
     const std::vector<std::vector<std::uint32_t>> graph = delaunay_graph(centres);
     const Partition part = voronoi_partition(h, cut, centres, graph, options.max_points);
-    for (std::size_t k = 0; k < cut.size(); ++k)
-        tiles.push_back(tile_from_points(h, cut[k], part.order.data() + part.start[k],
-                                         part.start[k + 1] - part.start[k], options));
+    std::vector<std::uint32_t> own;
+    for (std::size_t k = 0; k < cut.size(); ++k) {
+        const std::uint32_t* cell = part.order.data() + part.start[k];
+        const std::size_t size = part.start[k + 1] - part.start[k];
+        tiles.push_back(tile_from_points(h, cut[k], cell, size, options));
+        if (!(tiles.back().coverage_gap > 0.0))
+            continue;
+        // The cell took in points across a hole from a neighbouring node, and its hull covers the
+        // hole: the tile keeps only its own node's points of the cell (a subset of a convex cell, so
+        // it still overlaps no other tile; the gap triangulation covers the points it leaves out).
+        const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
+        own.clear();
+        for (std::size_t i = 0; i < size; ++i)
+            if (cell[i] >= n.begin && cell[i] < n.end)
+                own.push_back(cell[i]);
+        if (own.size() < size && own.size() >= 3)
+            tiles.back() = tile_from_points(h, cut[k], own.data(), own.size(), options);
+    }
     // Surface neighbours: witnessed from either side within the larger of the two spacings.
     for (std::uint32_t k = 0; k < cut.size(); ++k)
         for (std::size_t j = 0; j < graph[k].size(); ++j) {

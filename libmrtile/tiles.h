@@ -45,6 +45,9 @@ struct TileOptions
     //! triangulation fills them, and coarse cuts spend fewer faces for the same error (after the vertex
     //! fit). Far smaller samples (~64) leave gaps wide enough to close real holes or add handles.
     std::size_t max_points = 256;
+    //! Measure Tile::coverage_gap of every tile; with voronoi_trim, a tile whose cell's hull covers a
+    //! hole is built from its own node's points of the cell only (see Tile::coverage_gap).
+    bool measure_gaps = true;
 };
 
 struct Tile
@@ -74,6 +77,13 @@ struct Tile
     //! Indices (into the tile vector, ascending) of the tiles that meet this one on the sampled surface:
     //! the restricted Delaunay neighbours found from the points (voronoi_trim only; else empty).
     std::vector<std::uint32_t> neighbours;
+    //! How far the tile's outline reaches over surface none of its points sample (coverage_gap.h, from
+    //! the points it was built from; model units; 0 without TileOptions::measure_gaps). A Voronoi cell
+    //! can take in points across a hole from a neighbouring node, and its hull then covers the hole:
+    //! such a tile is built from its own node's points in the cell instead, and this is the gap left
+    //! after that. It can still exceed the node's own Node::coverage_gap (the node's hull is judged
+    //! with a sample of its points); mesh_cut refines such tiles (MeshOptions::gap_rounds).
+    double coverage_gap = 0.0;
 
     //! Mean point spacing sqrt(area / distinct_points) (0 without a fan). Counting clumped points as
     //! one keeps the spacing of the surface's sampling, which gap widths and split lengths follow.

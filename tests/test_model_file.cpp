@@ -403,13 +403,47 @@ TEST(ModelFile, forged_values_are_refused)
     refused(56, inf, "origin is not finite");                   // origin.z (after magic, 4 words, 2 counts, x, y)
     const std::size_t first_point = 104;                         // the header's size
     refused(first_point + 24 * 5, 1e300, "the points span x");  // point 5's x
-    // Nodes close the file before its 8-byte trailer, 168 bytes each; the last is a leaf.
-    const std::size_t last = bytes.size() - 8 - 168;
-    const std::size_t mean_z = last + 6 * 4 + 8 + 16, m2_xx = mean_z + 8, box_max_x = last + 120 + 24;
+    // Nodes close the file before its 8-byte trailer, 176 bytes each; the last is a leaf.
+    const std::size_t last = bytes.size() - 8 - 176;
+    const std::size_t mean_z = last + 6 * 4 + 8 + 16, m2_xx = mean_z + 8, box_max_x = last + 120 + 24, gap = last + 168;
     refused(mean_z, nan, "mean lies outside");
     refused(mean_z, 1e6, "mean lies outside");
     refused(m2_xx, 1e250, "second moments do not fit");
     refused(box_max_x, 1e200, "box is not its points' box");
+    refused(gap, -1.0, "errors do not fit");
+    refused(gap, nan, "errors do not fit");
+    refused(gap, 1e300, "errors do not fit");
+}
+
+// A version 1 file (no coverage gaps) still loads, with the gaps computed as a build would.
+TEST(ModelFile, version_1_files_load_with_their_gaps_computed)
+{
+    const Hierarchy h = sample();
+    const std::string v2 = serialize_model(h);
+    std::uint32_t flags = 0;
+    std::memcpy(&flags, v2.data() + 20, 4);
+    ASSERT_EQ(flags, 0u); // no colours, viewpoint, CRS or levels: nodes end the payload
+    const std::size_t nodes = h.nodes.size(), node_start = v2.size() - 8 - 176 * nodes;
+    std::string v1 = v2.substr(0, node_start);
+    for (std::size_t k = 0; k < nodes; ++k)
+        v1 += v2.substr(node_start + 176 * k, 168);
+    v1 += v2.substr(v2.size() - 8);
+    const std::uint32_t version = 1;
+    std::memcpy(&v1[8], &version, 4);
+    std::uint64_t payload = 0;
+    std::memcpy(&payload, v1.data() + 96, 8);
+    payload -= 8 * nodes;
+    std::memcpy(&v1[96], &payload, 8);
+    refresh_checksum(v1);
+    const Hierarchy loaded = deserialize_model(v1, "old.mrt");
+    ASSERT_EQ(loaded.nodes.size(), nodes);
+    bool some_gap = false;
+    for (std::size_t k = 0; k < nodes; ++k) {
+        EXPECT_EQ(loaded.nodes[k].coverage_gap, h.nodes[k].coverage_gap) << "node " << k;
+        some_gap = some_gap || h.nodes[k].coverage_gap > 0;
+    }
+    EXPECT_TRUE(some_gap); // the torus's hole: its coarse nodes' hulls cover it
+    EXPECT_EQ(serialize_model(loaded), v2); // saved again, it is the version 2 file
 }
 
 // Missing files and unwritable destinations give IoErrors naming the path and leave nothing behind.

@@ -1,0 +1,103 @@
+#pragma once
+//! \file coverage_gap.h
+//! \brief How far a cluster's tile reaches over surface its points do not cover (holes and notches).
+//! \details A tile is the convex hull of its cluster in the cluster's plane (paper §4.2), so a flat
+//! cluster around a window, a hole in a plate or the inner corner of an L-shaped part covers it: the
+//! paper's flatness test never splits such a cluster, and its tile fills the hole. The coverage gap
+//! measures that error: the radius of the largest disc inside the hull that holds no point, counted
+//! only where the surrounding sampling density says the disc should have held points (a real hole,
+//! not a sparse patch of an uneven sample). The build splits clusters that have one (BuildOptions::
+//! split_gaps) and cuts refine nodes whose gap exceeds their tolerance (cut.h), so holes stay open at
+//! every level of detail fine enough to show them.
+//!
+//! Method, on the points projected into the plane: a grid of cells holding about points_per_cell
+//! points each at the mean density; the empty cells whose centres lie inside the hull form connected
+//! regions; a region counts when both
+//!  - a disc of min_radius_spacings local point spacings fits in it (the spacing from the density of
+//!    the occupied cells around it, so that a thinly sampled patch is judged by its own density), and
+//!  - at that density it would hold at least min_missing_points points (a uniform random sample leaves
+//!    such an empty region with probability about e^-min_missing_points), and
+//!  - it surrounds almost no points (max_island_share): the sparse middle of an unevenly sampled
+//!    surface is a region around scattered points, a hole is empty;
+//! its gap is the distance to the nearest point from its cell centre farthest from occupied cells. Costs
+//! O(m log m) for m points (the hull's sort), m capped by max_points (a regular sample of the rest).
+
+#include "libmrtile/hierarchy.h"
+#include "libmrtile/vec3.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace mrt {
+
+struct CoverageOptions
+{
+    //! Grid cell size: cells hold about this many points at the cluster's mean density.
+    double points_per_cell = 4.0;
+    //! A region counts when a disc of this many local point spacings fits inside it. The surface stage
+    //! keeps holes open from a mean width of SurfaceOptions::max_gap_width (4) spacings on, so smaller
+    //! regions would be filled by the mesh anyway.
+    double min_radius_spacings = 4.0;
+    //! ... and when the surrounding density says it should hold at least this many points.
+    double min_missing_points = 16.0;
+    //! The points judged are this fraction of the surface's points (a regular sample: coverage_stride,
+    //! or a tile's sample). The spacing the surface stage sees is that of all points, so the radius
+    //! needed shrinks to min_radius_spacings × sqrt(sample_fraction) of the sample's spacings, but not
+    //! below min_sample_radius_spacings, where an empty disc in a uniform random sample is still
+    //! unlikely (it would hold about 20 points).
+    double sample_fraction = 1.0;
+    //! ... and when the points inside it (groups of points it surrounds) are at most 2 plus this share of
+    //! the points it misses: a hole holds no points (a stray few), the sparse part of an uneven sample
+    //! holds some.
+    double max_island_share = 0.01;
+    double min_sample_radius_spacings = 2.5;
+    //! Callers judge at most about this many points of a cluster (every k-th: coverage_stride); 0 = all.
+    std::size_t max_points = 4096;
+};
+
+//! \brief The coverage gap (model units, 0 when there is none) of `points` in the plane spanned by the
+//! unit vectors axis_u and axis_v.
+//! \details Fewer than 8 points, or points without area in the plane, have none. `fill` are points of
+//! other clusters near the plane: they occupy the grid but do not widen the hull (a cluster that is
+//! not convex has a hull reaching over its neighbours' points, which is no hole in the surface). All
+//! points given are judged: sample larger sets with coverage_stride.
+double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v,
+                    const CoverageOptions& options = {}, const std::vector<Vec3>& fill = {});
+
+//! \brief The empty regions that count (coverage_gap), kept to ask where they are: whether a fill
+//! between tiles would cover a hole of the sample (surface stage). The hull is that of all `points`.
+class CoverageMap
+{
+public:
+    CoverageMap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, const CoverageOptions& options = {});
+    //! The coverage gap (as coverage_gap).
+    double gap() const { return gap_; }
+    //! Whether p, projected into the plane, lies in a counted empty region whose radius (its largest
+    //! distance to a point) is at least min_radius.
+    bool in_gap(const Vec3& p, double min_radius = 0.0) const;
+    struct Region
+    {
+        Vec3 centre;   //!< in the plane through the first point: the spot farthest from the points
+        double radius; //!< its distance to the nearest point
+    };
+    //! The counted regions.
+    const std::vector<Region>& regions() const { return regions_; }
+
+private:
+    Vec3 origin_{0, 0, 0}, u_, v_;
+    double x0_ = 0, y0_ = 0, g_ = 1, gap_ = 0;
+    int nx_ = 0, ny_ = 0;
+    std::vector<float> counted_; // per grid cell: the radius of its counted region, 0 for none
+    std::vector<Region> regions_;
+};
+
+//! Every how many points to judge out of `count` (1 up to options.max_points).
+std::size_t coverage_stride(std::size_t count, const CoverageOptions& options = {});
+
+//! \brief Sets every node's Node::coverage_gap: its own gap in its PCA plane, with the points of other
+//! nodes within its largest plane distance of that plane filling the grid, then the largest of its own
+//! and its children's. build_hierarchy and load_model call it. Parallel over nodes on up to `threads`
+//! threads (0 = default); the result does not depend on it.
+void set_coverage_gaps(Hierarchy& h, std::size_t threads = 0, const CoverageOptions& options = {});
+
+} // namespace mrt
