@@ -137,9 +137,16 @@ double gap_of_projected(std::vector<P2> pts, std::vector<P2> fill, const Coverag
     // Density is that of distinct positions: clumps of near-equal points (repeated frames of one view,
     // a cloud concatenated with itself) count once, as in Tile::distinct_points, or every gap between
     // clumps would look like a hole at the clumps' inflated density.
+    // Only looked for where points sorted by x (the hull's order) have near-equal neighbours: in a
+    // sample without clumps hardly any do, and the sort costs as much as the rest.
     const double resolution = 0.01 * std::sqrt(area / static_cast<double>(pts.size()));
-    pts = distinct(pts, resolution);
-    fill = distinct(fill, resolution);
+    std::size_t near_equal = 0;
+    for (std::size_t i = 1; i < pts.size(); ++i)
+        near_equal += std::abs(pts[i].x - pts[i - 1].x) < resolution && std::abs(pts[i].y - pts[i - 1].y) < resolution ? 1 : 0;
+    if (near_equal * 100 > pts.size()) {
+        pts = distinct(pts, resolution);
+        fill = distinct(fill, resolution);
+    }
     const std::size_t m = pts.size();
     if (m < 8)
         return 0.0;
@@ -495,8 +502,10 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
         points.push_back(h.cloud.positions[i]);
     const Vec3 u = node.frame.vectors[2], v = node.frame.vectors[1];
     const double gap = coverage_gap(points, u, v, sampled);
-    if (gap <= 0)
-        return 0.0;
+    // Other nodes' points can only make it smaller, and a gap no larger than the node's plane distance
+    // changes no error (cut.h): the costly look at the neighbours is needed only beyond that.
+    if (gap <= node.max_plane_distance)
+        return gap;
     // Other nodes' points can lie inside this node's hull (a coarse node is a union of leaves and need
     // not be convex): look only where the hull is, within the node's thickness of its plane.
     const double thickness = node.max_plane_distance + 1e-9 * (h.scale > 0 ? h.scale : 1.0);
@@ -520,7 +529,8 @@ void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions&
     constexpr std::size_t kChunk = 256;
     run_parallel((count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
         for (std::size_t k = chunk * kChunk; k < std::min(count, (chunk + 1) * kChunk); ++k)
-            gap[k] = node_gap(h, h.nodes[k], options);
+            if (2 * h.nodes[k].count() >= options.max_points)
+                gap[k] = node_gap(h, h.nodes[k], options);
     });
     for (std::size_t k = count; k-- > 0;) { // children come after their parents
         Node& node = h.nodes[k];

@@ -90,13 +90,15 @@ std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& 
         stack.pop_back();
         if (!n.box.meets(box))
             continue;
-        if (!n.is_leaf()) {
+        const bool inside = box.contains(n.box.min) && box.contains(n.box.max);
+        if (!n.is_leaf() && !inside) {
             stack.push_back(n.right); // left first: ascending indices
             stack.push_back(n.left);
             continue;
         }
-        for (std::uint32_t i = n.begin; i < n.end; i += step)
-            if (box.contains(h.cloud.positions[i]))
+        // A leaf, or a node wholly inside: its range at once (every step-th point of the cloud).
+        for (std::uint32_t i = (n.begin + step - 1) / step * step; i < n.end; i += step)
+            if (inside || box.contains(h.cloud.positions[i]))
                 out.push_back(i);
     }
     return out;

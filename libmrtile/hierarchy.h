@@ -100,7 +100,7 @@ struct Hierarchy
 };
 
 //! \brief The points inside `box` (tree-order indices, ascending), found through the nodes' boxes;
-//! with `stride` > 1 only every stride-th point of each leaf met is looked at (a regular sample).
+//! with `stride` > 1 only the points whose index is a multiple of it are (a regular sample).
 std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& box, std::size_t stride = 1);
 
 //! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, then

@@ -587,7 +587,7 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
         std::int32_t id = layout.tiles[static_cast<std::size_t>(tiles[i])].node;
         for (int level = 0; level <= kLevels && id >= 0; ++level) {
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
-            if (n.coverage_gap >= radius)
+            if (n.coverage_gap >= radius && n.coverage_gap > n.max_plane_distance)
                 return true;
             id = n.parent;
         }

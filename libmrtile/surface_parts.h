@@ -514,7 +514,8 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
 constexpr double kMinHoleSpacings = 5.0;
 
 // Whether the hierarchy saw a hole where these tiles are: the coverage gap of one of their nodes or of
-// an ancestor up to 4 levels above (whose tile covers theirs) is at least `radius`. The judgement by
+// an ancestor up to 4 levels above (whose tile covers theirs) is at least `radius` and dominates its
+// error (cut.h: larger than its points' distance to its plane; a curved node's gap is no hole). The judgement by
 // density at node scale (coverage_gap.h) is what tells a hole from a sparse patch; the surface stage
 // only asks where a hole it was told of lies.
 bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count, double radius);
