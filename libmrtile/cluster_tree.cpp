@@ -523,7 +523,8 @@ void Builder::run()
     // round by round: a split's children, and the neighbours it changed, are judged in the next round.
     // The rounds are bounded (each splits at least one cluster; 64 is far more than the depth of a
     // hole's splits) so that no input can make them run long.
-    for (int round = 0; round < 64 && options_.split_gaps && mark_gaps(); ++round)
+    // Not with the paper's literal order: a failing cluster there makes every cluster splittable.
+    for (int round = 0; round < 64 && options_.split_gaps && !options_.paper_split_order && mark_gaps(); ++round)
         split_failing();
 
     leaf_of_point.assign(n, 0);

@@ -62,7 +62,7 @@ struct BuildOptions
     //! cover a hole or notch of the sampled surface (coverage_gap.h: a window in a wall, a hole in a
     //! plate, the inside corner of an L-shaped part), until no leaf does. The paper splits by flatness
     //! alone, so such a cluster stays one tile and the hole is filled. Clouds without such holes get
-    //! the same hierarchy either way.
+    //! the same hierarchy either way. Not with paper_split_order (the paper's tree exactly).
     bool split_gaps = true;
     //! Called now and then with the fraction of points already in flat clusters (0..1).
     std::function<void(double)> progress;

@@ -173,7 +173,6 @@ TEST(Surface, regrowing_is_kept_only_where_it_leaves_fewer_tiles_out)
     BuildOptions build;
     build.tau = 0.001;
     build.paper_split_order = true;
-    build.split_gaps = false; // the paper's tree exactly, as when the case was found
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"), build);
     Result r;
     r.mesh = build_surface(h, make_tiles(h, cut_by_tau(h, 0.001)), {}, &r.stats);
