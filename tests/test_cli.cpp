@@ -737,6 +737,36 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
 
 // What the build line and the mesh say about a noisy sample with repeated lines: the duplicates merged,
 // the cut stopped at the noise floor (a note), and --below-noise going on to the leaves.
+// A flat wall with windows: `info` reports the holes its coarse tiles would cover, and the default mesh
+// keeps every window open.
+TEST(Cli, holes_under_flat_tiles_are_reported_and_kept_open)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const PointCloud wall = shapes::flat_plate(40000, [](double x, double y) {
+        return !((x > 0.2 && x < 0.35 && y > 0.3 && y < 0.7) || (x > 0.6 && x < 0.75 && y > 0.3 && y < 0.7));
+    });
+    std::string text;
+    char line[96];
+    for (const Vec3& p : wall.positions) {
+        std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+        text += line;
+    }
+    write_text(dir / "wall.xyz", text);
+    ASSERT_EQ(mrtile("build " + (dir / "wall.xyz").string() + " -o " + (dir / "w.mrt").string(), dir).code, 0);
+    const Result info = mrtile("info --json " + (dir / "w.mrt").string(), dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    const auto j = nlohmann::json::parse(info.out);
+    EXPECT_GT(j["hole_nodes"].get<std::size_t>(), 0u);
+    EXPECT_GT(j["hole_max"].get<double>(), 0.05); // a window is 0.15 wide: about 0.075 across its middle
+    EXPECT_LT(j["hole_max"].get<double>(), 0.5);
+    const Result text_info = mrtile("info " + (dir / "w.mrt").string(), dir);
+    EXPECT_NE(text_info.out.find("holes       "), std::string::npos) << text_info.out;
+    const Result mesh = mrtile("mesh " + (dir / "w.mrt").string() + " -o " + (dir / "w.ply").string() + " --stats-json " +
+                                   (dir / "w.json").string(), dir);
+    ASSERT_EQ(mesh.code, 0) << mesh.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "w.json"))["boundary_loops"].get<int>(), 3);
+}
+
 TEST(Cli, duplicates_and_noise_floor_are_reported)
 {
     const fs::path dir = testing::fresh_test_dir("cli");

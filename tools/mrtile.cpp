@@ -1135,6 +1135,16 @@ int run_info(const fs::path& model, bool json)
             noisy_points += n.count();
     const double noisy_share = h.cloud.size() > 0 ? static_cast<double>(noisy_points) / static_cast<double>(h.cloud.size()) : 0.0;
     const double floor_max = h.scale > 0 ? max_noise_floor(h) / h.scale : 0.0;
+    // Holes a tile would cover (coverage_gap.h): the largest gap that is a node's error (larger than its
+    // plane distance), relative to the scale; cuts by tolerance finer than it keep that hole open.
+    double hole_max = 0.0;
+    std::size_t hole_nodes = 0;
+    for (const Node& n : h.nodes)
+        if (n.coverage_gap > n.max_plane_distance) {
+            ++hole_nodes;
+            hole_max = std::max(hole_max, n.coverage_gap);
+        }
+    const double hole_share = h.scale > 0 ? hole_max / h.scale : 0.0;
     if (json) {
         nlohmann::json j;
         j["file"] = model.string();
@@ -1157,6 +1167,8 @@ int run_info(const fs::path& model, bool json)
         j["scale"] = h.scale;
         j["noise_floor_max"] = floor_max;
         j["noisy_share"] = noisy_share;
+        j["hole_max"] = hole_share;
+        j["hole_nodes"] = hole_nodes;
         j["stored_levels"] = stored.levels.size();
         j["stored_level_faces"] = stored_faces;
         j["stored_level_recipe"] = stored.levels.empty() ? nlohmann::json(nullptr) : nlohmann::json(stored.recipe);
@@ -1181,6 +1193,12 @@ int run_info(const fs::path& model, bool json)
                     100.0 * noisy_share, floor_max);
     else
         std::printf("noise       none found (no noise floor)\n");
+    if (hole_nodes > 0)
+        std::printf("holes       %zu nodes' tiles would cover holes, the widest %.3g of the scale across its middle: "
+                    "cuts by tolerance refine them below that\n",
+                    hole_nodes, hole_share);
+    else
+        std::printf("holes       none under flat tiles\n");
     if (timed)
         std::printf("build time  %.3f s\n", h.info.build_seconds);
     else
