@@ -363,6 +363,61 @@ private:
     std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
 };
 
+// Removes, from each pair left, a gap face with exactly one border edge whose third corner is not on
+// the border (so the mesh stays a manifold), and drops the pairs it was in. Returns the faces removed.
+std::size_t remove_border_folds(Mesh& mesh, std::vector<std::pair<int, int>>& pairs)
+{
+    OpenMesh::FPropHandleT<bool> gap;
+    if (!mesh.get_property_handle(gap, kFaceGap))
+        return 0;
+    const bool had_status = mesh.has_face_status();
+    mesh.request_vertex_status();
+    mesh.request_edge_status();
+    mesh.request_halfedge_status();
+    mesh.request_face_status();
+    auto removable = [&](Mesh::FaceHandle f) {
+        if (mesh.status(f).deleted() || !mesh.property(gap, f))
+            return false;
+        int border_edges = 0;
+        Mesh::VertexHandle third;
+        for (const Mesh::HalfedgeHandle h : mesh.fh_range(f))
+            if (mesh.is_boundary(mesh.opposite_halfedge_handle(h))) {
+                ++border_edges;
+                third = mesh.to_vertex_handle(mesh.next_halfedge_handle(h));
+            }
+        return border_edges == 1 && !mesh.is_boundary(third);
+    };
+    std::vector<int> removed;
+    for (const auto& [a, b] : pairs) {
+        if (std::binary_search(removed.begin(), removed.end(), a) || std::binary_search(removed.begin(), removed.end(), b))
+            continue;
+        for (const int f : {a, b})
+            if (removable(Mesh::FaceHandle(f))) {
+                mesh.delete_face(Mesh::FaceHandle(f), false);
+                removed.insert(std::lower_bound(removed.begin(), removed.end(), f), f);
+                break;
+            }
+    }
+    if (removed.empty()) {
+        if (!had_status)
+            mesh.release_face_status();
+        return 0;
+    }
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(), [&](const std::pair<int, int>& p) {
+                    return std::binary_search(removed.begin(), removed.end(), p.first) ||
+                           std::binary_search(removed.begin(), removed.end(), p.second);
+                }),
+                pairs.end());
+    // Face indices shift down past each removed face.
+    auto renumber = [&](int f) { return f - static_cast<int>(std::lower_bound(removed.begin(), removed.end(), f) - removed.begin()); };
+    for (auto& [a, b] : pairs) {
+        a = renumber(a);
+        b = renumber(b);
+    }
+    mesh.garbage_collection();
+    return removed.size();
+}
+
 } // namespace
 
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
@@ -400,9 +455,11 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<s
         if (stats.flips + stats.moves == edits || untangler.tests() >= budget)
             break; // nothing more this way, or out of budget
     }
-    stats.pairs_after = pairs.size();
     stats.tests = untangler.tests();
-    if (stats.flips + stats.moves > 0)
+    if (options.remove_border_folds && !pairs.empty())
+        stats.removed_faces = remove_border_folds(mesh, pairs);
+    stats.pairs_after = pairs.size();
+    if (stats.flips + stats.moves + stats.removed_faces > 0)
         mesh.update_normals();
     return stats;
 }

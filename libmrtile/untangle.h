@@ -9,8 +9,10 @@
 //! neighbours (toward the centre of their neighbours, or across the surface); the first edit that
 //! lowers the number of intersections of the faces it changes, without turning a face by more than
 //! max_turn_degrees or moving a vertex by more than `max_move` of its shortest edge, is kept. Topology
-//! never changes (flips are OpenMesh's is_flip_ok ones). A tip folded over itself around one vertex
-//! can stay (no flip or move unfolds it): pairs_after says how many pairs are left.
+//! does not change (flips are OpenMesh's is_flip_ok ones), except that a gap face on the border still
+//! overlapping another face at the end is removed (UntangleOptions::remove_border_folds). A tip folded
+//! over itself around one vertex can stay (no flip or move unfolds it): pairs_after says how many pairs
+//! are left.
 
 #include "libmrtile/mesh.h"
 
@@ -33,6 +35,11 @@ struct UntangleOptions
     //! a crumpled one (noise meshed below its floor, thousands of crossings) stops here instead of
     //! taking a minute.
     double tests_per_face = 10.0;
+    //! Last, a gap face (f:gap) on the mesh's border that still overlaps another face is removed when
+    //! that keeps the mesh a manifold (one border edge, its third corner inside): the hole beside it
+    //! grows by that face. In flat parts with holes a fill beside a hole can fold over a neighbouring
+    //! face in the plane, where no flip or move helps. Meshes without f:gap keep every face.
+    bool remove_border_folds = true;
     //! Height fields: every face an edit changes must still face up `axis` (the mesh stays a graph).
     bool vertical = false;
     Vec3 axis{0, 0, 1};
@@ -45,6 +52,7 @@ struct UntangleStats
     std::size_t flips = 0;
     std::size_t moves = 0;
     std::size_t tests = 0; //!< triangle pairs tested (see UntangleOptions::tests_per_face)
+    std::size_t removed_faces = 0; //!< border gap faces removed (UntangleOptions::remove_border_folds)
 };
 
 //! \brief Lowers the self-intersections of `mesh` (self_intersecting_faces in mesh_stats.h) by local

@@ -242,5 +242,49 @@ TEST(Untangle, the_fit_hands_on_every_pair_it_leaves)
     EXPECT_EQ(s.intersecting_pairs, self_intersecting_faces(r.mesh));
 }
 
+// A flat fan of four faces around an inner vertex pulled just past one border edge: the face on that
+// edge is folded over its neighbours in the plane. Marked a gap face, it is removed last (no flip or
+// move is allowed here: max_rounds 0); the mesh stays a manifold with one loop. Without f:gap, or with
+// the option off, every face stays.
+TEST(Untangle, a_border_gap_face_folded_in_the_plane_is_removed)
+{
+    auto folded = [](bool mark) {
+        Mesh mesh;
+        const auto a = mesh.add_vertex(Mesh::Point(0, 0, 0)), b = mesh.add_vertex(Mesh::Point(1, 0, 0));
+        const auto c = mesh.add_vertex(Mesh::Point(1, 1, 0)), d = mesh.add_vertex(Mesh::Point(0, 1, 0));
+        const auto w = mesh.add_vertex(Mesh::Point(0.5, -0.1, 0)); // just below the edge a b
+        const auto f0 = mesh.add_face(w, a, b);
+        mesh.add_face(w, b, c);
+        mesh.add_face(w, c, d);
+        mesh.add_face(w, d, a);
+        if (mark) {
+            auto gap = OpenMesh::getOrMakeProperty<OpenMesh::FaceHandle, bool>(mesh, kFaceGap);
+            for (const auto f : mesh.faces())
+                gap[f] = f == f0;
+        }
+        mesh.update_normals();
+        return mesh;
+    };
+    UntangleOptions no_edits;
+    no_edits.max_rounds = 0;
+    Mesh mesh = folded(true);
+    ASSERT_FALSE(self_intersecting_faces(mesh).empty());
+    const UntangleStats s = untangle(mesh, no_edits);
+    EXPECT_EQ(s.removed_faces, 1u);
+    EXPECT_EQ(s.pairs_after, 0u);
+    EXPECT_EQ(mesh.n_faces(), 3u);
+    EXPECT_TRUE(self_intersecting_faces(mesh).empty());
+    const TopologyStats t = topology_stats(mesh);
+    EXPECT_EQ(t.boundary_loops, 1u);
+    EXPECT_EQ(t.nonmanifold_vertices, 0u);
+    for (const bool mark : {false, true}) {
+        Mesh kept = folded(mark);
+        UntangleOptions o = no_edits;
+        o.remove_border_folds = !mark; // unmarked: on but nothing to remove; marked: off
+        EXPECT_EQ(untangle(kept, o).removed_faces, 0u);
+        EXPECT_EQ(kept.n_faces(), 4u);
+    }
+}
+
 } // namespace
 } // namespace mrt
