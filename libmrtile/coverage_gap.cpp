@@ -103,8 +103,14 @@ std::vector<P2> distinct(const std::vector<P2>& pts, double resolution)
 {
     std::vector<std::pair<std::pair<std::int64_t, std::int64_t>, std::size_t>> keys;
     keys.reserve(pts.size());
-    for (std::size_t i = 0; i < pts.size(); ++i)
-        keys.push_back({{static_cast<std::int64_t>(std::floor(pts[i].x / resolution)), static_cast<std::int64_t>(std::floor(pts[i].y / resolution))}, i});
+    const double limit = 1e15; // keys beyond it would not fit 64 bits: such a point stays (key of its own)
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const double kx = std::floor(pts[i].x / resolution), ky = std::floor(pts[i].y / resolution);
+        if (std::abs(kx) < limit && std::abs(ky) < limit)
+            keys.push_back({{static_cast<std::int64_t>(kx), static_cast<std::int64_t>(ky)}, i});
+        else
+            keys.push_back({{std::numeric_limits<std::int64_t>::max(), static_cast<std::int64_t>(i)}, i});
+    }
     std::sort(keys.begin(), keys.end());
     std::vector<P2> out;
     for (std::size_t i = 0; i < keys.size(); ++i)
@@ -143,7 +149,9 @@ double gap_of_projected(std::vector<P2> pts, std::vector<P2> fill, const Coverag
     std::size_t near_equal = 0;
     for (std::size_t i = 1; i < pts.size(); ++i)
         near_equal += std::abs(pts[i].x - pts[i - 1].x) < resolution && std::abs(pts[i].y - pts[i - 1].y) < resolution ? 1 : 0;
-    if (near_equal * 100 > pts.size()) {
+    // (Grid keys must fit 64 bits: a sliver of almost no area has a vanishing resolution.)
+    const double extent = std::max({std::abs(x0), std::abs(x1), std::abs(y0), std::abs(y1)});
+    if (near_equal * 100 > pts.size() && extent < 1e15 * resolution) {
         pts = distinct(pts, resolution);
         fill = distinct(fill, resolution);
     }
