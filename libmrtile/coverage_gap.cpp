@@ -537,7 +537,7 @@ void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions&
     constexpr std::size_t kChunk = 256;
     run_parallel((count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
         for (std::size_t k = chunk * kChunk; k < std::min(count, (chunk + 1) * kChunk); ++k)
-            if (2 * h.nodes[k].count() >= options.max_points)
+            if (h.nodes[k].count() >= options.max_points)
                 gap[k] = node_gap(h, h.nodes[k], options);
     });
     for (std::size_t k = count; k-- > 0;) { // children come after their parents

@@ -52,7 +52,7 @@ struct CoverageOptions
     double max_island_share = 0.01;
     double min_sample_radius_spacings = 2.5;
     //! Callers judge at most about this many points of a cluster (every k-th: coverage_stride); 0 = all.
-    std::size_t max_points = 2048;
+    std::size_t max_points = 1024;
 };
 
 //! \brief The coverage gap (model units, 0 when there is none) of `points` in the plane spanned by the
@@ -97,9 +97,9 @@ std::size_t coverage_stride(std::size_t count, const CoverageOptions& options = 
 //! \brief Sets every node's Node::coverage_gap: its own gap in its PCA plane (judged from a regular
 //! sample of options.max_points of its points), with the points of other nodes within its largest
 //! plane distance of that plane filling the grid, then the largest of its own and its children's.
-//! Nodes of fewer than options.max_points / 2 points get no gap of their own (the build has judged
+//! Nodes of fewer than options.max_points points get no gap of their own (the build has judged
 //! its leaves at full resolution, and mesh_cut judges every tile it makes): that keeps the cost to
-//! about two passes over the points (0.35 s for a million, single-threaded). build_hierarchy and load_model call it. Parallel over nodes on up to
+//! about two passes over the points (0.18 s for a million, single-threaded). build_hierarchy and load_model call it. Parallel over nodes on up to
 //! `threads` threads (0 = default); the result does not depend on it.
 void set_coverage_gaps(Hierarchy& h, std::size_t threads = 0, const CoverageOptions& options = {});
 
