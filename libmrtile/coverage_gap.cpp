@@ -26,10 +26,43 @@ struct P2
 
 double cross2(const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
 
+bool x_then_y(const P2& a, const P2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+
+// Sorts by x, then y: a counting sort into about one column per 4 points (they are spread over their
+// x range), then each column on its own. The sort is most of a judgement's cost.
+void sort_x_then_y(std::vector<P2>& pts)
+{
+    const std::size_t n = pts.size();
+    if (n < 64) {
+        std::sort(pts.begin(), pts.end(), x_then_y);
+        return;
+    }
+    double lo = pts[0].x, hi = lo;
+    for (const P2& p : pts) {
+        lo = std::min(lo, p.x);
+        hi = std::max(hi, p.x);
+    }
+    const std::size_t columns = n / 4;
+    const double scale = hi > lo ? static_cast<double>(columns) / (hi - lo) : 0.0;
+    auto column = [&](const P2& p) { return std::min(columns - 1, static_cast<std::size_t>((p.x - lo) * scale)); };
+    std::vector<std::size_t> start(columns + 1, 0);
+    for (const P2& p : pts)
+        ++start[column(p) + 1];
+    for (std::size_t c = 0; c < columns; ++c)
+        start[c + 1] += start[c];
+    std::vector<P2> sorted(n);
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (const P2& p : pts)
+        sorted[next[column(p)]++] = p;
+    for (std::size_t c = 0; c < columns; ++c)
+        std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(start[c]), sorted.begin() + static_cast<std::ptrdiff_t>(start[c + 1]), x_then_y);
+    pts = std::move(sorted);
+}
+
 // Andrew's monotone chain; counter-clockwise, collinear points dropped. `pts` is sorted in place.
 std::vector<P2> convex_hull(std::vector<P2>& pts)
 {
-    std::sort(pts.begin(), pts.end(), [](const P2& a, const P2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+    sort_x_then_y(pts);
     std::vector<P2> hull(2 * pts.size());
     std::size_t k = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {

@@ -99,7 +99,7 @@ std::size_t coverage_stride(std::size_t count, const CoverageOptions& options = 
 //! plane distance of that plane filling the grid, then the largest of its own and its children's.
 //! Nodes of fewer than options.max_points points get no gap of their own (the build has judged
 //! its leaves at full resolution, and mesh_cut judges every tile it makes): that keeps the cost to
-//! about two passes over the points (0.18 s for a million, single-threaded). build_hierarchy and load_model call it. Parallel over nodes on up to
+//! about two passes over the points (0.15 s for a million, single-threaded). build_hierarchy and load_model call it. Parallel over nodes on up to
 //! `threads` threads (0 = default); the result does not depend on it.
 void set_coverage_gaps(Hierarchy& h, std::size_t threads = 0, const CoverageOptions& options = {});
 
