@@ -459,14 +459,12 @@ double Builder::gap_of(std::uint32_t id) const
     const Cluster& c = clusters_[id];
     // Every point: this is the only time a leaf is judged at full resolution (set_coverage_gaps samples
     // large nodes), and only flat clusters are judged, each once per change.
-    CoverageOptions options;
-    options.max_points = 0;
-    const std::size_t stride = 1;
     std::vector<Vec3> points;
-    points.reserve(c.members.size() / stride + 1);
-    for (std::size_t i = 0; i < c.members.size(); i += stride)
-        points.push_back(c.members[i].p);
+    points.reserve(c.members.size());
+    for (const Member& mb : c.members)
+        points.push_back(mb.p);
     const Eigen3x3 frame = eigen_decomposition(c.moments);
+    const CoverageOptions options;
     const double alone = coverage_gap(points, frame.vectors[2], frame.vectors[1], options);
     if (alone <= 0)
         return 0.0;
@@ -476,12 +474,10 @@ double Builder::gap_of(std::uint32_t id) const
         thickness = std::max(thickness, std::abs(dot(mb.p - centre, normal)));
     thickness += 1e-9 * (c.radius + 1e-300);
     std::vector<Vec3> fill;
-    for (std::uint32_t n : c.neighbours) {
-        const std::vector<Member>& list = clusters_[n].members;
-        for (std::size_t i = 0; i < list.size(); i += stride)
-            if (std::abs(dot(list[i].p - centre, normal)) <= thickness)
-                fill.push_back(list[i].p);
-    }
+    for (std::uint32_t n : c.neighbours)
+        for (const Member& mb : clusters_[n].members)
+            if (std::abs(dot(mb.p - centre, normal)) <= thickness)
+                fill.push_back(mb.p);
     return coverage_gap(points, frame.vectors[2], frame.vectors[1], options, fill);
 }
 

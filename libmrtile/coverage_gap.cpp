@@ -10,7 +10,6 @@
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -128,7 +127,6 @@ struct GapGrid
     double x0 = 0, y0 = 0, g = 1;
     int nx = 0, ny = 0;
     std::vector<float> counted; // the radius of the counted region a cell lies in, 0 for none
-    std::vector<std::array<double, 3>> regions; // counted regions: x, y of the farthest cell, radius
 };
 
 // The points less all but one of each clump of points within `resolution` of each other (grid keys).
@@ -455,12 +453,9 @@ double gap_of_projected(std::vector<P2> pts, std::vector<P2> fill, const Coverag
         if (radius >= min_radius * spacing && missing >= o.min_missing_points &&
             island_points[region] <= 2.0 + o.max_island_share * missing) {
             gap = std::max(gap, radius);
-            if (out) {
+            if (out)
                 for (const std::size_t c : members)
                     out->counted[c] = static_cast<float>(radius);
-                const std::size_t c = farthest[region - 1];
-                out->regions.push_back({x0 + (static_cast<double>(c % nx) + 0.5) * g, y0 + (static_cast<double>(c / nx) + 0.5) * g, radius});
-            }
         }
     }
     return gap;
@@ -492,8 +487,6 @@ CoverageMap::CoverageMap(const std::vector<Vec3>& points, const Vec3& axis_u, co
     nx_ = grid.nx;
     ny_ = grid.ny;
     counted_ = std::move(grid.counted);
-    for (const auto& r : grid.regions)
-        regions_.push_back({origin_ + u_ * r[0] + v_ * r[1], r[2]});
 }
 
 bool CoverageMap::in_gap(const Vec3& p, double min_radius) const

@@ -75,20 +75,12 @@ public:
     //! Whether p, projected into the plane, lies in a counted empty region whose radius (its largest
     //! distance to a point) is at least min_radius.
     bool in_gap(const Vec3& p, double min_radius = 0.0) const;
-    struct Region
-    {
-        Vec3 centre;   //!< in the plane through the first point: the spot farthest from the points
-        double radius; //!< its distance to the nearest point
-    };
-    //! The counted regions.
-    const std::vector<Region>& regions() const { return regions_; }
 
 private:
     Vec3 origin_{0, 0, 0}, u_, v_;
     double x0_ = 0, y0_ = 0, g_ = 1, gap_ = 0;
     int nx_ = 0, ny_ = 0;
     std::vector<float> counted_; // per grid cell: the radius of its counted region, 0 for none
-    std::vector<Region> regions_;
 };
 
 //! Every how many points to judge out of `count` (1 up to options.max_points).

@@ -28,12 +28,6 @@ double distance_to_box(const Vec3& p, const BoundingBox& b)
     return norm(d);
 }
 
-// Whether the node's coverage gap is what its tile's error is made of: larger than the distance of
-// its points to its plane. A cluster across a sharp edge is far from its plane anyway (and where the
-// sampling density jumps at the edge its sparse side can look empty); the gap of a flat one is all
-// there is to its error.
-bool gap_dominates(const Node& n) { return n.coverage_gap > n.max_plane_distance; }
-
 // The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above
 // `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h), or its
 // tile reaches farther than `limit` over a hole or notch of the surface, farther than its points lie

@@ -65,6 +65,12 @@ struct Node
     const Vec3& centre() const { return moments.mean; }
 };
 
+//! Whether the node's coverage gap is what its tile's error is made of: larger than the distance of
+//! its points to its plane. A cluster across a sharp edge is far from its plane anyway (and where the
+//! sampling density jumps at the edge its sparse side can look empty); the gap of a flat one is all
+//! there is to its error. Cuts, LOD errors and the surface stage count a gap only where it dominates.
+inline bool gap_dominates(const Node& n) { return n.coverage_gap > n.max_plane_distance; }
+
 struct BuildInfo
 {
     Criterion criterion = Criterion::Tolerance;

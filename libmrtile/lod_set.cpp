@@ -61,7 +61,7 @@ double cut_tolerance(const Hierarchy& h, const Cut& cut)
     double m = 0.0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
-        m = std::max({m, n.rms_plane_distance, n.coverage_gap > n.max_plane_distance ? n.coverage_gap : 0.0});
+        m = std::max({m, n.rms_plane_distance, gap_dominates(n) ? n.coverage_gap : 0.0});
     }
     return side > 0 ? m / side : 0.0;
 }

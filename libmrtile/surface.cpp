@@ -127,9 +127,8 @@ bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHand
     const Mesh::HalfedgeHandle out = mesh.halfedge_handle(v); // a border halfedge for a border vertex
     if (!mesh.is_boundary(out))
         return false;
-    const Vec3 at = to_vec3(mesh.point(v));
-    const Vec3 q = to_vec3(mesh.point(mesh.to_vertex_handle(out)));
-    const Vec3 p = to_vec3(mesh.point(mesh.from_vertex_handle(mesh.prev_halfedge_handle(out))));
+    const Mesh::VertexHandle next = mesh.to_vertex_handle(out), previous = mesh.from_vertex_handle(mesh.prev_halfedge_handle(out));
+    const Vec3 at = to_vec3(mesh.point(v)), q = to_vec3(mesh.point(next)), p = to_vec3(mesh.point(previous));
     const Vec3 m = to_vec3(mesh.point(w));
     const auto segment_distance = [](const Vec3& x, const Vec3& a, const Vec3& b) {
         const Vec3 d = b - a;
@@ -137,7 +136,7 @@ bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHand
         const double t = len2 > 0.0 ? std::clamp(dot(x - a, d) / len2, 0.0, 1.0) : 0.0;
         return distance(x, a + d * t);
     };
-    const bool along = w == mesh.to_vertex_handle(out) || w == mesh.from_vertex_handle(mesh.prev_halfedge_handle(out));
+    const bool along = w == next || w == previous;
     const double deviation = along ? segment_distance(at, p, q) : std::min(segment_distance(at, p, m), segment_distance(at, m, q));
     return deviation <= std::max(slack, 1e-9 * (distance(at, p) + distance(at, q)));
 }

@@ -578,6 +578,13 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
     });
 }
 
+namespace {
+
+// Whether the hierarchy saw a hole where these tiles are: the coverage gap of one of their nodes or of
+// an ancestor up to 4 levels above (whose tile covers theirs) is at least `radius` and dominates its
+// error (gap_dominates: a curved node's gap is no hole). The judgement by density at node scale
+// (coverage_gap.h) is what tells a hole from a sparse patch; the surface stage only asks where a hole
+// it was told of lies.
 bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count, double radius)
 {
     // Up to kLevels above each tile: a node at most about 2^kLevels tiles large (its stored gap is the
@@ -587,13 +594,15 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
         std::int32_t id = layout.tiles[static_cast<std::size_t>(tiles[i])].node;
         for (int level = 0; level <= kLevels && id >= 0; ++level) {
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
-            if (n.coverage_gap >= radius && n.coverage_gap > n.max_plane_distance)
+            if (n.coverage_gap >= radius && gap_dominates(n))
                 return true;
             id = n.parent;
         }
     }
     return false;
 }
+
+} // namespace
 
 bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,
                         const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing)
@@ -612,7 +621,8 @@ bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int
     // grid cell, from every point, the patch's corners included: narrower patches cannot reach one.
     constexpr double kMinCircumradius = 2.5;
     constexpr double kMaxThickness = 0.1; // RMS distance to the plane over the margin
-    if (patch.empty() || !(spacing > 0.0))
+    const double min_radius = kMinHoleSpacings * spacing;
+    if (patch.empty() || !(spacing > 0.0) || !hole_among(h, layout, tiles, count, min_radius))
         return false;
     const bool wide = std::any_of(patch.begin(), patch.end(), [&](const Tri& t) {
         return circumradius(positions[t[0]], positions[t[1]], positions[t[2]]) > kMinCircumradius * spacing;
@@ -644,7 +654,6 @@ bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int
     if (points.empty() || std::sqrt(sum2 / static_cast<double>(points.size())) > kMaxThickness * margin)
         return false;
     const CoverageMap map(points, axis_u, axis_v);
-    const double min_radius = kMinHoleSpacings * spacing;
     const bool hole = map.gap() >= min_radius &&
                       std::any_of(spots.begin(), spots.end(), [&](const Vec3& p) { return map.in_gap(p, min_radius); });
     return hole;
@@ -666,7 +675,7 @@ void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const s
                 full_spacing = std::max(full_spacing, tile.full_spacing);
             }
             const std::array<std::int32_t, 3> tiles{layout.vertices[t[0]].tile, layout.vertices[t[1]].tile, layout.vertices[t[2]].tile};
-            if (full_spacing > 0.0 && full_spacing < spacing && hole_among(h, layout, tiles.data(), 3, kMinHoleSpacings * full_spacing))
+            if (full_spacing > 0.0 && full_spacing < spacing)
                 drop[i] = covers_sample_hole(h, layout, tiles.data(), 3, positions, {t}, full_spacing);
         }
     });
@@ -755,7 +764,6 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             // plate among coarse tiles): ask the points around the patch (a gap between tiles has
             // points all over it).
             if (!closing && options.max_gap_width > 0.0 && full_spacing > 0.0 && full_spacing < spacing &&
-                hole_among(h, layout, loop_tiles.data(), loop_tiles.size(), kMinHoleSpacings * full_spacing) &&
                 covers_sample_hole(h, layout, loop_tiles.data(), loop_tiles.size(), positions, patch, full_spacing))
                 continue;
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });

@@ -513,18 +513,13 @@ bool points_cover_hole(const Hierarchy& h, const std::vector<Vec3>& positions, c
 // closed part, got 4 holes at 4 spacings).
 constexpr double kMinHoleSpacings = 5.0;
 
-// Whether the hierarchy saw a hole where these tiles are: the coverage gap of one of their nodes or of
-// an ancestor up to 4 levels above (whose tile covers theirs) is at least `radius` and dominates its
-// error (cut.h: larger than its points' distance to its plane; a curved node's gap is no hole). The judgement by
-// density at node scale (coverage_gap.h) is what tells a hole from a sparse patch; the surface stage
-// only asks where a hole it was told of lies.
-bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count, double radius);
-
 // Whether a fill of `patch` (triangles over `positions`) would cover a hole of the sample: the input
 // points around it, projected into its plane, leave an empty region under it that their own density
 // says should hold points (coverage_gap.h), at least kMinHoleSpacings × `spacing` wide (the points'
 // spacing at the patch, TileLoop::full_spacing); only patches with a triangle wider than 2.5 spacings
-// are judged. Ask hole_among first: on its own this finds holes in real scans that are sparse patches.
+// are judged, and only where the hierarchy saw a hole that wide among the tiles (a node of one of
+// them, or up to 4 levels above, whose gap dominates its error): on its own the density test finds
+// holes in real scans that are sparse patches.
 // The points are projected into the plane of the tiles `tiles`; where their normals differ by more
 // than 30 degrees (a fill across a sharp edge or the rim of a thin part) the patch is not judged.
 bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,

@@ -370,13 +370,8 @@ std::size_t remove_border_folds(Mesh& mesh, std::vector<std::pair<int, int>>& pa
     OpenMesh::FPropHandleT<bool> gap;
     if (!mesh.get_property_handle(gap, kFaceGap))
         return 0;
-    const bool had_status = mesh.has_face_status();
-    mesh.request_vertex_status();
-    mesh.request_edge_status();
-    mesh.request_halfedge_status();
-    mesh.request_face_status();
     auto removable = [&](Mesh::FaceHandle f) {
-        if (mesh.status(f).deleted() || !mesh.property(gap, f))
+        if (!mesh.property(gap, f))
             return false;
         int border_edges = 0;
         Mesh::VertexHandle third;
@@ -387,33 +382,33 @@ std::size_t remove_border_folds(Mesh& mesh, std::vector<std::pair<int, int>>& pa
             }
         return border_edges == 1 && !mesh.is_boundary(third);
     };
+    // Faces are deleted one by one (a deletion changes its neighbours' borders), so statuses are needed
+    // from the first; a face already deleted is in `removed`.
     std::vector<int> removed;
     for (const auto& [a, b] : pairs) {
         if (std::binary_search(removed.begin(), removed.end(), a) || std::binary_search(removed.begin(), removed.end(), b))
             continue;
         for (const int f : {a, b})
             if (removable(Mesh::FaceHandle(f))) {
+                if (removed.empty()) {
+                    mesh.request_vertex_status();
+                    mesh.request_edge_status();
+                    mesh.request_halfedge_status();
+                    mesh.request_face_status();
+                }
                 mesh.delete_face(Mesh::FaceHandle(f), false);
                 removed.insert(std::lower_bound(removed.begin(), removed.end(), f), f);
                 break;
             }
     }
-    if (removed.empty()) {
-        if (!had_status)
-            mesh.release_face_status();
+    if (removed.empty())
         return 0;
-    }
+    // The pairs left only count now (garbage collection renumbers the faces).
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(), [&](const std::pair<int, int>& p) {
                     return std::binary_search(removed.begin(), removed.end(), p.first) ||
                            std::binary_search(removed.begin(), removed.end(), p.second);
                 }),
                 pairs.end());
-    // Face indices shift down past each removed face.
-    auto renumber = [&](int f) { return f - static_cast<int>(std::lower_bound(removed.begin(), removed.end(), f) - removed.begin()); };
-    for (auto& [a, b] : pairs) {
-        a = renumber(a);
-        b = renumber(b);
-    }
     mesh.garbage_collection();
     return removed.size();
 }

@@ -1140,7 +1140,7 @@ int run_info(const fs::path& model, bool json)
     double hole_max = 0.0;
     std::size_t hole_nodes = 0;
     for (const Node& n : h.nodes)
-        if (n.coverage_gap > n.max_plane_distance) {
+        if (gap_dominates(n)) {
             ++hole_nodes;
             hole_max = std::max(hole_max, n.coverage_gap);
         }
