@@ -7,6 +7,7 @@
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
+#include "libmrtile/tiles.h"
 
 #include <gtest/gtest.h>
 
@@ -214,6 +215,48 @@ TEST(CoverageGap, cuts_refine_nodes_by_their_gap)
     camera.position = {0.5, 0.5, 2.0};
     EXPECT_GT(screen_space_error(h.nodes[0], camera), camera.max_pixel_error);
     EXPECT_GT(cut_for_camera(h, camera).size(), 1u);
+}
+
+// Whether p (in the plane z = 0) lies strictly inside the tile's outline.
+bool inside_tile(const Hierarchy& h, const Tile& t, double x, double y)
+{
+    const std::size_t n = t.boundary.size();
+    if (n < 3)
+        return false;
+    int sign = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3& a = h.cloud.positions[t.boundary[i]];
+        const Vec3& b = h.cloud.positions[t.boundary[(i + 1) % n]];
+        const double c = (b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x);
+        const int s = c > 0 ? 1 : (c < 0 ? -1 : 0);
+        if (s == 0 || (sign != 0 && s != sign))
+            return false;
+        sign = s;
+    }
+    return true;
+}
+
+// A Voronoi cell can take in points across a hole from a neighbouring node, and its hull then covers
+// the hole: such a tile keeps its own node's points. A plate with holes 12, 16 and 20 spacings wide:
+// without the gaps measured a tile covers the middle of the widest; with them none does (the narrower
+// ones are under what a tile's sample can see).
+TEST(CoverageGap, tiles_whose_cells_reach_over_a_hole_keep_their_own_points)
+{
+    const std::size_t n = 60000;
+    const double s = 1.0 / std::sqrt(static_cast<double>(n));
+    const std::vector<Hole> holes{{0.5, 0.5, 6 * s}, {0.25, 0.75, 8 * s}, {0.75, 0.75, 10 * s}};
+    const Hierarchy h = build_hierarchy(shapes::flat_plate(n, outside_holes(holes), 9));
+    const Cut cut = cut_by_tolerance(h, 0.002);
+    auto covering_widest = [&](const TileOptions& o) {
+        std::size_t count = 0;
+        for (const Tile& t : make_tiles(h, cut, o))
+            count += inside_tile(h, t, holes[2].x, holes[2].y) ? 1 : 0;
+        return count;
+    };
+    TileOptions unmeasured;
+    unmeasured.measure_gaps = false;
+    EXPECT_EQ(covering_widest(unmeasured), 1u);
+    EXPECT_EQ(covering_widest(TileOptions{}), 0u);
 }
 
 // Holes 20 to 50 spacings wide in a flat plate stay open in the mesh, clean or noisy, at the default
