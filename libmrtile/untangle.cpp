@@ -181,10 +181,13 @@ public:
         std::sort(ring.begin(), ring.end());
         ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
         std::vector<Mesh::VertexHandle> own(corners.begin(), corners.end());
+        // A crossing in the face's own plane (a fold in a flat part) is parted by a move across the
+        // surface too, but as a tent standing out of the plane: only moves within it are tried there.
+        const bool in_plane = crossings_in_plane(f);
         for (const std::vector<Mesh::VertexHandle>* vertices : {&own, &ring})
             for (const Move move : {Move{false, 0.25}, Move{true, 0.25}, Move{true, -0.25}, Move{false, 0.5}, Move{true, 0.5}, Move{true, -0.5}, Move{false, 1.0}})
                 for (const auto v : *vertices)
-                    if (tests_ < budget && try_move(v, move)) {
+                    if (tests_ < budget && !(in_plane && move.along_normal) && try_move(v, move)) {
                         ++stats.moves;
                         return;
                     }
@@ -219,6 +222,28 @@ private:
                     ++count;
             }
         return count;
+    }
+
+    // Whether every face that f crosses lies in f's plane: parallel normals, corners within a
+    // millionth of f's longest edge of it (rounding, on a plane that is not axis-aligned).
+    bool crossings_in_plane(Mesh::FaceHandle f)
+    {
+        const auto c = face_vertices(mesh_, f);
+        const OpenMesh::Vec3d a = mesh_.point(c[0]), b = mesh_.point(c[1]), d = mesh_.point(c[2]);
+        const OpenMesh::Vec3d n = OpenMesh::cross(b - a, d - a).normalized();
+        const double tolerance = 1e-6 * std::sqrt(std::max({(b - a).sqrnorm(), (d - b).sqrnorm(), (a - d).sqrnorm()}));
+        for (const int g : grid_.near(face_box(mesh_, f))) {
+            const Mesh::FaceHandle gh(g);
+            if (gh == f)
+                continue;
+            ++tests_;
+            if (!faces_intersect(mesh_, f, gh))
+                continue;
+            for (const auto v : mesh_.fv_range(gh))
+                if (std::abs(OpenMesh::dot(mesh_.point(v) - a, n)) > tolerance)
+                    return false;
+        }
+        return true;
     }
 
     // Area above a millionth of the longest edge squared: an edit never makes a needle or a cap that

@@ -286,5 +286,32 @@ TEST(Untangle, a_border_gap_face_folded_in_the_plane_is_removed)
     }
 }
 
+// A flat 6 x 6 grid with one inner vertex pushed in the plane past its neighbours: its faces fold over
+// theirs. Lifting a vertex off the plane would part the faces too, as a tent standing out of a flat
+// part (an L-shaped plate got one 6% of its diagonal high); in the plane, moves toward the neighbours'
+// centre undo the fold, and every vertex stays in the plane.
+TEST(Untangle, a_fold_in_the_plane_is_not_lifted_out_of_it)
+{
+    Mesh mesh;
+    std::vector<Mesh::VertexHandle> grid;
+    for (int j = 0; j <= 6; ++j)
+        for (int i = 0; i <= 6; ++i)
+            grid.push_back(mesh.add_vertex(Mesh::Point(i, j, 0.0)));
+    auto at = [&](int i, int j) { return grid[static_cast<std::size_t>(j * 7 + i)]; };
+    for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < 6; ++i) {
+            mesh.add_face(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+            mesh.add_face(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+        }
+    mesh.point(at(3, 3)) = Mesh::Point(4.4, 3.3, 0.0); // past its neighbour (4, 3)
+    mesh.update_normals();
+    const std::size_t before = self_intersecting_faces(mesh).size();
+    ASSERT_GT(before, 0u);
+    const UntangleStats s = untangle(mesh);
+    EXPECT_LT(s.pairs_after, before);
+    for (const auto v : mesh.vertices())
+        EXPECT_EQ(mesh.point(v)[2], 0.0) << "vertex " << v.idx() << " left the plane";
+}
+
 } // namespace
 } // namespace mrt
