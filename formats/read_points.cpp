@@ -16,6 +16,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -330,6 +331,10 @@ struct ColumnLayout
 {
     std::array<int, 3> column = {0, 1, 2}; // x, y, z
     std::array<int, 3> color = {-1, -1, -1}; // red, green, blue (0-255), when the file has them
+    // The header named the colour columns: their values are colours, so a word there is an error and a
+    // value beyond 0-255 is clamped. Columns guessed by the PTS convention may be something else
+    // (normals, say), so values that are not colours drop the guess instead.
+    bool colors_named = false;
     int columns_needed = 3;
     // "1,5;2,5;3,5" (a European spreadsheet's CSV): semicolons separate, commas are decimal points.
     bool decimal_comma = false;
@@ -348,9 +353,10 @@ std::string lower_name(std::string_view token)
 bool has_all(const std::array<int, 3>& columns) { return columns[0] >= 0 && columns[1] >= 0 && columns[2] >= 0; }
 
 // A line of column names ("x,y,z,intensity", CloudCompare's "//X,Y,Z,R,G,B"): the coordinates are in the
-// columns named x, y and z if all three are named, else in the first three; colours (0-255) in the
-// columns named r, g, b or red, green, blue.
-void read_column_names(std::string_view line, bool keep_colors, ColumnLayout& layout)
+// columns named x, y and z; a header naming none of them leaves them in the first three, one naming some
+// but not all is refused (reading "intensity,x,y" as x y z would give a wrong cloud without a word).
+// Colours (0-255) are in the columns named r, g, b or red, green, blue.
+void read_column_names(const Input& in, std::string_view line, bool keep_colors, ColumnLayout& layout)
 {
     while (!line.empty() && (line.front() == ' ' || line.front() == '\t'))
         line.remove_prefix(1);
@@ -360,6 +366,8 @@ void read_column_names(std::string_view line, bool keep_colors, ColumnLayout& la
     static const char* const kColorNames[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
     std::array<int, 3> named = {-1, -1, -1};
     std::array<int, 3> color = {-1, -1, -1};
+    std::string columns; // as written, for the message
+    bool columns_cut = false;
     std::string_view token;
     for (int index = 0; tokens.next(token); ++index) {
         const std::string name = lower_name(token);
@@ -369,11 +377,27 @@ void read_column_names(std::string_view line, bool keep_colors, ColumnLayout& la
             if (color[axis] < 0 && (name == kColorNames[axis][0] || name == kColorNames[axis][1]))
                 color[axis] = index;
         }
+        if (columns.size() < 200) {
+            const std::string quoted = quote_token(token); // printable and short
+            columns += (index > 0 ? ", " : "") + quoted.substr(1, quoted.size() - 2);
+        } else if (!columns_cut) {
+            columns += ", ...";
+            columns_cut = true;
+        }
     }
-    if (has_all(named))
+    if (has_all(named)) {
         layout.column = named;
-    if (has_all(color) && keep_colors)
+    } else if (named[0] >= 0 || named[1] >= 0 || named[2] >= 0) {
+        std::string missing;
+        for (int axis = 0; axis < 3; ++axis)
+            if (named[axis] < 0)
+                missing += (missing.empty() ? "" : " or ") + std::string(1, static_cast<char>('x' + axis));
+        fail_line(in, "the header names no " + missing + " column (columns: " + columns + ")");
+    }
+    if (has_all(color) && keep_colors) {
         layout.color = color;
+        layout.colors_named = true;
+    }
     for (int axis = 0; axis < 3; ++axis)
         layout.columns_needed = std::max({layout.columns_needed, layout.column[axis] + 1, layout.color[axis] + 1});
 }
@@ -451,7 +475,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         if (first_content_line) {
             first_content_line = false;
             if (is_column_names(token)) {
-                read_column_names(line, options.keep_colors, layout);
+                read_column_names(in, line, options.keep_colors, layout);
                 layout_known = true;
                 continue;
             }
@@ -485,7 +509,15 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
             p[axis] = column_number(in, fields[axis], layout);
         check_max_points(in, cloud.positions.size() + 1, options);
         cloud.positions.push_back(p);
-        if (has_all(layout.color)) {
+        if (has_all(layout.color) && layout.colors_named) {
+            // Named colours: a word is an error as in a coordinate column; out-of-range values are
+            // clamped, as the PLY reader does with integer colours, rather than losing every colour.
+            Rgba c = {0, 0, 0, 255};
+            for (int k = 0; k < 3; ++k)
+                c[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(
+                    std::lround(std::clamp(column_number(in, color_fields[k], layout), 0.0, 255.0)));
+            cloud.colors.push_back(c);
+        } else if (has_all(layout.color)) {
             Rgba c = {0, 0, 0, 255};
             if (color_byte(color_fields[0], c[0]) && color_byte(color_fields[1], c[1]) &&
                 color_byte(color_fields[2], c[2])) {
@@ -892,15 +924,24 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
     check_max_points(in, vertex.count, options);
 
     // Before allocating anything, check that an uncompressed binary file can hold what it declares.
+    // The message names the element that does not fit: an absurd count ahead of the vertices is the
+    // fault then, not the vertex count.
     bool count_confirmed = false;
     if (binary && in.file_size() > 0) {
         std::uint64_t needed = in.offset();
-        for (std::size_t i = 0; i <= vertex_index; ++i)
-            needed = saturating_add(needed, saturating_mul(header.elements[i].count, header.elements[i].min_size));
-        if (needed > in.file_size())
-            throw IoError(in.name() + ": truncated: the header declares " + std::to_string(vertex.count) +
-                          " vertices (at least " + std::to_string(needed) + " bytes) but the file has " +
-                          std::to_string(in.file_size()) + " bytes");
+        for (std::size_t i = 0; i <= vertex_index; ++i) {
+            const PlyElement& element = header.elements[i];
+            needed = saturating_add(needed, saturating_mul(element.count, element.min_size));
+            if (needed <= in.file_size())
+                continue;
+            const std::string declared = i == vertex_index
+                                             ? std::to_string(vertex.count) + " vertices"
+                                             : std::to_string(element.count) + " " + quote_token(element.name) +
+                                                   " elements ahead of the vertices";
+            throw IoError(in.name() + ": truncated: the header declares " + declared + " (at least " +
+                          std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) +
+                          " bytes");
+        }
         count_confirmed = true;
     }
 
@@ -961,6 +1002,7 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
             Tokens tokens = next_ascii_record(in, vertex, i);
             std::string_view token;
             std::size_t found = 0;
+            std::uint64_t list_items = 0;
             for (std::size_t p = 0; p < vertex.properties.size(); ++p) {
                 const PlyProperty& property = vertex.properties[p];
                 if (!tokens.next(token))
@@ -975,9 +1017,24 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
                         if (!tokens.next(token))
                             fail_line(in, "list " + property.name + " is shorter than its length " +
                                               std::to_string(n));
+                    list_items += n;
                 } else if (kept[p]) {
                     values[p] = number_on_line(in, token);
                 }
+            }
+            // Each vertex is one line: more values than the properties take mean the header does not
+            // describe the data (a missing property, or two vertices run together), so the values
+            // read may be the wrong ones.
+            if (tokens.next(token)) {
+                std::uint64_t total = found + list_items + 1;
+                while (tokens.next(token))
+                    ++total;
+                const std::string lists = vertex.has_lists ? " (" + std::to_string(found + list_items) +
+                                                                 " values with the list lengths this line gives)"
+                                                           : std::string();
+                fail_line(in, "vertex " + std::to_string(i) + " has " + std::to_string(total) +
+                                  " values, the header declares " + std::to_string(vertex.properties.size()) +
+                                  " properties" + lists);
             }
             store(values.data());
         }
@@ -1025,15 +1082,37 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
             size[k] = static_cast<std::uint64_t>(v[0]);
         }
         double m[4][4];
+        std::uint64_t matrix_line = 0;
         for (int row = 0; row < 8; ++row) {
             if (!next_numbers(in, v))
                 throw IoError(in.name() + ": truncated: " + where + " header ends early");
+            if (row == 4)
+                matrix_line = in.line_number();
             const std::size_t expected = row < 4 ? 3 : 4;
             if (v.size() != expected)
                 fail_line(in, "expected " + std::to_string(expected) + " numbers in the " + where + " header, found " +
                                   std::to_string(v.size()));
             if (row >= 4)
                 std::copy(v.begin(), v.end(), m[row - 4]);
+        }
+        // The registration is a rigid motion: its 3x3 part must be a rotation (orthonormal rows). An
+        // all-zero or otherwise degenerate matrix would collapse or distort the scan without a word.
+        // Real files print the rotation with 6-8 digits, far within the tolerance.
+        double worst = 0;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) {
+                const double dot = m[a][0] * m[b][0] + m[a][1] * m[b][1] + m[a][2] * m[b][2];
+                worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+            }
+        if (!(worst <= 1e-3)) {
+            const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                               m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                               m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+            char detail[64];
+            std::snprintf(detail, sizeof detail, "%.6g", det);
+            throw InvalidInput(in.name() + ": " + where + ": the registration matrix (line " +
+                               std::to_string(matrix_line) + ") is not a rigid motion: its rotation part is " +
+                               "not orthonormal (determinant " + detail + ")");
         }
         // The scanner stands at the registration's translation (the scan's own origin).
         cloud.viewpoint = Vec3{m[3][0], m[3][1], m[3][2]};
@@ -1159,13 +1238,15 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     const std::string version = std::to_string(major) + "." + std::to_string(minor);
     if (major != 1 || minor > 4)
         throw InvalidInput(in.name() + ": LAS version " + version + " is not supported (1.0 to 1.4 are)");
-    // LASzip marks compressed point data by setting the top bits of the format.
-    if (format_byte & 0xC0)
+    // LASzip marks compressed point data by setting bit 7 (bit 6 in its early versions) of a valid
+    // format, 0-10: a format byte that is not one of those with such bits (99, say) is no LAZ file.
+    if ((format_byte & 0xC0) && (format_byte & 0x3F) <= 10)
         throw InvalidInput(in.name() + ": LAZ-compressed points; decompress first (laszip -i IN.laz -o OUT.las, "
                                        "or pdal translate)");
     const unsigned format = format_byte;
     if (format > 10)
-        throw InvalidInput(in.name() + ": unknown LAS point data format " + std::to_string(format));
+        throw InvalidInput(in.name() + ": unsupported LAS point data format " + std::to_string(format) +
+                           " (formats 0 to 10 are read)");
     if (record_size < kLasRecordSize[format])
         throw InvalidInput(in.name() + ": LAS point records of " + std::to_string(record_size) +
                            " bytes are shorter than format " + std::to_string(format) + " needs (" +

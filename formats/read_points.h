@@ -5,14 +5,15 @@
 //! \details What is read from each format:
 //!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
 //!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
-//!    element instance per line (as every writer produces it).
+//!    element instance per line (as every writer produces it); a vertex line holding more values than
+//!    its properties (list lengths included) take is refused.
 //!  - LAS 1.0-1.4, point formats 0-10: scaled coordinates, and colours (formats 2, 3, 5, 7, 8, 10;
 //!    16-bit, or 0-255 as many writers store them: read as 0-255 unless some value exceeds 255).
 //!    Withheld points and points classified as noise (classes 7 and 18) are left out. LAZ-compressed
 //!    files are refused with a hint (no LASzip here).
 //!  - PTX (terrestrial scanners): every scan, each through its registration matrix (row vectors, the
-//!    translation in the last row); "0 0 0" points (no return) are left out; x y z intensity r g b
-//!    colours are kept when every point has them.
+//!    translation in the last row; refused unless its 3x3 part is orthonormal); "0 0 0" points (no
+//!    return) are left out; x y z intensity r g b colours are kept when every point has them.
 //!  - PCD (the Point Cloud Library's format), DATA ascii, binary or binary_compressed (LZF, stored field
 //!    by field), any field layout with x, y, z (F, I or U of 1-8 bytes; padding fields "_"); PCL's
 //!    packed 32-bit colour ("rgb" or "rgba", as float bits or, in ASCII, an unsigned integer). Points of
@@ -23,9 +24,10 @@
 //!    first line holding a single integer (the point count of PTS files; in a .pts file every such line, as
 //!    multi-scan PTS files repeat it before each scan). A first line of column names
 //!    ("x,y,z,intensity", CloudCompare's "//X,Y,Z,R,G,B") picks the columns named x, y, z (any case, any
-//!    order; else the first three) and r, g, b or red, green, blue as 0-255 colours; without names a
-//!    .pts line of 6 or 7 values is x y z [intensity] r g b (Leica's convention). Colours that are not
-//!    all within 0-255 are dropped (they were something else, normals say). When the first line holds
+//!    order; a header naming none of them leaves the first three, one naming only some is refused) and
+//!    r, g, b or red, green, blue as colours (numbers, clamped to 0-255); without names a .pts line of 6
+//!    or 7 values is x y z [intensity] r g b (Leica's convention), and these guessed colours are dropped
+//!    unless all are within 0-255 (they were something else, normals say). When the first line holds
 //!    a semicolon, semicolons separate and commas are decimal points ("1,5;2,5;3,5", as a European
 //!    spreadsheet writes CSV).
 //!  - OBJ: `v x y z [w]` lines; `v x y z r g b` colours (0..1) are kept when every v line has them.

@@ -362,6 +362,56 @@ TEST(ReadColumns, colours_from_named_columns_and_pts_convention)
     EXPECT_FALSE(read_points(dir / "c.txt", no_colors).has_colors());
 }
 
+// A header naming only some of x, y, z: taking the first three columns would read "intensity,x,y" with
+// intensity as x, and "x,y,intensity" with intensity as z, without a word.
+TEST(ReadColumns, header_naming_only_some_coordinates_is_refused)
+{
+    const fs::path dir = test_dir();
+    const std::string rows = "1,2,3\n4,5,6\n7,8,9\n";
+    struct Case { std::string name, body, expect; };
+    const std::vector<Case> cases = {
+        {"int_first.csv", "intensity,x,y\n" + rows, "line 1: the header names no z column (columns: intensity, x, y)"},
+        {"xy_int.csv", "x,y,intensity\n" + rows, "the header names no z column (columns: x, y, intensity)"},
+        {"cc.txt", "//X,Z,Intensity\n" + rows, "the header names no y column (columns: X, Z, Intensity)"},
+        {"x_only.pts", "X Intensity Foo\n1 2 3\n", "line 1: the header names no y or z column"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const fs::path path = write_file(dir / c.name, c.body);
+        expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect});
+    }
+    // Headers naming no coordinate keep the first three columns; named ones are honoured in any order.
+    const std::vector<Vec3> expected = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+    expect_points(read_points(write_file(dir / "abc.csv", "a,b,c\n" + rows)), expected);
+    expect_points(read_points(write_file(dir / "order.csv", "intensity,Z,y,X\n9,3,2,1\n9,6,5,4\n9,9,8,7\n")),
+                  expected);
+    expect_points(read_points(write_file(dir / "cc_order.txt", "//Z,Y,X\n3,2,1\n6,5,4\n9,8,7\n")), expected);
+}
+
+// Columns the header names as colours hold colours: a word there is an error (as in a coordinate
+// column), and values beyond 0-255 are clamped as the PLY reader clamps integer colours, instead of every
+// colour of the file being dropped.
+TEST(ReadColumns, named_colour_columns_refuse_words_and_clamp)
+{
+    const fs::path dir = test_dir();
+    const fs::path word = write_file(dir / "word.csv", "//X,Y,Z,R,G,B\n1,2,3,10,20,30\n4,5,6,10,20,abc\n");
+    expect_error<InvalidInput>([&] { read_points(word); }, {word.string(), "line 3: 'abc' is not a number"});
+    const fs::path eu = write_file(dir / "word_eu.csv", "X;Y;Z;red;green;blue\n1;2;3;10;x;30\n");
+    expect_error<InvalidInput>([&] { read_points(eu); }, {eu.string(), "line 2: 'x' is not a number"});
+
+    const PointCloud c = read_points(write_file(dir / "range.csv", "//X,Y,Z,R,G,B\n1,2,3,300,-1,50\n4,5,6,255,0,"
+                                                                   "127.6\n7,8,9,1e6,-0.4,0\n"));
+    expect_points(c, {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}});
+    ASSERT_EQ(c.colors.size(), 3u);
+    EXPECT_EQ(c.colors[0], (std::array<std::uint8_t, 4>{255, 0, 50, 255}));
+    EXPECT_EQ(c.colors[1], (std::array<std::uint8_t, 4>{255, 0, 128, 255}));
+    EXPECT_EQ(c.colors[2], (std::array<std::uint8_t, 4>{255, 0, 0, 255}));
+    // Not asked for: the colour columns are not read at all.
+    ReadOptions no_colors;
+    no_colors.keep_colors = false;
+    EXPECT_FALSE(read_points(word, no_colors).has_colors());
+}
+
 TEST(ReadObj, vertex_lines_only_and_colours)
 {
     const fs::path dir = test_dir();
@@ -894,6 +944,39 @@ TEST(ReadPtx, scans_registered_no_returns_dropped_and_colours)
     expect_read_errors(dir, cases);
 }
 
+// A registration matrix that is no rigid motion (all zeros collapses the scan to a point; a scale
+// distorts it) is refused, naming the scan; rotations printed with six digits still read.
+TEST(ReadPtx, degenerate_registration_matrix_is_refused)
+{
+    const fs::path dir = test_dir();
+    const std::string head = "1\n2\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+    const std::string points = "1 0 0 0.5\n0 2 0 0.5\n";
+    struct Case { std::string name, body, expect; };
+    const std::vector<Case> cases = {
+        {"zero.ptx", head + "0 0 0 0\n0 0 0 0\n0 0 0 0\n0 0 0 0\n" + points, "scan 1: the registration matrix (line 7)"},
+        {"scale.ptx", head + "1e+200 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n" + points, "scan 1: the registration matrix"},
+        {"flat.ptx", head + "1 0 0 0\n0 1 0 0\n0 0 0 0\n5 5 5 1\n" + points, "determinant 0)"},
+        {"second.ptx", head + "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n" + points + head +
+                           "0 0 0 0\n0 0 0 0\n0 0 0 0\n0 0 0 0\n" + points,
+         "scan 2: the registration matrix (line 19) is not a rigid motion"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const fs::path path = write_file(dir / c.name, c.body);
+        expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect, "not orthonormal"});
+    }
+    // 30 degrees about z with six digits (cos 0.866025, sin 0.5), as scanner software prints it.
+    const PointCloud turned = read_points(write_file(
+        dir / "turned.ptx", head + "0.866025 0.5 0 0\n-0.5 0.866025 0 0\n0 0 1 0\n10 20 30 1\n" + points));
+    const std::vector<Vec3> got = absolute(turned);
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_NEAR(got[0].x, 10.866025, 1e-9);
+    EXPECT_NEAR(got[0].y, 20.5, 1e-9);
+    EXPECT_NEAR(got[1].x, 9.0, 1e-9);
+    EXPECT_NEAR(got[1].y, 21.73205, 1e-9);
+    EXPECT_NEAR(got[1].z, 30.0, 1e-9);
+}
+
 // --- LAS ------------------------------------------------------------------------------------------
 
 // A LAS file of the given version and point format holding `points` (and one colour per point if the
@@ -1095,6 +1178,12 @@ TEST(ReadLas, malformed_files_fail_cleanly)
     std::string bad_offset = good;
     bad_offset[96] = 10; // points "inside" the header
     bad_offset[97] = bad_offset[98] = bad_offset[99] = 0;
+    std::string format99 = good; // bit 6 set, but 99 & 63 is no LAS format either: not LAZ
+    format99[104] = 99;
+    std::string format11 = good;
+    format11[104] = 11;
+    std::string laz_early = good; // LASzip's early versions set bit 6
+    laz_early[104] = 3 | 0x40;
     LasFile absurd;
     absurd.declared = 4000000000u;
     LasFile noise_only;
@@ -1104,6 +1193,9 @@ TEST(ReadLas, malformed_files_fail_cleanly)
         {"tiny.las", good.substr(0, 100), "ends inside the LAS header", true},
         {"text.las", "1 2 3\n", "not a LAS file", false},
         {"laz.las", laz, "LAZ-compressed", false},
+        {"laz64.las", laz_early, "LAZ-compressed", false},
+        {"format99.las", format99, "unsupported LAS point data format 99", false},
+        {"format11.las", format11, "unsupported LAS point data format 11", false},
         {"scale.las", zero_scale, "scale or offset of y", false},
         {"short.las", short_record, "shorter than format 3", false},
         {"version.las", version, "version 1.9", false},
@@ -1113,6 +1205,11 @@ TEST(ReadLas, malformed_files_fail_cleanly)
         {"noise.las", noise_only.bytes(), "no points", false},
     };
     expect_read_errors(dir, cases);
+    try {
+        read_points(dir / "format99.las");
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()).find("LAZ"), std::string::npos) << e.what();
+    }
     const fs::path cut_gz = write_gz(dir / "cut.las.gz", good.substr(0, good.size() - 10));
     expect_error<IoError>([&] { read_points(cut_gz); }, {cut_gz.string(), "truncated", "3 of 4 points"});
     const fs::path laz_file = write_file(dir / "a.laz", good);
@@ -1223,6 +1320,21 @@ TEST(ReadErrors, truncated_and_oversized_binary_ply)
                                                          "element vertex 1\nproperty float x\nproperty float y\n"
                                                          "property float z\nend_header\n" + std::string(64, '\1'));
     expect_error<IoError>([&] { read_points(faces); }, {faces.string(), "truncated"});
+    // An absurd count of another element ahead of the vertices: the message names that element, not
+    // the (plausible) vertex count.
+    const fs::path junk = write_file(dir / "junk.ply", "ply\nformat binary_little_endian 1.0\nelement junk 1000000000000\n"
+                                                       "property uchar a\nelement vertex 3\nproperty float x\n"
+                                                       "property float y\nproperty float z\nend_header\n" +
+                                                           std::string(100, '\0'));
+    const std::string junk_size = std::to_string(fs::file_size(junk));
+    expect_error<IoError>([&] { read_points(junk); },
+                          {junk.string(), "declares 1000000000000 'junk' elements ahead of the vertices (at least ",
+                           "bytes) but the file has " + junk_size + " bytes"});
+    try {
+        read_points(junk);
+    } catch (const IoError& e) {
+        EXPECT_EQ(std::string(e.what()).find("3 vertices"), std::string::npos) << e.what();
+    }
 }
 
 TEST(ReadErrors, malformed_ply_headers)
@@ -1267,6 +1379,13 @@ TEST(ReadErrors, bad_values_name_the_line)
                     "end_header\n1 2 3\n4 5 NaN\n", "line 9"},
         {"few.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
                     "property float w\nend_header\n1 2 3 4\n4 5 6\n", "line 10"},
+        // Extra values: the header does not describe the data.
+        {"many.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                     "end_header\n1 2 3\n4 5 6 9 9\n", "line 9: vertex 1 has 5 values, the header declares 3 properties"},
+        // With a list the count is the scalars plus the list's length and items: 3 + (1 + 2) = 6 here, 7 given.
+        {"many_list.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty list uchar int l\n"
+                          "property float y\nproperty float z\nend_header\n1 0 2 3\n4 2 7 7 5 6 9\n",
+         "line 10: vertex 1 has 7 values, the header declares 4 properties (6 values with the list lengths"},
         {"off1.off", "OFF\n2 0 0\n1 2 3\n4 x 6\n", "line 4"},
         {"off2.off", "4OFF\n2 0 0\n1 2 3 4\n", "line 1"},
         {"off3.off", "PLY\n", "line 1"},
