@@ -490,6 +490,32 @@ TEST(Reconstruct, triangle_count_target_is_met_from_below)
     EXPECT_THROW(mesh_to_triangle_count(h, 0), InvalidInput);
 }
 
+// A small patch of 50 points hovering over a plate's rim, which the surface leaves out (a lone fan of
+// few points): the vertex fit follows only the points of the surface it has, so the plate stays flat
+// and inside its square. Fitted to the patch's points too, the rim faces under it rose 0.02 toward them.
+TEST(Reconstruct, a_dropped_island_does_not_pull_the_surface)
+{
+    PointCloud cloud = shapes::flat_plate(20000, [](double, double) { return true; });
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u(-0.02, 0.02);
+    for (int i = 0; i < 50; ++i)
+        cloud.positions.push_back({1.0 + u(rng), 0.5 + u(rng), 0.05 + 0.2 * u(rng)});
+    const Hierarchy h = build_hierarchy(cloud);
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    double off_plane = 0, off_square = 0;
+    for (const auto v : r.mesh.vertices()) {
+        const Vec3 p = to_vec3(r.mesh.point(v));
+        ASSERT_LT(p.z, 0.025) << "the patch is meshed: the test no longer tests the fit";
+        off_plane = std::max(off_plane, std::abs(p.z));
+        off_square = std::max({off_square, p.x - 1.0, p.y - 1.0, -p.x, -p.y});
+    }
+    EXPECT_LT(off_plane, 1e-9) << "a plate vertex was pulled toward the patch";
+    EXPECT_LT(off_square, 1e-9);
+    const TopologyStats t = topology_stats(r.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.boundary_loops, 1u);
+}
+
 // E_RMS (eq. 4-6) against a direct evaluation; zero on a plane.
 TEST(Reconstruct, e_rms_matches_brute_force)
 {
