@@ -98,14 +98,13 @@ Mesh hull_mesh(const Hierarchy& h, std::int32_t node_id)
     return mesh;
 }
 
-// The points the vertex fit follows: all of them, but those of a tile whose fan the surface left out
-// and that lie away from the mesh (their median distance over up to 16 of them above 3 of the tile's
-// spacings). Such points sample surface the mesh does not have: a small detached piece left out, or
-// the other half of a 2-tile sphere whose surface kept one fan. Fitted to them, the faces nearest them
-// were pulled toward it (a plate's rim rose 4% of its width toward a dropped island of 50 points; that
-// fan's apex went 2.8 radii out). A fan covered by its neighbours' gap faces (at a sharp edge) has its
-// points on the mesh, and keeps them. Empty = every point (the usual case, no copy).
-std::vector<Vec3> fit_points(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles, const Mesh& mesh,
+// Per tile of `cut`: true for a fan tile the surface left out whose points lie away from the mesh
+// (their median distance over up to 16 of them above 3 of the tile's spacings). Such points sample
+// surface the mesh does not have: a small detached piece left out, a strip that failed to join at a
+// coarse cut, or the other half of a 2-tile sphere whose surface kept one fan. A fan covered by its
+// neighbours' gap faces (at a sharp edge) has its points on the mesh and is not away. Empty when no
+// tile is (the usual case: no closest-point queries at all when every fan is in the mesh).
+std::vector<bool> away_tiles(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles, const Mesh& mesh,
                              std::size_t threads)
 {
     OpenMesh::FPropHandleT<int> tile_of_face;
@@ -143,7 +142,16 @@ std::vector<Vec3> fit_points(const Hierarchy& h, const Cut& cut, const std::vect
         away[k] = d[kProbes / 2] > kAwaySpacings * tiles[k].spacing();
         any = any || away[k];
     }
-    if (!any)
+    return any ? away : std::vector<bool>{};
+}
+
+// The points the vertex fit follows: all of them but those of the tiles away from the mesh
+// (away_tiles). Fitted to them, the faces nearest them were pulled toward surface the mesh does not
+// have (a plate's rim rose 4% of its width toward a dropped island of 50 points; a 2-tile sphere's fan
+// apex went 2.8 radii out). Empty = every point (no copy).
+std::vector<Vec3> fit_points(const Hierarchy& h, const Cut& cut, const std::vector<bool>& away)
+{
+    if (away.empty())
         return {};
     std::vector<Vec3> kept;
     for (std::size_t k = 0; k < cut.size(); ++k)
@@ -152,6 +160,23 @@ std::vector<Vec3> fit_points(const Hierarchy& h, const Cut& cut, const std::vect
             kept.insert(kept.end(), h.cloud.positions.begin() + n.begin, h.cloud.positions.begin() + n.end);
         }
     return kept;
+}
+
+// The cut with the marked nodes replaced by their children (in place: still in point order).
+Cut refine_marked(const Hierarchy& h, const Cut& cut, const std::vector<bool>& marked)
+{
+    Cut refined;
+    refined.reserve(cut.size());
+    for (std::size_t k = 0; k < cut.size(); ++k) {
+        const Node& node = h.nodes[static_cast<std::size_t>(cut[k])];
+        if (marked[k] && !node.is_leaf()) {
+            refined.push_back(node.left);
+            refined.push_back(node.right);
+        } else {
+            refined.push_back(cut[k]);
+        }
+    }
+    return refined;
 }
 
 } // namespace
@@ -188,21 +213,27 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
             }
         if (std::none_of(small.begin(), small.end(), [](bool b) { return b; }))
             break;
-        Cut refined; // children in place of the node: still in point order
-        for (std::size_t k = 0; k < result.cut.size(); ++k) {
-            const Node& node = h.nodes[static_cast<std::size_t>(result.cut[k])];
-            if (small[k]) {
-                refined.push_back(node.left);
-                refined.push_back(node.right);
-            } else {
-                refined.push_back(result.cut[k]);
-            }
-        }
-        result.cut = std::move(refined);
+        result.cut = refine_marked(h, result.cut, small);
         tiles = make_tiles(h, result.cut, options.tiles);
     }
-    result.tiles = tiles.size();
     build_surface(h, tiles, result.mesh, options.surface, &result.surface);
+    // Tiles whose fans the surface left out although their points lie away from it are refined and
+    // the cut meshed again (MeshOptions::dropped_rounds); what is left away is not fitted to.
+    std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
+    for (int round = 0; round < options.dropped_rounds && !away.empty(); ++round) {
+        bool refinable = false;
+        for (std::size_t k = 0; k < away.size(); ++k)
+            refinable = refinable || (away[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
+        if (!refinable)
+            break;
+        result.cut = refine_marked(h, result.cut, away);
+        tiles = make_tiles(h, result.cut, options.tiles);
+        result.mesh = Mesh();
+        result.surface = SurfaceStats{};
+        build_surface(h, tiles, result.mesh, options.surface, &result.surface);
+        away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
+    }
+    result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     // A height field stays a graph through both: every face they change faces up its axis.
     FitOptions fit = options.fit;
@@ -216,7 +247,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     // no new caps: FitOptions::max_flip_angle_degrees).
     result.slivers = remove_slivers(result.mesh, slivers);
     {
-        const std::vector<Vec3> kept = fit_points(h, result.cut, tiles, result.mesh, fit.threads);
+        const std::vector<Vec3> kept = fit_points(h, result.cut, away);
         result.fit = fit_vertices(result.mesh, kept.empty() ? h.cloud.positions : kept, fit);
     }
     // Last of the geometry: the fit's flips can also cross a thin part (it reverts only its moves).

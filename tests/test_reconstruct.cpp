@@ -186,10 +186,20 @@ TEST(Reconstruct, small_separate_objects_each_get_a_closed_surface)
 
     MeshOptions as_given;
     as_given.small_object_rounds = 0;
+    as_given.dropped_rounds = 0;
     EXPECT_EQ(mesh_cut(h, cut, as_given).cut, cut);
+    // A lone object is no small object among others: its two tiles are meshed as given by that rule.
+    // The surface keeps one of the two hemisphere fans (a disc, half a radius from the other half's
+    // points), and the dropped one is refined (MeshOptions::dropped_rounds): a closed sphere of 3 tiles.
     const Hierarchy one = build_hierarchy(shapes::sphere(800));
     const Cut two = cut_by_budget(one, 2);
-    EXPECT_EQ(mesh_cut(one, two).cut, two);
+    MeshOptions no_small = as_given;
+    no_small.dropped_rounds = MeshOptions{}.dropped_rounds;
+    EXPECT_EQ(mesh_cut(one, two, as_given).cut, two);
+    EXPECT_EQ(topology_stats(mesh_cut(one, two, as_given).mesh).boundary_loops, 1u);
+    const MeshResult refined = mesh_cut(one, two, no_small);
+    EXPECT_EQ(refined.cut.size(), 3u);
+    expect_closed(refined.mesh, 0);
 }
 
 // Two unit spheres of 50,000 points each, 5 and 10 point spacings apart: both are meshed, each closed.
@@ -501,7 +511,9 @@ TEST(Reconstruct, a_dropped_island_does_not_pull_the_surface)
     for (int i = 0; i < 50; ++i)
         cloud.positions.push_back({1.0 + u(rng), 0.5 + u(rng), 0.05 + 0.2 * u(rng)});
     const Hierarchy h = build_hierarchy(cloud);
-    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    MeshOptions fit_only; // the patch's tile as the surface leaves it: out
+    fit_only.dropped_rounds = 0;
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002), fit_only);
     double off_plane = 0, off_square = 0;
     for (const auto v : r.mesh.vertices()) {
         const Vec3 p = to_vec3(r.mesh.point(v));
@@ -514,6 +526,52 @@ TEST(Reconstruct, a_dropped_island_does_not_pull_the_surface)
     const TopologyStats t = topology_stats(r.mesh);
     EXPECT_EQ(t.components, 1u);
     EXPECT_EQ(t.boundary_loops, 1u);
+    // By default the patch's tile is refined until the patch is meshed, a piece of its own; the plate
+    // stays as flat.
+    const MeshResult full = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    EXPECT_EQ(topology_stats(full.mesh).components, 2u);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, full.mesh).max,
+              0.5 * point_to_mesh_distance(h.cloud.positions, r.mesh).max);
+    for (const auto v : full.mesh.vertices()) {
+        const Vec3 p = to_vec3(full.mesh.point(v));
+        if (p.x < 0.97) { // away from the patch
+            EXPECT_LT(std::abs(p.z), 1e-9);
+        }
+    }
+}
+
+// The two registered bunny scans of bun.conf at a coarse cut: a strip of the base (388 points, one
+// tile) failed to join the surface and was left out, 10% of the diagonal from the mesh. Tiles left
+// out while their points lie away from the mesh are refined and the cut meshed again
+// (MeshOptions::dropped_rounds); without that the strip is missing.
+TEST(Reconstruct, a_strip_left_out_at_a_coarse_cut_is_refined_until_it_joins)
+{
+    ReadOptions read;
+    read.skip_missing_scans = true;
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun.conf", read));
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    MeshOptions without;
+    without.dropped_rounds = 0;
+    const MeshResult before = mesh_cut(h, cut, without);
+    const MeshResult after = mesh_cut(h, cut);
+    const QualityReport q_before = measure_quality(h, before.cut, before.mesh);
+    const QualityReport q_after = measure_quality(h, after.cut, after.mesh);
+    EXPECT_GT(q_before.point_to_mesh.max, 0.05); // the strip is missing
+    EXPECT_LT(q_after.point_to_mesh.max, 0.03);
+    EXPECT_LT(q_after.point_to_mesh.mean, q_before.point_to_mesh.mean);
+    EXPECT_GT(after.cut.size(), cut.size()); // refined ...
+    EXPECT_LT(after.cut.size(), cut.size() + 4); // ... there only
+    EXPECT_EQ(q_after.topology.nonmanifold_edges + q_after.topology.nonmanifold_vertices, 0u);
+    EXPECT_EQ(q_after.topology.genus, 0);
+    EXPECT_LE(q_after.topology.boundary_loops, q_before.topology.boundary_loops);
+    EXPECT_EQ(after.surface.refused_faces, 0u);
+    // Inputs without such tiles mesh exactly as before: no extra meshing, the same cut.
+    const Hierarchy bunny = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const Cut bunny_cut = cut_by_tolerance(bunny, 0.005);
+    const MeshResult plain = mesh_cut(bunny, bunny_cut, without);
+    const MeshResult with = mesh_cut(bunny, bunny_cut);
+    EXPECT_EQ(plain.cut, with.cut);
+    EXPECT_EQ(plain.mesh.n_faces(), with.mesh.n_faces());
 }
 
 // E_RMS (eq. 4-6) against a direct evaluation; zero on a plane.
