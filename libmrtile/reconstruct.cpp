@@ -220,17 +220,40 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     // Tiles whose fans the surface left out although their points lie away from it are refined and
     // the cut meshed again (MeshOptions::dropped_rounds); what is left away is not fitted to.
     std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
+    std::size_t crossings = 0; // self-intersecting pairs of the surface, counted once a round starts
     for (int round = 0; round < options.dropped_rounds && !away.empty(); ++round) {
         bool refinable = false;
         for (std::size_t k = 0; k < away.size(); ++k)
             refinable = refinable || (away[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
         if (!refinable)
             break;
+        MeshResult before; // kept to go back to
+        before.cut = result.cut;
+        before.mesh = result.mesh;
+        before.surface = result.surface;
+        if (round == 0)
+            crossings = self_intersecting_faces(result.mesh).size();
+        std::vector<Tile> tiles_before = tiles;
+        std::vector<bool> away_before = away;
         result.cut = refine_marked(h, result.cut, away);
         tiles = make_tiles(h, result.cut, options.tiles);
         result.mesh = Mesh();
         result.surface = SurfaceStats{};
         build_surface(h, tiles, result.mesh, options.surface, &result.surface);
+        // The new surface may not cross itself more than the one before: where refined tiles fold
+        // into each other or into their neighbours (a roof tile that is half wall in a height field, a
+        // thin rod's tiles), the untangling cannot always undo it, and a piece left out is the smaller
+        // harm. Back to the mesh before the round then.
+        const std::size_t now = self_intersecting_faces(result.mesh).size();
+        if (now > crossings) {
+            result.cut = std::move(before.cut);
+            result.mesh = before.mesh;
+            result.surface = before.surface;
+            tiles = std::move(tiles_before);
+            away = std::move(away_before);
+            break;
+        }
+        crossings = now;
         away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
     }
     result.tiles = tiles.size();
