@@ -454,10 +454,20 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
     bool layout_known = false;
     std::string_view line;
     bool first_content_line = true;
+    bool separators_known = false;
     while (in.next_line(line)) {
-        if (first_content_line && line.find(';') != std::string_view::npos) {
-            layout.separators = &kSemicolonSeparators;
-            layout.decimal_comma = true;
+        // The first line with data (not a comment, not a point count) says whether semicolons separate.
+        if (!separators_known) {
+            std::string_view content = line.substr(0, 0), token;
+            std::size_t tokens_seen = 0;
+            std::uint64_t count = 0;
+            for (Tokens words(line, kBlanks); words.next(token); ++tokens_seen)
+                content = line.substr(0, static_cast<std::size_t>(token.data() + token.size() - line.data()));
+            if (content.find(';') != std::string_view::npos) {
+                layout.separators = &kSemicolonSeparators;
+                layout.decimal_comma = true;
+            }
+            separators_known = tokens_seen > 1 || (tokens_seen == 1 && !parse_count(content.substr(content.find_first_not_of(" \t")), count));
         }
         Tokens tokens(line, *layout.separators);
         std::string_view token;
@@ -609,6 +619,13 @@ PointCloud read_off(Input& in, const ReadOptions& options)
         fail_line(in, "expected the vertex count, found " + quote_token(token));
     check_max_points(in, vertex_count, options);
 
+    // A vertex line holds x y z, then 3 normal values (N), 2 texture coordinates (ST) and a colour (C:
+    // a colour map index, or 3 or 4 components; writers differ in what they put first) as the keyword
+    // says. More or fewer mean the counts do not describe the lines: a vertex count larger than the
+    // vertex lines reads face lines ("3 0 1 2") as points without a word.
+    const auto has = [&](char c) { return prefix.find(c) != std::string_view::npos; };
+    const std::size_t fewest = 3 + (has('N') ? 3 : 0) + (has('S') ? 2 : 0);
+    const std::size_t most = fewest + (has('C') ? 4 : 0);
     PointCloud cloud;
     reserve_capped(cloud, vertex_count, kReserveCap, false);
     for (std::uint64_t i = 0; i < vertex_count; ++i) {
@@ -616,6 +633,14 @@ PointCloud read_off(Input& in, const ReadOptions& options)
             throw IoError(in.name() + ": truncated: file ends at line " + std::to_string(in.line_number()) +
                           " after " + std::to_string(i) + " of " + std::to_string(vertex_count) + " vertices");
         cloud.positions.push_back(position_on_line(in, tokens, token));
+        std::size_t values = 3;
+        while (tokens.next(token))
+            ++values;
+        if (values < fewest || values > most)
+            fail_line(in, "vertex " + std::to_string(i) + " of " + std::to_string(vertex_count) + " has " +
+                              std::to_string(values) + " values, a " + std::string(prefix) + "OFF vertex has " +
+                              (fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " to " + std::to_string(most)) +
+                              " (is the vertex count in line 2 right?)");
     }
     return cloud;
 }
@@ -905,6 +930,17 @@ Tokens next_ascii_record(Input& in, const PlyElement& element, std::uint64_t ind
                   " elements");
 }
 
+// Reads past every instance of an element that is not needed; throws if the input ends first.
+void skip_element(Input& in, const PlyElement& element, bool binary, bool swap)
+{
+    if (binary) {
+        skip_binary_element(in, element, swap);
+        return;
+    }
+    for (std::uint64_t i = 0; i < element.count; ++i)
+        next_ascii_record(in, element, i);
+}
+
 PointCloud read_ply(Input& in, const ReadOptions& options)
 {
     const PlyHeader header = read_ply_header(in);
@@ -923,13 +959,15 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
     const VertexLayout layout = vertex_layout(in, vertex, options.keep_colors);
     check_max_points(in, vertex.count, options);
 
-    // Before allocating anything, check that an uncompressed binary file can hold what it declares.
-    // The message names the element that does not fit: an absurd count ahead of the vertices is the
-    // fault then, not the vertex count.
+    // Before allocating anything, check that an uncompressed binary file can hold what it declares,
+    // the elements after the vertices too (their smallest size: a file cut off after its vertices is
+    // truncated all the same, and says so, though the vertices are whole). The message names the
+    // element that does not fit: an absurd count ahead of the vertices is the fault then, not the
+    // vertex count.
     bool count_confirmed = false;
     if (binary && in.file_size() > 0) {
         std::uint64_t needed = in.offset();
-        for (std::size_t i = 0; i <= vertex_index; ++i) {
+        for (std::size_t i = 0; i < header.elements.size(); ++i) {
             const PlyElement& element = header.elements[i];
             needed = saturating_add(needed, saturating_mul(element.count, element.min_size));
             if (needed <= in.file_size())
@@ -937,7 +975,8 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
             const std::string declared = i == vertex_index
                                              ? std::to_string(vertex.count) + " vertices"
                                              : std::to_string(element.count) + " " + quote_token(element.name) +
-                                                   " elements ahead of the vertices";
+                                                   (i < vertex_index ? " elements ahead of the vertices"
+                                                                     : " elements after the vertices");
             throw IoError(in.name() + ": truncated: the header declares " + declared + " (at least " +
                           std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) +
                           " bytes");
@@ -945,15 +984,8 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         count_confirmed = true;
     }
 
-    for (std::size_t e = 0; e < vertex_index; ++e) {
-        const PlyElement& element = header.elements[e];
-        if (binary) {
-            skip_binary_element(in, element, swap);
-        } else {
-            for (std::uint64_t i = 0; i < element.count; ++i)
-                next_ascii_record(in, element, i);
-        }
-    }
+    for (std::size_t e = 0; e < vertex_index; ++e)
+        skip_element(in, header.elements[e], binary, swap);
 
     PointCloud cloud;
     reserve_capped(cloud, vertex.count, count_confirmed ? SIZE_MAX : kReserveCap, layout.colors);
@@ -1039,6 +1071,11 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
             store(values.data());
         }
     }
+    // The elements after the vertices are not needed, but a file that ends inside them was cut off
+    // (a download or copy that stopped): it is refused as truncated like any other, rather than read
+    // as if it were whole. Skipping them costs a pass over the rest of the file, no parsing.
+    for (std::size_t e = vertex_index + 1; e < header.elements.size(); ++e)
+        skip_element(in, header.elements[e], binary, swap);
     return cloud;
 }
 
@@ -1225,6 +1262,10 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     const bool swap = !host_is_little_endian();
     const unsigned major = static_cast<unsigned char>(header[24]);
     const unsigned minor = static_cast<unsigned char>(header[25]);
+    // What is needed of the header later is copied now: a later take() may move or reallocate the
+    // buffer `header` points into.
+    const std::uint32_t record_count = load<std::uint32_t>(header + 100, swap);
+    const bool wkt_flag = (load<std::uint16_t>(header + 6, swap) & 0x10) != 0;
     const std::uint16_t header_size = load<std::uint16_t>(header + 94, swap);
     const std::uint32_t point_offset = load<std::uint32_t>(header + 96, swap);
     const unsigned format_byte = static_cast<unsigned char>(header[104]);
@@ -1281,8 +1322,6 @@ PointCloud read_las(Input& in, const ReadOptions& options)
         const char* records = in.take(static_cast<std::size_t>(record_bytes));
         if (!records)
             throw IoError(in.name() + ": truncated: the file ends before its point data");
-        const std::uint32_t record_count = load<std::uint32_t>(header + 100, swap);
-        const bool wkt_flag = (load<std::uint16_t>(header + 6, swap) & 0x10) != 0;
         crs = las_crs(records, static_cast<std::size_t>(record_bytes), record_count, swap, wkt_flag);
     }
     if (!in.skip(point_offset - in.offset()))
@@ -1333,6 +1372,9 @@ PointCloud read_las(Input& in, const ReadOptions& options)
 // PCD (the Point Cloud Library's format; robotics and depth cameras): an ASCII header, then the points
 // as text, as packed binary records, or LZF-compressed field by field. Organized clouds (depth images)
 // mark pixels without a measurement with NaN coordinates: those points are left out, as PTX's "0 0 0".
+
+// Largest binary PCD point record read (see read_pcd_header).
+constexpr std::uint64_t kMaxPcdRecordBytes = std::uint64_t{1} << 16;
 
 struct PcdField
 {
@@ -1485,6 +1527,13 @@ PcdHeader read_pcd_header(Input& in)
     for (int axis : {h.x, h.y, h.z})
         if (h.fields[static_cast<std::size_t>(axis)].size == 8 && h.fields[static_cast<std::size_t>(axis)].type != 'F')
             throw InvalidInput(in.name() + ": 64-bit integer coordinates are not read");
+    // A binary point is read as one contiguous record: a header whose SIZE x COUNT make a record
+    // larger than any real descriptor (PCL's largest, VFH, is 1.2 KB) would otherwise size the read
+    // buffer by a number it made up, unchecked when the file size is unknown (gzip).
+    if (record > kMaxPcdRecordBytes)
+        throw InvalidInput(in.name() + ": malformed PCD header: a point of " + std::to_string(record) +
+                           " bytes (the fields' SIZE x COUNT), more than the " + std::to_string(kMaxPcdRecordBytes) +
+                           " this reader takes");
     h.record_size = static_cast<std::size_t>(record);
     h.packed_size = static_cast<std::size_t>(packed);
     h.values = values;
@@ -1580,8 +1629,14 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
                 values.push_back(token);
             if (values.empty())
                 continue;
-            if (values.size() < h.values)
-                fail_line(in, "expected " + std::to_string(h.values) + " values, found " + std::to_string(values.size()));
+            std::size_t found = values.size();
+            if (found == h.values)
+                while (tokens.next(token))
+                    ++found;
+            // Fewer or more values than FIELDS x COUNT declare (a 3-value normal declared with COUNT
+            // 1, say): the columns would be read shifted.
+            if (found != h.values)
+                fail_line(in, "expected " + std::to_string(h.values) + " values, found " + std::to_string(found));
             const auto coordinate = [&](const PcdField& f) {
                 const std::string_view t = values[f.column];
                 double v = 0;

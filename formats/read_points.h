@@ -4,7 +4,8 @@
 //! OBJ (v lines), OFF, Stanford scan lists (.conf), each optionally gzip-compressed (.gz). Streaming: files are never slurped whole into strings.
 //! \details What is read from each format:
 //!  - PLY: the x/y/z properties of the `vertex` element (any scalar type), plus red/green/blue[/alpha]
-//!    as colours when `keep_colors`. Other properties and elements are skipped. ASCII PLY is read one
+//!    as colours when `keep_colors`. Other properties and elements are skipped, but a file that ends
+//!    inside one (after the vertices too) is refused as truncated. ASCII PLY is read one
 //!    element instance per line (as every writer produces it); a vertex line holding more values than
 //!    its properties (list lengths included) take is refused.
 //!  - LAS 1.0-1.4, point formats 0-10: scaled coordinates, and colours (formats 2, 3, 5, 7, 8, 10;
@@ -15,7 +16,8 @@
 //!    translation in the last row; refused unless its 3x3 part is orthonormal); "0 0 0" points (no
 //!    return) are left out; x y z intensity r g b colours are kept when every point has them.
 //!  - PCD (the Point Cloud Library's format), DATA ascii, binary or binary_compressed (LZF, stored field
-//!    by field), any field layout with x, y, z (F, I or U of 1-8 bytes; padding fields "_"); PCL's
+//!    by field), any field layout with x, y, z (F, I or U of 1-8 bytes; padding fields "_"; an ASCII
+//!    line holds exactly the values FIELDS x COUNT declare, a point at most 64 KB); PCL's
 //!    packed 32-bit colour ("rgb" or "rgba", as float bits or, in ASCII, an unsigned integer). Points of
 //!    an organized cloud without a measurement (a NaN coordinate) are left out; VIEWPOINT is metadata
 //!    (PCL does not apply it either). A binary_compressed block is one LZF stream, so it is held whole.
@@ -31,7 +33,9 @@
 //!    a semicolon, semicolons separate and commas are decimal points ("1,5;2,5;3,5", as a European
 //!    spreadsheet writes CSV).
 //!  - OBJ: `v x y z [w]` lines; `v x y z r g b` colours (0..1) are kept when every v line has them.
-//!  - OFF (also COFF, NOFF, STOFF...): the vertices; faces, normals and colours are ignored.
+//!  - OFF (also COFF, NOFF, STOFF...): the vertices; faces, normals and colours are ignored. A vertex
+//!    line holds x y z and exactly the values its keyword announces (3 normals for N, 2 texture
+//!    coordinates for ST, up to 4 colour values for C): a face line read as a vertex is refused.
 //!  - CONF (a Stanford scan list, as scanalyze writes it for the raw range scans of the Stanford 3D
 //!    Scanning Repository): every `bmesh FILE tx ty tz qx qy qz qw` (or `mesh ...`) line is a point file,
 //!    relative to the list's folder, read as above and moved into the common frame (see ScanPlacement);

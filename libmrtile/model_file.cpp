@@ -212,6 +212,15 @@ void check_structure(const Hierarchy& h, const Reader& r)
             r.fail("node " + std::to_string(k) + " has an invalid point range");
         if ((node.left < 0) != (node.right < 0))
             r.fail("node " + std::to_string(k) + " has one child");
+        // Every node but the root is the child of an earlier node (parents come first in the file),
+        // so that the tree has no orphans: a node no parent names could carry any parent index, which
+        // the derived statistics would then follow out of the array.
+        if (k > 0) {
+            const std::int32_t p = node.parent;
+            const Node* parent = p >= 0 && static_cast<std::size_t>(p) < k ? &h.nodes[static_cast<std::size_t>(p)] : nullptr;
+            if (!parent || (parent->left != static_cast<std::int32_t>(k) && parent->right != static_cast<std::int32_t>(k)))
+                r.fail("node " + std::to_string(k) + " is not a child of its parent");
+        }
         if (node.is_leaf())
             continue;
         const auto self = static_cast<std::int64_t>(k);

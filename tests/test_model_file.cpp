@@ -415,6 +415,28 @@ TEST(ModelFile, forged_values_are_refused)
     refused(gap, 1e300, "errors do not fit");
 }
 
+// A node that no parent names (an orphan, the tree's structure otherwise intact) is refused, whatever
+// its parent field says: a far index made the derived statistics read outside the node array (found by
+// fuzzing), and a valid one made a second tree that `mrtile info` counted as part of the model.
+TEST(ModelFile, orphan_nodes_are_refused)
+{
+    for (const std::int32_t parent : {std::numeric_limits<std::int32_t>::max(), -1, 0, 2}) {
+        SCOPED_TRACE(parent);
+        Hierarchy h = sample();
+        Node orphan = h.nodes.back(); // a leaf, statistics and range valid
+        orphan.parent = parent;
+        h.nodes.push_back(orphan);
+        const std::string bytes = serialize_model(h);
+        try {
+            deserialize_model(bytes, "orphan.mrt");
+            ADD_FAILURE() << "accepted";
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("orphan.mrt"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("is not a child of its parent"), std::string::npos) << e.what();
+        }
+    }
+}
+
 // A version 1 file (no coverage gaps) still loads, with the gaps computed as a build would.
 TEST(ModelFile, version_1_files_load_with_their_gaps_computed)
 {

@@ -319,6 +319,13 @@ TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
         // A European spreadsheet: semicolons separate, commas are decimal points.
         {"eu.csv", "X;Y;Z\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
         {"eu.xyz", "0,5; -1,25; 2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        // ... after a point count line, or a comment: the first line with data decides (both were
+        // read with commas separating: (0, 5, -1) and so on; found by fuzzing).
+        {"eu_count.pts", "4\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        {"eu_comment.csv", "# exported from a spreadsheet\n\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        // A semicolon in a comment says nothing about the data (it made commas decimal points).
+        {"comment.csv", "# exported; metres\n0.5,-1.25,2\n3,4.75,-5.5\n-0.125,0,8\n1,1,1\n"},
+        {"comment_after.xyz", "0.5 -1.25 2 # first; of four\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n"},
         // A UTF-8 byte order mark (Windows tools write one).
         {"bom.xyz", "\xEF\xBB\xBF" "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n"},
         {"bom.csv", "\xEF\xBB\xBF" "x,y,z\n0.5,-1.25,2\n3,4.75,-5.5\n-0.125,0,8\n1,1,1\n"},
@@ -862,6 +869,13 @@ TEST(ReadPcd, malformed_files_fail_cleanly)
         {"encoding.pcd", head + "DATA zip\n", "DATA must be", false},
         {"short.pcd", head + "DATA ascii\n1 2 3\n", "truncated: 1 of 2 points", true},
         {"values.pcd", head + "DATA ascii\n1 2\n", "line 7: expected 3 values", false},
+        // More values than declared: a 3-value normal declared with COUNT 1 shifted the columns.
+        {"extra.pcd", "FIELDS x y z normal\nSIZE 4 4 4 4\nTYPE F F F F\nWIDTH 1\nDATA ascii\n1 2 3 0 0 1\n",
+         "line 6: expected 4 values, found 6", false},
+        // A record larger than any point (SIZE x COUNT): a .pcd.gz of 2 KB had the reader zero-fill 4 GB
+        // (found by fuzzing); without a file size to check it against, it is refused by itself.
+        {"record.pcd", "FIELDS x y z big\nSIZE 4 4 4 8\nTYPE F F F F\nCOUNT 1 1 1 1048576\nWIDTH 1\nDATA binary\n" +
+                           std::string(64, '\0'), "a point of 8388620 bytes", false},
         {"word_value.pcd", head + "DATA ascii\n1 2 x\n", "'x' is not a number", false},
         {"inf.pcd", head + "DATA ascii\n1 2 inf\n3 4 5\n", "point 0 has an infinite coordinate", false},
         {"huge.pcd", head + "DATA ascii\n1 2 3\n1e999 4 5\n", "point 1 has an infinite coordinate", false},
@@ -874,6 +888,17 @@ TEST(ReadPcd, malformed_files_fail_cleanly)
         {"lzf_nosizes.pcd", compressed.substr(0, compressed_data + 3), "no sizes", true},
     };
     expect_read_errors(dir, cases);
+    std::string fields = "FIELDS x y z";
+    std::string sizes = "SIZE 4 4 4", types = "TYPE F F F", counts = "COUNT 1 1 1";
+    for (int k = 0; k < 500; ++k) {
+        fields += " f" + std::to_string(k);
+        sizes += " 8";
+        types += " F";
+        counts += " 1048576";
+    }
+    const fs::path bomb = write_gz(dir / "bomb.pcd.gz", fields + "\n" + sizes + "\n" + types + "\n" + counts +
+                                                          "\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n" + std::string(4000, '\0'));
+    expect_error<InvalidInput>([&] { read_points(bomb); }, {bomb.string(), "malformed PCD header: a point of"});
 }
 
 // Two scans: the first in the registered frame already (identity), with a "no return" point; the second
@@ -1161,6 +1186,14 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
     long_record[21] = static_cast<char>(0xff);
     EXPECT_EQ(crs_of(long_record, 1), "");
     EXPECT_EQ(crs_of(keys, 1000), "EPSG:32633");
+    // Records larger than the read buffer (256 KB; waveform descriptors, big WKT or padding records):
+    // the reader grew its buffer under a pointer to the header and read the record count and the WKT
+    // flag from freed memory (found by fuzzing under ASan; the CRS came out empty).
+    std::string padding;
+    while (padding.size() < 300000)
+        padding += las_record("padding", 1, std::string(60000, 'p'));
+    EXPECT_EQ(crs_of(keys + padding, 1 + static_cast<std::uint32_t>(padding.size() / (54 + 60000))), "EPSG:32633");
+    EXPECT_EQ(crs_of(padding + keys + wkt_record, 2 + static_cast<std::uint32_t>(padding.size() / (54 + 60000)), 0x10), wkt);
 }
 
 TEST(ReadLas, malformed_files_fail_cleanly)
@@ -1295,8 +1328,26 @@ TEST(ReadErrors, truncated_and_oversized_binary_ply)
     // Cut inside the vertex records: the size check catches it before reading.
     const fs::path cut = write_file(dir / "cut.ply", full.substr(0, vertex_end - 5));
     expect_error<IoError>([&] { read_points(cut); }, {cut.string(), "truncated"});
-    // Elements after the vertices are not needed: a file cut there still reads.
-    expect_points(read_points(write_file(dir / "tail.ply", full.substr(0, vertex_end))), kPoints);
+    // Elements after the vertices are not needed, but a file cut off in them is truncated all the
+    // same (it was read as whole): refused, naming the element, found by the size check or by running
+    // into the end; the whole file reads.
+    const fs::path tail = write_file(dir / "tail.ply", full.substr(0, vertex_end));
+    expect_error<IoError>([&] { read_points(tail); }, {tail.string(), "truncated", "0 of 2 face elements"});
+    const fs::path in_faces = write_file(dir / "in_faces.ply", full.substr(0, full.size() - 3));
+    expect_error<IoError>([&] { read_points(in_faces); }, {in_faces.string(), "truncated", "1 of 2 face elements"});
+    const fs::path tail_gz = write_gz(dir / "tail.ply.gz", full.substr(0, vertex_end + 5));
+    expect_error<IoError>([&] { read_points(tail_gz); }, {tail_gz.string(), "truncated", "of 2 face elements"});
+    const std::string ascii = make_ply(Encoding::ascii, "float", kPoints, kColors);
+    const fs::path ascii_tail = write_file(dir / "ascii_tail.ply", ascii.substr(0, ascii.rfind("3 1 2 3 0")));
+    expect_error<IoError>([&] { read_points(ascii_tail); }, {ascii_tail.string(), "truncated", "1 of 2 face elements"});
+    const fs::path many_faces = write_file(dir / "many_faces.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"
+                                                                   "property float x\nproperty float y\nproperty float z\n"
+                                                                   "element face 1000000000000\nproperty uchar flags\nend_header\n" +
+                                                                       std::string(100, '\0'));
+    expect_error<IoError>([&] { read_points(many_faces); },
+                          {many_faces.string(), "declares 1000000000000 'face' elements after the vertices"});
+    expect_points(read_points(write_file(dir / "whole.ply", full)), kPoints);
+    expect_points(read_points(write_file(dir / "whole_ascii.ply", ascii)), kPoints);
     // The same cut compressed: no size to check, the reader runs into the end.
     const fs::path cut_gz = write_gz(dir / "cut.ply.gz", full.substr(0, vertex_end - 5));
     expect_error<IoError>([&] { read_points(cut_gz); }, {cut_gz.string(), "truncated", "3 of 4 vertex"});
@@ -1390,6 +1441,10 @@ TEST(ReadErrors, bad_values_name_the_line)
         {"off2.off", "4OFF\n2 0 0\n1 2 3 4\n", "line 1"},
         {"off3.off", "PLY\n", "line 1"},
         {"off4.off", "OFF\nmany 0 0\n", "line 2"},
+        // A vertex count beyond the vertex lines: the face line was read as a point (3, 0, 1).
+        {"off5.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n3 0 1 2\n", "line 5: vertex 2 of 3 has 4 values, a OFF vertex has 3"},
+        {"off6.off", "NOFF\n2 0 0\n0 0 0 0 0 1\n1 0 0 0 0\n", "line 4: vertex 1 of 2 has 5 values, a NOFF vertex has 6"},
+        {"off7.off", "COFF\n2 0 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1 9\n", "line 4: vertex 1 of 2 has 8 values, a COFF vertex has 3 to 7"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
