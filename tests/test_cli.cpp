@@ -228,6 +228,45 @@ TEST(Cli, tolerance_zero_no_quality_and_unreachable_triangles)
     EXPECT_NE(few.out.find("no cut meshes to 2 triangles or fewer"), std::string::npos) << few.out;
 }
 
+// --error is the cut's tolerance in model units: the same cut as --tolerance error / scale (info's
+// scale), on mesh and reconstruct; it excludes the other global cuts.
+TEST(Cli, error_in_model_units)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 3000);
+    const std::string model = (dir / "a.mrt").string();
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + model, dir).code, 0);
+    const Result info = mrtile("info --json " + model, dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    const double scale = nlohmann::json::parse(info.out)["scale"].get<double>();
+    ASSERT_GT(scale, 0.0);
+    const auto stats = [&](const std::string& command) {
+        const Result r = mrtile(command + " --stats-json " + (dir / "s.json").string(), dir);
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(slurp(dir / "s.json"));
+    };
+    for (const double error : {0.02, 0.005}) {
+        SCOPED_TRACE(error);
+        char relative[64];
+        std::snprintf(relative, sizeof relative, "%.17g", error / scale);
+        const nlohmann::json by_error = stats("mesh " + model + " -o " + (dir / "e.ply").string() + " --error " + std::to_string(error));
+        const nlohmann::json by_tolerance = stats("mesh " + model + " -o " + (dir / "t.ply").string() + " --tolerance " + relative);
+        EXPECT_EQ(by_error["tiles"], by_tolerance["tiles"]);
+        EXPECT_EQ(by_error["faces"], by_tolerance["faces"]);
+        EXPECT_EQ(slurp(dir / "e.ply"), slurp(dir / "t.ply"));
+        const nlohmann::json rebuilt = stats("reconstruct " + xyz.string() + " -o " + (dir / "r.ply").string() + " --error " + std::to_string(error));
+        EXPECT_EQ(rebuilt["faces"], by_error["faces"]);
+    }
+    EXPECT_GT(stats("mesh " + model + " -o " + (dir / "e.ply").string() + " --error 0.005")["tiles"].get<int>(),
+              stats("mesh " + model + " -o " + (dir / "e.ply").string() + " --error 0.02")["tiles"].get<int>());
+    for (const char* clash : {" --tolerance 0.01", " --tiles 10", " --tau 0.001", " --triangles 100"}) {
+        const Result r = mrtile("mesh " + model + " -o " + (dir / "x.ply").string() + " --error 0.01" + clash, dir);
+        EXPECT_EQ(r.code, 2) << clash;
+    }
+    EXPECT_EQ(mrtile("mesh " + model + " -o " + (dir / "x.ply").string() + " --error 0", dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "x.ply"));
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

@@ -202,6 +202,7 @@ struct BuildArgs
 struct CutArgs
 {
     double tolerance = -1.0; // not given: kDefaultTolerance; 0: the finest cut
+    double error = 0.0;      // > 0: the tolerance in model units (RMS plane distance), given instead
     double tau = 0.0;
     std::size_t tiles = 0;
     std::size_t triangles = 0;
@@ -216,22 +217,26 @@ struct CutArgs
         auto* tol = cmd->add_option("--tolerance", tolerance,
                                     "cut: RMS plane distance / largest bbox side (default 0.002; 0: the finest cut)")
                         ->check(kNonNegative);
+        auto* err = cmd->add_option("--error", error,
+                                    "cut: RMS plane distance in model units (metres for lidar): --tolerance E / the model's scale")
+                        ->check(kPositive);
         auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
                       ->check(kPositive);
         auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(integer_check(1, 1ull << 40));
         auto* tri = cmd->add_option("--triangles", triangles,
                                     "cut: the finest best-N cut whose mesh has at most this many triangles")
                         ->check(integer_check(1, 1ull << 40));
-        tri->excludes(tol)->excludes(t)->excludes(n);
+        tri->excludes(tol)->excludes(t)->excludes(n)->excludes(err);
+        err->excludes(tol)->excludes(t)->excludes(n);
         auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)")
                       ->check(kNonEmpty);
         auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]")
                       ->check(kNonEmpty);
         tol->excludes(t)->excludes(n);
         t->excludes(n);
-        c->excludes(f)->excludes(n)->excludes(t)->excludes(tri);
+        c->excludes(f)->excludes(n)->excludes(t)->excludes(tri)->excludes(err);
         f->excludes(tri);
-        options = {tol, t, n, tri, f, c};
+        options = {tol, err, t, n, tri, f, c};
     }
 
     bool any_given() const
@@ -303,7 +308,13 @@ struct CutArgs
         parsed_focus();
     }
 
-    double base_tolerance() const { return tolerance >= 0 ? tolerance : kDefaultTolerance; }
+    // The cut's tolerance relative to the model's scale (Hierarchy::scale, what cut_by_tolerance takes).
+    double base_tolerance(const Hierarchy& h) const
+    {
+        if (error > 0)
+            return h.scale > 0 ? error / h.scale : 0.0;
+        return tolerance >= 0 ? tolerance : kDefaultTolerance;
+    }
 
     Cut cut(const Hierarchy& h) const
     {
@@ -318,11 +329,11 @@ struct CutArgs
         if (tau > 0)
             return cut_by_tau(h, tau);
         if (focus.empty())
-            return cut_by_tolerance(h, base_tolerance());
+            return cut_by_tolerance(h, base_tolerance(h));
         std::vector<FocusRegion> regions = parsed_focus();
         for (FocusRegion& r : regions)
             r.centre = r.centre - origin;
-        return cut_by_regions(h, base_tolerance(), regions);
+        return cut_by_regions(h, base_tolerance(h), regions);
     }
 };
 
@@ -552,7 +563,7 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     const MeshResult r = mesh_cut(h, cut, mesh_args.options());
     // Tiles of a plain tolerance cut that only their noise floor kept from refining.
     const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
-    const double limit = cut_args.base_tolerance() * h.scale;
+    const double limit = cut_args.base_tolerance(h) * h.scale;
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
@@ -974,7 +985,7 @@ struct ProduceArgs
         output.validate(out);
         exp.validate(out, lods_command);
         if (exp.lod_set() && cut.any_given())
-            throw UsageError("cut options (--tolerance, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
+            throw UsageError("cut options (--tolerance, --error, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
                              "a LOD set's levels are chosen by --levels or --lod-tolerances");
         if ((exp.lod_set() || lods_command) && !mesh.stats_json.empty())
             throw UsageError(std::string("--stats-json: describes one mesh; ") +
