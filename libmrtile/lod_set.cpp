@@ -30,6 +30,9 @@ struct LevelIndex
     std::vector<std::size_t> faces_below;
     // True for nodes of the cut and their ancestors (regions may not go below the cut).
     std::vector<char> at_or_above_cut;
+    // The largest node_error of the cut nodes in each node's subtree (0 for nodes below the cut): a
+    // tile's own geometric error.
+    std::vector<double> error_below;
     // Faces with an owner, ordered by the owner's first point (then by face): the faces of the cut
     // nodes inside a region [begin, end) are among one contiguous run of it, so extracting a region
     // does not scan the whole level.
@@ -100,12 +103,16 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level)
     auto first_point = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
     std::stable_sort(index.faces_by_owner.begin(), index.faces_by_owner.end(),
                      [&](std::uint32_t a, std::uint32_t b) { return first_point(a) < first_point(b); });
-    for (std::int32_t id : level.cut)
+    index.error_below.assign(h.nodes.size(), 0.0);
+    for (std::int32_t id : level.cut) {
         index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
+        index.error_below[static_cast<std::size_t>(id)] = node_error(h.nodes[static_cast<std::size_t>(id)]);
+    }
     // Children come after parents: accumulate upwards.
     for (std::size_t k = h.nodes.size(); k-- > 1;) {
         const auto parent = static_cast<std::size_t>(h.nodes[k].parent);
         index.faces_below[parent] += index.faces_below[k];
+        index.error_below[parent] = std::max(index.error_below[parent], index.error_below[k]);
         if (index.at_or_above_cut[k])
             index.at_or_above_cut[parent] = 1;
     }
@@ -402,7 +409,13 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         LodTile tile;
         tile.region = p.region;
         tile.level = p.level;
-        tile.geometric_error = set.levels[p.level].geometric_error;
+        // The tile's own error: the largest of its cut nodes' (a smooth part of a level refines later
+        // than a rough one), never above its parent's or its level's; the finest level's are 0.
+        tile.geometric_error = p.level == last ? 0.0
+                                               : std::min(set.levels[p.level].geometric_error,
+                                                          index[p.level].error_below[static_cast<std::size_t>(p.region)]);
+        if (p.parent >= 0)
+            tile.geometric_error = std::min(tile.geometric_error, set.tiles[static_cast<std::size_t>(p.parent)].geometric_error);
         tile.box = region.box;
         const std::size_t id = set.tiles.size();
         if (p.parent >= 0)

@@ -15,7 +15,9 @@
 //! the surface normal, as deep as twice the level's largest plane distance) that hides those cracks.
 //! Geometric error of a level = the largest node_error (cut.h: distance of a point to its tile plane,
 //! or the tile's coverage gap) over the level's cut (model units), forced non-increasing with the
-//! level; the finest level's tiles get 0.
+//! level. A tile's = the largest node_error of the level's cut nodes in its region, never above its
+//! parent tile's or its level's (a smooth region refines later than a rough one of the same level);
+//! the finest level's tiles get 0.
 
 #include "libmrtile/cut.h"
 #include "libmrtile/reconstruct.h"

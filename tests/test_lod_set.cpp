@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sys/wait.h>
 
@@ -190,6 +191,46 @@ TEST(LodSet, thread_count_does_not_change_the_result)
                 ASSERT_EQ(fa->idx(), fb->idx());
         }
     }
+}
+
+// A tile's geometric error is its own: the largest node_error of its level's cut nodes in its region
+// (brute force here), never above its parent's or its level's; the finest level's tiles get 0. On a
+// surface whose roughness varies (a sphere with one rippled cap) tiles of the smooth part are below
+// their level's worst, so a client refines them later; with the level's error on every tile (as
+// before) they refined as early as the roughest.
+TEST(LodSet, tiles_carry_their_own_geometric_error)
+{
+    PointCloud bumpy = shapes::sphere(30000);
+    for (Vec3& p : bumpy.positions)
+        if (p.z > 0.6)
+            p = p * (1.0 + 0.02 * std::sin(40.0 * p.x) * std::sin(40.0 * p.y));
+    const Hierarchy h = build_hierarchy(bumpy);
+    LodSetOptions o;
+    o.max_tile_triangles = 1500;
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_GT(set.tiles.size(), 6u);
+    std::vector<double> parent_error(set.tiles.size(), std::numeric_limits<double>::infinity());
+    for (const LodTile& p : set.tiles)
+        for (std::size_t c : p.children)
+            parent_error[c] = p.geometric_error;
+    std::size_t smoother = 0;
+    for (std::size_t k = 0; k < set.tiles.size(); ++k) {
+        const LodTile& t = set.tiles[k];
+        const LodLevel& level = set.levels[t.level];
+        const Node& region = h.nodes[static_cast<std::size_t>(t.region)];
+        double own = 0.0;
+        for (std::int32_t id : level.cut) {
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            if (n.begin >= region.begin && n.end <= region.end)
+                own = std::max(own, node_error(n));
+        }
+        const bool finest = t.level + 1 == set.levels.size();
+        const double expected = finest ? 0.0 : std::min({own, level.geometric_error, parent_error[k]});
+        EXPECT_EQ(t.geometric_error, expected) << "tile " << k << " level " << t.level;
+        if (!finest && t.geometric_error < level.geometric_error)
+            ++smoother;
+    }
+    EXPECT_GT(smoother, 0u);
 }
 
 // The tile tree: budgets honoured, errors non-increasing, boxes nested, children's regions partition
