@@ -267,6 +267,35 @@ TEST(Cli, error_in_model_units)
     EXPECT_FALSE(fs::exists(dir / "x.ply"));
 }
 
+// The scans a list names are inputs too: writing over one (or over a listed scan that is missing,
+// which the next run would read as a scan) is a usage error, and the scans stay as they were. It
+// replaced bun000.ply by the mesh.
+TEST(Cli, outputs_may_not_overwrite_the_scans_of_a_list)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    for (const char* name : {"bun.conf", "bun000.ply", "bun045.ply"}) {
+        fs::copy_file(fs::path(MRTILE_SHARED_DATA) / name, dir / name);
+        fs::permissions(dir / name, fs::perms::owner_write, fs::perm_options::add);
+    }
+    const std::string scan = slurp(dir / "bun000.ply"), other = slurp(dir / "bun045.ply");
+    const std::string conf = (dir / "bun.conf").string();
+    for (const std::string& outputs : {" -o " + (dir / "bun000.ply").string(),
+                                       " -o " + (dir / "m.ply").string() + " --stats-json " + (dir / "bun045.ply").string(),
+                                       " -o " + (dir / "bun090.ply").string(),
+                                       " -o " + (dir / "sub" / ".." / "bun000.ply").string(),
+                                       " -o " + (dir / "m.ply").string() + " --model " + (dir / "bun045.ply").string()}) {
+        const Result r = mrtile("reconstruct " + conf + " --skip-missing-scans" + outputs, dir);
+        EXPECT_EQ(r.code, 2) << outputs << "\n" << r.err;
+        EXPECT_NE(r.err.find("a scan its list names"), std::string::npos) << r.err;
+    }
+    EXPECT_EQ(slurp(dir / "bun000.ply"), scan);
+    EXPECT_EQ(slurp(dir / "bun045.ply"), other);
+    EXPECT_FALSE(fs::exists(dir / "bun090.ply"));
+    EXPECT_FALSE(fs::exists(dir / "m.ply"));
+    EXPECT_EQ(mrtile("build " + conf + " --skip-missing-scans -o " + (dir / "bun000.ply").string(), dir).code, 2);
+    EXPECT_EQ(mrtile("reconstruct " + conf + " --skip-missing-scans -o " + (dir / "m.ply").string(), dir).code, 0);
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

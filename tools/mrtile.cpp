@@ -1231,21 +1231,47 @@ struct Output
     Kind kind = Kind::file;
 };
 
+// The same file, or (one of them not there yet) the same path once resolved: a scan a list names but
+// that is missing would be read as a scan the next time.
 bool same_file(const fs::path& a, const fs::path& b)
 {
     std::error_code ec;
-    return fs::equivalent(a, b, ec) && !ec;
+    if (fs::equivalent(a, b, ec) && !ec)
+        return true;
+    const fs::path ra = fs::weakly_canonical(a, ec);
+    if (ec)
+        return false;
+    const fs::path rb = fs::weakly_canonical(b, ec);
+    return !ec && ra == rb;
+}
+
+// The files a command reads: its inputs, and the scans that scan lists among them name.
+std::vector<fs::path> read_files(const std::vector<fs::path>& inputs)
+{
+    std::vector<fs::path> files = inputs;
+    for (const fs::path& in : inputs)
+        if (is_scan_list(in)) {
+            std::error_code ec;
+            if (!fs::is_regular_file(in, ec))
+                continue; // reported when it is read
+            for (const ScanPlacement& scan : read_scan_list(in))
+                files.push_back(scan.path);
+        }
+    return files;
 }
 
 void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output>& outputs)
 {
+    const std::vector<fs::path> read = read_files(inputs);
     for (std::size_t i = 0; i < outputs.size(); ++i) {
         const Output& o = outputs[i];
         if (o.path.empty())
             continue;
-        for (const fs::path& in : inputs)
+        for (const fs::path& in : read)
             if (same_file(in, o.path))
-                throw UsageError(o.path.string() + ": is also an input of this command; write to another file");
+                throw UsageError(o.path.string() + ": is also an input of this command" +
+                                 (std::find(inputs.begin(), inputs.end(), in) == inputs.end() ? " (a scan its list names)" : "") +
+                                 "; write to another file");
         if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
             throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
         if (o.kind == Output::Kind::mesh && !is_mesh_extension(lower_extension(o.path)))
