@@ -296,6 +296,44 @@ TEST(Cli, outputs_may_not_overwrite_the_scans_of_a_list)
     EXPECT_EQ(mrtile("reconstruct " + conf + " --skip-missing-scans -o " + (dir / "m.ply").string(), dir).code, 0);
 }
 
+// --enu places a model in local east-north-up metres at the given point: the data lands where its
+// ENU coordinates say, also when they lie away from 0 (the model's origin is their median, and the
+// files hold positions relative to it; the root transform dropped it, 122 m off here: found by QA).
+TEST(Cli, enu_places_the_input_coordinates)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    {
+        std::ofstream xyz(dir / "local.xyz");
+        for (int i = 0; i < 40; ++i)
+            for (int j = 0; j < 20; ++j) // a 20 x 10 m patch around (60, 35, 100)
+                xyz << 50.0 + 0.5 * i << " " << 30.0 + 0.5 * j << " " << 100.0 + 0.1 * std::sin(0.3 * (i + j)) << "\n";
+    }
+    ASSERT_EQ(mrtile("build " + (dir / "local.xyz").string() + " -o " + (dir / "l.mrt").string(), dir).code, 0);
+    const Result r = mrtile("export " + (dir / "l.mrt").string() + " -o " + (dir / "t").string() + " --format 3dtiles --enu 9,45,0", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto tileset = nlohmann::json::parse(slurp(dir / "t" / "tileset.json"));
+    const auto& m = tileset["root"]["transform"];
+    const auto& box = tileset["root"]["boundingVolume"]["box"];
+    std::array<double, 3> placed{};
+    for (int row = 0; row < 3; ++row)
+        placed[static_cast<std::size_t>(row)] = m[row].get<double>() * box[0].get<double>() + m[4 + row].get<double>() * box[1].get<double>() +
+                                                m[8 + row].get<double>() * box[2].get<double>() + m[12 + row].get<double>();
+    // ENU (59.75, 34.75, 100) at longitude 9, latitude 45, height 0 on WGS 84, computed here.
+    const double a = 6378137.0, f = 1.0 / 298.257223563, e2 = f * (2.0 - f);
+    const double lon = 9.0 * M_PI / 180.0, lat = 45.0 * M_PI / 180.0;
+    const double n = a / std::sqrt(1.0 - e2 * std::sin(lat) * std::sin(lat));
+    const std::array<double, 3> base{n * std::cos(lat) * std::cos(lon), n * std::cos(lat) * std::sin(lon), n * (1.0 - e2) * std::sin(lat)};
+    const std::array<double, 3> east{-std::sin(lon), std::cos(lon), 0.0};
+    const std::array<double, 3> north{-std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat)};
+    const std::array<double, 3> up{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+    double off = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        const double expected = base[k] + 59.75 * east[k] + 34.75 * north[k] + 100.0 * up[k];
+        off = std::max(off, std::abs(placed[k] - expected));
+    }
+    EXPECT_LT(off, 0.2); // the box centre within 20 cm of the data's centre
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

@@ -862,8 +862,17 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     // Placement is settled before the (long) meshing, so that a usage error comes at once.
     std::optional<ProjectedCrs> crs;
     if (!e.enu.empty()) {
+        // The files hold positions relative to the model's origin; the transform maps those (not the
+        // input's ENU coordinates) to ECEF: ENU to ECEF after the origin's translation. Without it
+        // a model whose points lie away from 0 (the origin is their median) landed that far off.
         const std::array<double, 3> v = e.enu_anchor();
-        t.root_transform = enu_to_ecef_transform(v[0], v[1], v[2]);
+        std::array<double, 16> m = enu_to_ecef_transform(v[0], v[1], v[2]);
+        const Vec3 o = from_output_frame(to_output_frame(h.cloud.origin, t.gltf.up_axis), UpAxis::Z); // tileset frame
+        for (int row = 0; row < 3; ++row)
+            m[static_cast<std::size_t>(12 + row)] += m[static_cast<std::size_t>(row)] * o.x +
+                                                     m[static_cast<std::size_t>(4 + row)] * o.y +
+                                                     m[static_cast<std::size_t>(8 + row)] * o.z;
+        t.root_transform = m;
     } else {
         crs = placement_crs(h);
     }
