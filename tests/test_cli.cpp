@@ -195,11 +195,24 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {glb + " --format ply", "does not match"},
         {glb + " --quantize 12", "add --draco"},
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "use export"},
+        // Options the output would ignore (session 15 QA: all were accepted).
+        {a + " --draco", "a .ply file has no Draco"},
+        {a + " --up y", "--up y"},
+        {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.obj").string() + " --draco", "has no Draco"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --draco", "a .ply file has no Draco"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format stl --up y", "--up y"},
+        {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string() + " --format 3dtiles", "writes a directory"},
+        {"build " + in + " -o " + (dir / "s.mrt").string() + " --skip-missing-scans", "no input is one"},
+        {"reconstruct " + in + " -o " + mesh + " --crs EPSG:32632", "no effect here"},
+        {"reconstruct " + in + " -o " + (dir / "x.glb").string() + " --format lod-glb --crs EPSG:32632", "no effect here"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);
-    for (const char* name : {"t", "x.glb", "x.txt", "l", "s.json"})
+    for (const char* name : {"t", "x.glb", "x.txt", "l", "s.json", "x.obj", "s.mrt"})
         EXPECT_FALSE(fs::exists(dir / name)) << name;
+    // What they do apply to still works.
+    EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "d.glb").string() + " --draco --up y", dir).code, 0);
+    EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "d.drc").string() + " --quantize 10", dir).code, 0);
 }
 
 // --tolerance 0 is the finest cut (not the default); --no-quality keeps the topology keys and writes

@@ -394,10 +394,20 @@ struct OutputArgs
     CLI::Option* quantize_option = nullptr;
 
     // --quantize acts on Draco only: without --draco it would be ignored, except in a .drc file.
-    void validate(const fs::path& out) const
+    // --draco and --up y act on glTF/GLB and 3D Tiles content only (and --draco is what a .drc is):
+    // on another format they would be ignored. `written` is what is written: the output's extension,
+    // "3dtiles", or the mesh format of lods' files.
+    void validate(const fs::path& out, const std::string& written = "") const
     {
-        if (given(quantize_option) && !draco && lower_extension(out) != ".drc")
+        const std::string kind = written.empty() ? lower_extension(out) : written;
+        if (given(quantize_option) && !draco && kind != ".drc")
             throw UsageError("--quantize: sets Draco's quantization; add --draco (or write a .drc file)");
+        const bool gltf = kind == ".glb" || kind == ".gltf" || kind == "3dtiles";
+        if (draco && !gltf && kind != ".drc")
+            throw UsageError("--draco: compresses glTF/GLB and 3D Tiles content; a " + kind + " file has no Draco");
+        if (up == "y" && !gltf)
+            throw UsageError("--up y: turns the input into glTF's y-up frame; a " + kind +
+                             " file keeps the input's axes, so it would have no effect");
     }
 
     void add(CLI::App* cmd)
@@ -440,6 +450,12 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
         DracoOptions d;
         d.position_bits = args.quantize;
         write_drc(mesh, origin, out, d);
+        // Draco has no transform, and float positions far from 0 lose their digits: the file keeps
+        // them relative to the origin, which a reader must add back. Say so where it matters.
+        if (origin != Vec3{0, 0, 0})
+            std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g), stored as its "
+                        "\"mrtile_origin\" metadata entry (Draco has no transform)\n",
+                        out.string().c_str(), origin.x, origin.y, origin.z);
     } else if (is_mesh_extension(ext)) { // OpenMesh's writers: .ply .obj .off .stl .om
         write_mesh(mesh, origin, out);
     } else {
@@ -630,6 +646,9 @@ struct ExportArgs
             throw UsageError(out.string() + ": --format lod-glb writes a .glb file");
         } else if (!format.empty() && !lod_set() && ext != "." + format) {
             throw UsageError(out.string() + ": --format " + format + " does not match the file's extension");
+        } else if (format == "3dtiles" && is_mesh_extension(ext)) {
+            throw UsageError(out.string() + ": --format 3dtiles writes a directory; this name is a " + ext +
+                             " file's (drop the extension, or --format)");
         }
         if (!lods_command && !lod_set())
             for (const CLI::Option* o : lod_options)
@@ -991,7 +1010,11 @@ struct ProduceArgs
     void validate(const fs::path& out, bool lods_command) const
     {
         cut.validate();
-        output.validate(out);
+        const std::string written = exp.format == "3dtiles" ? std::string("3dtiles")
+                                    : exp.format == "lod-glb" ? std::string(".glb")
+                                    : lods_command ? "." + (exp.format.empty() || exp.format == "lods" ? std::string("ply") : exp.format)
+                                                   : std::string();
+        output.validate(out, written);
         exp.validate(out, lods_command);
         if (exp.lod_set() && cut.any_given())
             throw UsageError("cut options (--tolerance, --error, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
@@ -1434,6 +1457,18 @@ int run(int argc, char** argv)
             throw UsageError("--crs: places a 3D Tiles set on the globe; it has no effect on other formats");
         if (!exp_crs.empty() && !exp_args.exp.enu.empty())
             throw UsageError("--crs and --enu: both place the tileset; give one");
+    }
+    // Build options that these inputs or outputs would ignore.
+    const auto check_build = [](const BuildArgs& b, const std::vector<fs::path>& inputs) {
+        if (b.skip_missing_scans && std::none_of(inputs.begin(), inputs.end(), [](const fs::path& p) { return is_scan_list(p); }))
+            throw UsageError("--skip-missing-scans: applies to scan lists (.conf); no input is one");
+    };
+    if (*build)
+        check_build(build_args, build_in);
+    if (*rec) {
+        check_build(rec_build, rec_in);
+        if (!rec_build.crs.empty() && rec_model.empty() && rec_args.exp.format != "3dtiles")
+            throw UsageError("--crs: places a 3D Tiles set on the globe or is stored with --model; it has no effect here");
     }
     if (*build)
         check_outputs(build_in, {{build_out, Output::Kind::model}});
