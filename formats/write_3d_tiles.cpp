@@ -13,15 +13,11 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <exception>
-#include <fcntl.h>
 #include <string>
 #include <system_error>
-#include <unistd.h>
 
 namespace mrt {
 
@@ -156,40 +152,6 @@ void check_replaceable(const fs::path& dir)
                       "to replace the directory (move it away or write elsewhere)");
 }
 
-void remove_quietly(const fs::path& path)
-{
-    std::error_code ec;
-    fs::remove_all(path, ec);
-}
-
-// Puts the finished `built` directory at `dir`, replacing an existing one only now.
-void swap_into_place(const fs::path& built, const fs::path& dir)
-{
-    std::error_code ec;
-    if (!fs::exists(dir, ec)) {
-        fs::rename(built, dir, ec);
-        if (ec)
-            throw IoError(dir.string() + ": cannot move the tileset into place (" + ec.message() + ")");
-        return;
-    }
-    // Atomic exchange where the file system supports it; otherwise two renames with a roll-back.
-    if (::renameat2(AT_FDCWD, built.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) == 0) {
-        remove_quietly(built); // now holds the previous tileset
-        return;
-    }
-    fs::path old = dir;
-    old += ".old." + std::to_string(static_cast<long>(::getpid()));
-    fs::rename(dir, old, ec);
-    if (ec)
-        throw IoError(dir.string() + ": cannot replace the existing tileset (" + ec.message() + ")");
-    fs::rename(built, dir, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::rename(old, dir, ignored);
-        throw IoError(dir.string() + ": cannot move the tileset into place (" + ec.message() + ")");
-    }
-    remove_quietly(old);
-}
 
 } // namespace
 
@@ -260,7 +222,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
     tileset["geometricError"] = top_error;
     tileset["root"] = std::move(ordered_root);
     write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n");
-    swap_into_place(built, dir);
+    replace_directory(built, dir, "tileset");
 }
 
 void check_tileset_directory(const fs::path& dir)

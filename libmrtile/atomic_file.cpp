@@ -9,11 +9,13 @@
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
+#include <string>
 #include <system_error>
 #include <unistd.h>
 
@@ -208,6 +210,35 @@ void ensure_directory(const std::filesystem::path& dir)
     if (ec || !std::filesystem::is_directory(dir))
         throw IoError(dir.string() + ": cannot create directory (" +
                       (ec ? ec.message() : std::string("exists and is not a directory")) + ")");
+}
+
+void replace_directory(const std::filesystem::path& built, const std::filesystem::path& dir, const std::string& what)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::exists(dir, ec)) {
+        fs::rename(built, dir, ec);
+        if (ec)
+            throw IoError(dir.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
+        return;
+    }
+    // Atomic exchange where the file system supports it; otherwise two renames with a roll-back.
+    if (::renameat2(AT_FDCWD, built.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) == 0) {
+        fs::remove_all(built, ec); // now holds the previous one
+        return;
+    }
+    fs::path old = dir;
+    old += ".old." + std::to_string(static_cast<long>(::getpid()));
+    fs::rename(dir, old, ec);
+    if (ec)
+        throw IoError(dir.string() + ": cannot replace the existing " + what + " (" + ec.message() + ")");
+    fs::rename(built, dir, ec);
+    if (ec) {
+        std::error_code ignored;
+        fs::rename(old, dir, ignored);
+        throw IoError(dir.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
+    }
+    fs::remove_all(old, ec);
 }
 
 } // namespace mrt

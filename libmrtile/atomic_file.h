@@ -67,6 +67,12 @@ private:
     std::filesystem::path path_;
 };
 
+//! \brief Puts the finished directory `built` (a TemporaryDirectory's) at `dir`, replacing an existing
+//! one only now: atomically where the file system can exchange the two, else by two renames with a
+//! roll-back. The previous directory is removed. `what` names the output in messages ("tileset").
+//! \throw IoError naming `dir` if it cannot be put in place (the previous one is then kept).
+void replace_directory(const std::filesystem::path& built, const std::filesystem::path& dir, const std::string& what);
+
 //! \brief Names a temporary file or directory to remove if the program is stopped by a signal
 //! (install_signal_cleanup) before it is renamed into place; forget_temporary when it is gone or moved.
 //! Cheap, thread-safe, best effort (a fixed number of slots).

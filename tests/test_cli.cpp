@@ -347,6 +347,33 @@ TEST(Cli, enu_places_the_input_coordinates)
     EXPECT_LT(off, 0.2); // the box centre within 20 cm of the data's centre
 }
 
+// lods replaces its output directory whole, as a tileset is replaced: a chain with fewer levels does
+// not leave the finer levels of the one before beside it (QA), and a directory holding anything else
+// is not replaced.
+TEST(Cli, lods_replaces_its_directory_whole)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 4000);
+    const std::string model = (dir / "a.mrt").string(), out = (dir / "chain").string();
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + model, dir).code, 0);
+    ASSERT_EQ(mrtile("lods " + model + " -o " + out + " --levels 4", dir).code, 0);
+    ASSERT_TRUE(fs::exists(dir / "chain" / "level2.ply"));
+    ASSERT_EQ(mrtile("lods " + model + " -o " + out + " --levels 2 --format glb", dir).code, 0);
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir / "chain"))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"level0.glb", "level1.glb", "lods.json"}));
+    { std::ofstream(dir / "chain" / "notes.txt") << "mine"; }
+    const Result r = mrtile("lods " + model + " -o " + out + " --levels 3", dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("holds notes.txt"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "chain" / "level1.glb"));
+    EXPECT_FALSE(fs::exists(dir / "chain" / "level2.ply"));
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

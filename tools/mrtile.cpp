@@ -96,18 +96,6 @@ struct Globals
     bool progress() const { return !quiet && ::isatty(2); }
 };
 
-// An output directory of several files: made if missing, but not its parents (like every other
-// output, whose directory must exist).
-void make_output_directory(const fs::path& dir)
-{
-    std::error_code ec;
-    if (fs::is_directory(dir, ec))
-        return;
-    if (!fs::create_directory(dir, ec) || ec)
-        throw IoError(dir.string() + ": cannot create directory (" +
-                      (ec ? ec.message() : std::string("exists and is not a directory")) + ")");
-}
-
 std::string lower_extension(const fs::path& p)
 {
     std::string e = p.extension().string();
@@ -968,14 +956,17 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
             break;
         }
     }
-    make_output_directory(dir);
+    // Built aside and swapped in whole, as a tileset is: a chain with fewer levels than the one it
+    // replaces left that one's finer levels beside it (QA).
+    const TemporaryDirectory temporary(dir);
+    const fs::path& built = temporary.path();
     nlohmann::json index = nlohmann::json::array();
     const std::string ext = lower_extension(dir / ("x." + (e.format.empty() || e.format == "lods" ? std::string("ply") : e.format)));
     for (std::size_t level = 0; level < quality.size(); ++level) {
         const LodLevel& l = set.levels[level];
         const QualityReport& q = quality[level];
         const std::string name = "level" + std::to_string(level) + ext;
-        write_any_mesh(l.mesh, h.cloud.origin, dir / name, o);
+        write_any_mesh(l.mesh, h.cloud.origin, built / name, o);
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
@@ -985,7 +976,8 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     }
     if (quality.size() < set.levels.size())
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
-    write_file_atomically(dir / "lods.json", index.dump(2) + "\n");
+    write_file_atomically(built / "lods.json", index.dump(2) + "\n");
+    replace_directory(built, dir, "LOD chain");
     std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), quality.size(), seconds_since(start));
 }
 
@@ -1292,6 +1284,32 @@ std::vector<fs::path> read_files(const std::vector<fs::path>& inputs)
     return files;
 }
 
+// An existing lods output directory is replaced as a whole, so it may hold only what `lods` writes
+// (lods.json, levelN.EXT): a user's own files in it stop the command before any work.
+void check_lods_directory(const fs::path& dir)
+{
+    std::error_code ec;
+    if (fs::exists(dir, ec)) {
+        if (!fs::is_directory(dir, ec))
+            throw IoError(dir.string() + ": exists and is not a directory");
+        for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+            const std::string name = entry.path().filename().string();
+            const std::string stem = entry.path().stem().string();
+            const bool ours = entry.is_regular_file(ec) &&
+                              (name == "lods.json" ||
+                               (stem.size() > 5 && stem.compare(0, 5, "level") == 0 &&
+                                std::all_of(stem.begin() + 5, stem.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
+                                is_mesh_extension(lower_extension(entry.path()))));
+            if (!ours)
+                throw IoError(dir.string() + ": holds " + name + ", which is not part of a LOD chain we write; refusing "
+                              "to replace the directory (move it away or write elsewhere)");
+        }
+        if (ec)
+            throw IoError(dir.string() + ": cannot list it (" + ec.message() + ")");
+    }
+    check_writable_directory(dir);
+}
+
 void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output>& outputs)
 {
     const std::vector<fs::path> read = read_files(inputs);
@@ -1316,14 +1334,7 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
         case Output::Kind::mesh:
         case Output::Kind::model: check_writable_file(o.path); break;
         case Output::Kind::tileset: check_tileset_directory(o.path); break;
-        case Output::Kind::directory: {
-            std::error_code ec;
-            if (fs::exists(o.path, ec) && !fs::is_directory(o.path, ec))
-                throw IoError(o.path.string() + ": exists and is not a directory");
-            if (!fs::is_directory(o.path, ec))
-                check_writable_directory(o.path);
-            break;
-        }
+        case Output::Kind::directory: check_lods_directory(o.path); break;
         }
     }
 }
