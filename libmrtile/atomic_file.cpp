@@ -128,6 +128,12 @@ void check_writable_file(const std::filesystem::path& path)
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw IoError(path.string() + ": is a directory");
+    // Renaming over a file needs only the directory's permission: a file made read-only (no write
+    // bit for anyone, or none for this user) would be replaced all the same.
+    struct stat existing;
+    if (::stat(path.c_str(), &existing) == 0 &&
+        ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(path.c_str(), W_OK) != 0))
+        throw IoError(path.string() + ": is read-only; not replacing it");
     AtomicFile probe(path); // removed again, uncommitted
 }
 
@@ -187,6 +193,11 @@ void AtomicFile::commit()
     if (!ok || out_.fail())
         throw IoError(path_.string() + ": write failed (disk full or not writable?)");
     std::error_code ec;
+    // A file replaced keeps its permissions (a private model stays private); a new one gets the
+    // process's defaults, as the temporary file has them.
+    struct stat existing;
+    if (::stat(path_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+        ::chmod(temp_.c_str(), existing.st_mode & 07777);
     std::filesystem::rename(temp_, path_, ec);
     if (ec)
         throw IoError(path_.string() + ": cannot rename temporary file into place (" + ec.message() + ")");

@@ -50,6 +50,31 @@ TEST(AtomicFile, outputs_are_checked_without_a_trace)
     EXPECT_EQ(entries(dir), 0u);
 }
 
+// A file written over keeps its permissions (a private model stayed private only until the first
+// rewrite: QA), a new one gets the defaults, and a read-only file is not replaced.
+TEST(AtomicFile, a_replaced_file_keeps_its_permissions_and_read_only_files_stay)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    const fs::path file = dir / "private.mrt";
+    write_file_atomically(file, "one");
+    fs::permissions(file, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+    check_writable_file(file);
+    write_file_atomically(file, "two");
+    EXPECT_EQ(fs::status(file).permissions(), fs::perms::owner_read | fs::perms::owner_write);
+    std::ifstream in(file);
+    std::string text;
+    in >> text;
+    EXPECT_EQ(text, "two");
+    fs::permissions(file, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read, fs::perm_options::replace);
+    try {
+        check_writable_file(file);
+        ADD_FAILURE() << "a read-only file would be replaced";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("is read-only"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(entries(dir), 1u);
+}
+
 // A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
 // directory (with a subdirectory, as a tileset has) leaves neither, and still dies of the signal.
 TEST(AtomicFile, a_signal_removes_the_temporaries)

@@ -374,6 +374,27 @@ TEST(Cli, lods_replaces_its_directory_whole)
         EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
 }
 
+// export --store-levels rewrites the model: with its permissions kept (a private model came back
+// world-readable: QA), and not at all when the model is read-only (it was replaced).
+TEST(Cli, store_levels_keeps_the_models_permissions)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 3000);
+    const fs::path model = dir / "a.mrt";
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + model.string(), dir).code, 0);
+    fs::permissions(model, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+    ASSERT_EQ(mrtile("export " + model.string() + " -o " + (dir / "t").string() + " --format 3dtiles --store-levels", dir).code, 0);
+    EXPECT_EQ(fs::status(model).permissions(), fs::perms::owner_read | fs::perms::owner_write);
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + (dir / "b.mrt").string(), dir).code, 0);
+    const std::string before = slurp(dir / "b.mrt");
+    fs::permissions(dir / "b.mrt", fs::perms::owner_read | fs::perms::group_read, fs::perm_options::replace);
+    const Result r = mrtile("export " + (dir / "b.mrt").string() + " -o " + (dir / "u").string() + " --format 3dtiles --store-levels", dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("is read-only"), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(dir / "b.mrt"), before);
+    EXPECT_FALSE(fs::exists(dir / "u"));
+}
+
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.
 TEST(Cli, build_info_mesh_and_determinism)
 {

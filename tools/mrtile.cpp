@@ -1491,8 +1491,11 @@ int run(int argc, char** argv)
                                {rec_args.mesh.stats_json, Output::Kind::file}});
     if (*lods)
         check_outputs({lods_in}, {{lods_out, Output::Kind::directory}});
-    if (*exp)
+    if (*exp) {
         check_outputs({exp_in}, {{exp_out, output_kind(exp_args)}, {exp_args.mesh.stats_json, Output::Kind::file}});
+        if (exp_store_levels && exp_args.exp.lod_set())
+            check_writable_file(exp_in); // rewritten with the levels: not if read-only
+    }
 
     if (*build) {
         Hierarchy h;
