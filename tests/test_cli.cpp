@@ -276,8 +276,11 @@ TEST(Cli, error_in_model_units)
         const Result r = mrtile("mesh " + model + " -o " + (dir / "x.ply").string() + " --error 0.01" + clash, dir);
         EXPECT_EQ(r.code, 2) << clash;
     }
-    EXPECT_EQ(mrtile("mesh " + model + " -o " + (dir / "x.ply").string() + " --error 0", dir).code, 2);
+    EXPECT_EQ(mrtile("mesh " + model + " -o " + (dir / "x.ply").string() + " --error -1", dir).code, 2);
     EXPECT_FALSE(fs::exists(dir / "x.ply"));
+    // 0 is the finest cut, as --tolerance 0 is.
+    EXPECT_EQ(stats("mesh " + model + " -o " + (dir / "z.ply").string() + " --error 0")["tiles"],
+              stats("mesh " + model + " -o " + (dir / "z.ply").string() + " --tolerance 0")["tiles"]);
 }
 
 // The scans a list names are inputs too: writing over one (or over a listed scan that is missing,
@@ -393,6 +396,22 @@ TEST(Cli, store_levels_keeps_the_models_permissions)
     EXPECT_NE(r.err.find("is read-only"), std::string::npos) << r.err;
     EXPECT_EQ(slurp(dir / "b.mrt"), before);
     EXPECT_FALSE(fs::exists(dir / "u"));
+}
+
+// A focus sphere that misses the model (coordinates of another frame) says so instead of silently
+// giving the base cut; one that meets it says nothing.
+TEST(Cli, focus_outside_the_model_is_noted)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 3000);
+    const std::string model = (dir / "a.mrt").string();
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + model, dir).code, 0);
+    const Result away = mrtile("mesh " + model + " -o " + (dir / "m.ply").string() + " --focus 100,100,0,30:0.0002", dir);
+    EXPECT_EQ(away.code, 0) << away.err;
+    EXPECT_NE(away.out.find("does not meet the model's points"), std::string::npos) << away.out;
+    const Result near = mrtile("mesh " + model + " -o " + (dir / "m.ply").string() + " --focus 1,0,0,0.3:0.0002", dir);
+    EXPECT_EQ(near.code, 0) << near.err;
+    EXPECT_EQ(near.out.find("does not meet"), std::string::npos) << near.out;
 }
 
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.

@@ -190,7 +190,7 @@ struct BuildArgs
 struct CutArgs
 {
     double tolerance = -1.0; // not given: kDefaultTolerance; 0: the finest cut
-    double error = 0.0;      // > 0: the tolerance in model units (RMS plane distance), given instead
+    double error = -1.0;     // >= 0: the tolerance in model units (RMS plane distance), given instead
     double tau = 0.0;
     std::size_t tiles = 0;
     std::size_t triangles = 0;
@@ -206,8 +206,8 @@ struct CutArgs
                                     "cut: RMS plane distance / largest bbox side (default 0.002; 0: the finest cut)")
                         ->check(kNonNegative);
         auto* err = cmd->add_option("--error", error,
-                                    "cut: RMS plane distance in model units (metres for lidar): --tolerance E / the model's scale")
-                        ->check(kPositive);
+                                    "cut: RMS plane distance in model units (metres for lidar): --tolerance E / the model's scale (0: the finest cut)")
+                        ->check(kNonNegative);
         auto* t = cmd->add_option("--tau", tau, "cut: the paper's tau, smallest eigenvalue of M (units^2)")
                       ->check(kPositive);
         auto* n = cmd->add_option("--tiles", tiles, "cut: the best cut with N tiles")->check(integer_check(1, 1ull << 40));
@@ -299,7 +299,7 @@ struct CutArgs
     // The cut's tolerance relative to the model's scale (Hierarchy::scale, what cut_by_tolerance takes).
     double base_tolerance(const Hierarchy& h) const
     {
-        if (error > 0)
+        if (error >= 0)
             return h.scale > 0 ? error / h.scale : 0.0;
         return tolerance >= 0 ? tolerance : kDefaultTolerance;
     }
@@ -319,8 +319,16 @@ struct CutArgs
         if (focus.empty())
             return cut_by_tolerance(h, base_tolerance(h));
         std::vector<FocusRegion> regions = parsed_focus();
-        for (FocusRegion& r : regions)
-            r.centre = r.centre - origin;
+        for (std::size_t k = 0; k < regions.size(); ++k) {
+            regions[k].centre = regions[k].centre - origin;
+            // Coordinates in another frame (local ones for a georeferenced model, say) miss the model.
+            if (!intersects(h.nodes.front(), regions[k]))
+                std::printf("note: --focus %s: the sphere does not meet the model's points (bounding box %.9g,%.9g,%.9g "
+                            "to %.9g,%.9g,%.9g); it refines nothing\n",
+                            focus[k].c_str(), h.nodes.front().box.min.x + origin.x, h.nodes.front().box.min.y + origin.y,
+                            h.nodes.front().box.min.z + origin.z, h.nodes.front().box.max.x + origin.x,
+                            h.nodes.front().box.max.y + origin.y, h.nodes.front().box.max.z + origin.z);
+        }
         return cut_by_regions(h, base_tolerance(h), regions);
     }
 };
@@ -1013,7 +1021,7 @@ struct ProduceArgs
                              "a LOD set's levels are chosen by --levels or --lod-tolerances");
         if ((exp.lod_set() || lods_command) && !mesh.stats_json.empty())
             throw UsageError(std::string("--stats-json: describes one mesh; ") +
-                             (lods_command ? "lods writes each level's statistics to DIR/index.json" : "not a LOD set"));
+                             (lods_command ? "lods writes each level's statistics to DIR/lods.json" : "not a LOD set"));
     }
 
     //! `stored`: levels stored with the model (reused when made with the same options); with
