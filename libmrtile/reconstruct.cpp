@@ -40,7 +40,9 @@ std::vector<bool> small_object_tiles(const Hierarchy& h, const Cut& cut, const s
     std::vector<bool> small(n, false);
     for (std::uint32_t k = 0; k < n; ++k) {
         const std::size_t piece = size[pieces.find(k)];
-        small[k] = piece <= kSmallObjectTiles && piece < n && !h.nodes[static_cast<std::size_t>(cut[k])].is_leaf();
+        // A height field's wall (a fanless tile) has no neighbours, and is no object either.
+        small[k] = piece <= kSmallObjectTiles && piece < n && !tiles[k].fanless &&
+                   !h.nodes[static_cast<std::size_t>(cut[k])].is_leaf();
     }
     return small;
 }
@@ -200,7 +202,28 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         }
         result.mesh = Mesh(); // no hull: the tiles below build the mesh afresh
     }
-    std::vector<Tile> tiles = make_tiles(h, result.cut, options.tiles);
+    // A height field with walls (steep tiles, choose_height_field: an airborne scan's buildings) gets
+    // tiles in the height field's plane, partitioned there, the walls left out: every fan is a graph
+    // over the plane, the roofs' and the ground's cells meet at the walls without taking in their
+    // points, and the gap triangulation bridges each wall as a step (paper Fig. 9c). The surface
+    // stage is told the choice, which tiles built in one plane could not show it. A height field
+    // without walls keeps its tiles as they are.
+    SurfaceOptions surface_options = options.surface;
+    const auto tiles_of = [&](const Cut& cut) {
+        std::vector<Tile> pca = make_tiles(h, cut, options.tiles);
+        surface_options = options.surface;
+        if (options.surface.height_field == HeightField::Off)
+            return pca;
+        const HeightFieldChoice choice = choose_height_field(h, pca, options.surface);
+        if (!choice.used || std::none_of(choice.steep.begin(), choice.steep.end(), [](bool b) { return b; }))
+            return pca;
+        TileOptions in_plane = options.tiles;
+        in_plane.plane_axis = choice.axis;
+        std::vector<Tile> graph = make_tiles(h, cut, in_plane, choice.steep);
+        surface_options.height_field = HeightField::On;
+        return graph;
+    };
+    std::vector<Tile> tiles = tiles_of(result.cut);
     const int rounds = std::max(options.small_object_rounds, options.gap_rounds);
     for (int round = 0; round < rounds && options.tiles.voronoi_trim; ++round) {
         std::vector<bool> small = round < options.small_object_rounds ? small_object_tiles(h, result.cut, tiles)
@@ -214,9 +237,9 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         if (std::none_of(small.begin(), small.end(), [](bool b) { return b; }))
             break;
         result.cut = refine_marked(h, result.cut, small);
-        tiles = make_tiles(h, result.cut, options.tiles);
+        tiles = tiles_of(result.cut);
     }
-    build_surface(h, tiles, result.mesh, options.surface, &result.surface);
+    build_surface(h, tiles, result.mesh, surface_options, &result.surface);
     // Tiles whose fans the surface left out although their points lie away from it are refined and
     // the cut meshed again (MeshOptions::dropped_rounds); what is left away is not fitted to.
     std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
@@ -236,10 +259,10 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         std::vector<Tile> tiles_before = tiles;
         std::vector<bool> away_before = away;
         result.cut = refine_marked(h, result.cut, away);
-        tiles = make_tiles(h, result.cut, options.tiles);
+        tiles = tiles_of(result.cut);
         result.mesh = Mesh();
         result.surface = SurfaceStats{};
-        build_surface(h, tiles, result.mesh, options.surface, &result.surface);
+        build_surface(h, tiles, result.mesh, surface_options, &result.surface);
         // The new surface may not cross itself more than the one before: where refined tiles fold
         // into each other or into their neighbours (a roof tile that is half wall in a height field, a
         // thin rod's tiles), the untangling cannot always undo it, and a piece left out is the smaller

@@ -243,13 +243,24 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     return mesh;
 }
 
-void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mesh, const SurfaceOptions& options,
+HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
+                                     bool check_overlap)
+{
+    const Projection p = choose_projection(h, tiles, options, check_overlap);
+    HeightFieldChoice choice;
+    choice.used = p.used;
+    choice.axis = p.axis;
+    choice.steep = p.steep;
+    return choice;
+}
+
+void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mesh, const SurfaceOptions& options,
                    SurfaceStats* stats)
 {
     if (mesh.n_vertices() > 0)
         throw InvalidInput("build_surface: the mesh to build into must be empty");
     const auto start = std::chrono::steady_clock::now();
-    if (tiles.empty())
+    if (given.empty())
         throw InvalidInput("build_surface: the cut has no tiles");
     if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
         !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
@@ -261,7 +272,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
         throw InvalidInput("SurfaceOptions::close_holes: at most " + std::to_string(kMaxCloseHoles) +
                            " edges (a hole's fill costs the cube of its edges)");
     std::size_t fan_tiles = 0;
-    for (const Tile& t : tiles) {
+    for (const Tile& t : given) {
         if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
             throw InvalidInput("build_surface: tile of node " + std::to_string(t.node) + " is not in the hierarchy");
         for (std::uint32_t p : t.boundary)
@@ -278,8 +289,22 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, Mesh& mes
         throw InvalidInput("build_surface: no tile has three non-collinear points; choose a coarser cut");
     }
 
+    // A height field's steep tiles get no fan (see choose_height_field): tiles made for one come so
+    // (mesh_cut), others are marked here.
+    const Projection projection = choose_projection(h, given, options);
+    std::vector<Tile> marked;
+    const std::size_t steep_fans = projection.used ? static_cast<std::size_t>(std::count(projection.steep.begin(), projection.steep.end(), true)) : 0;
+    if (steep_fans > 0 && steep_fans < fan_tiles) {
+        marked = given;
+        for (std::size_t k = 0; k < marked.size(); ++k)
+            if (projection.steep[k]) {
+                marked[k].fanless = true;
+                marked[k].boundary.clear(); // no points either: see make_tiles' fanless tiles
+            }
+        fan_tiles -= steep_fans;
+    }
+    const std::vector<Tile>& tiles = marked.empty() ? given : marked;
     const Layout layout = make_layout(h, tiles, options);
-    const Projection projection = choose_projection(h, tiles, options);
     const double alpha = options.alpha > 0.0 ? options.alpha : options.alpha_factor * layout.mean_edge;
 
     // T2 input: every vertex but the fan centres. (Adding the centres as Delaunay blockers against

@@ -109,9 +109,10 @@ Vec3 dominant_normal_axis(const std::vector<Tile>& tiles)
     return e.vectors[2];
 }
 
-bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, double y)
+// Counter-clockwise or clockwise convex polygon: inside when all turns have the same strict sign, and
+// (margin > 0) at least `margin` from every edge.
+bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, double y, double margin = 0.0)
 {
-    // Counter-clockwise or clockwise convex polygon: inside when all turns have the same strict sign.
     int sign = 0;
     for (std::size_t i = 0; i < poly.size(); ++i) {
         const auto& a = poly[i];
@@ -124,13 +125,16 @@ bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, d
             sign = s;
         else if (s != sign)
             return false;
+        if (margin > 0.0 && std::abs(c) < margin * std::hypot(b[0] - a[0], b[1] - a[1]))
+            return false;
     }
     return true;
 }
 
 } // namespace
 
-Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
+                             bool check_overlap)
 {
     Projection p;
     if (options.height_field == HeightField::Off)
@@ -156,30 +160,61 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
     const Vec3 helper = std::abs(p.axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
     p.u = normalized(cross(helper, p.axis));
     p.v = cross(p.axis, p.u);
+    // Steep tiles: the walls of a height field (a building's, sampled by a few points of an airborne
+    // scan) or parts that are no height field at all. In a height field they get no fan, and the gap
+    // triangulation bridges their neighbours across them (the paper's step discontinuities, Fig. 9c).
+    // Auto takes them for walls only in a georeferenced cloud (a CRS) whose surface faces up (its axis
+    // within 10 degrees of z) while they hold at most kMaxSteepShare of the points: the ground and
+    // roofs of an airborne scan. A range scan is a graph over its view direction too, and its steep
+    // tiles are surface seen at a grazing angle: bridged, its depth jumps became curtains (the bunny's
+    // raw scans: 6-10% of the diagonal off).
+    const double min_cos = std::cos(radians(options.max_tilt_degrees));
+    std::vector<bool> steep(tiles.size(), false);
+    double steep_points = 0.0, fan_points = 0.0;
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const Tile& t = tiles[k];
+        if (!t.has_fan())
+            continue;
+        const double count = static_cast<double>(h.nodes[static_cast<std::size_t>(t.node)].count());
+        fan_points += count;
+        if (std::abs(dot(t.normal, p.axis)) < min_cos) {
+            steep[k] = true;
+            steep_points += count;
+        }
+    }
     if (options.height_field == HeightField::On) {
         p.used = true;
+        p.steep = std::move(steep);
         return p;
     }
-    const double min_cos = std::cos(radians(options.max_tilt_degrees));
-    for (const Tile& t : tiles)
-        if (t.has_fan() && std::abs(dot(t.normal, p.axis)) < min_cos)
-            return p;
+    const bool airborne = !h.cloud.crs.empty() && std::abs(p.axis.z) >= std::cos(radians(10.0));
+    if (steep_points > (airborne ? kMaxSteepShare : 0.0) * fan_points || steep_points == fan_points)
+        return p;
+    if (!check_overlap) {
+        p.used = true;
+        p.steep = std::move(steep);
+        return p;
+    }
     // Overlap test: bucket projected tile centres in a grid, test each against the outlines whose
-    // bounding boxes cover its cell.
+    // bounding boxes cover its cell. In an airborne scan a centre within two spacings of an outline's
+    // edge is no overhang: at a wall the tiles on both sides reach the wall's line.
     struct Outline
     {
         std::vector<std::array<double, 2>> poly;
         double x0, y0, x1, y1;
+        double margin;
     };
     std::vector<Outline> outlines;
     std::vector<std::array<double, 2>> centres;
     double mean_size = 0.0;
-    for (const Tile& t : tiles) {
-        if (!t.has_fan())
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const Tile& t = tiles[k];
+        if (!t.has_fan() || steep[k])
             continue;
         Outline o;
         o.x0 = o.y0 = std::numeric_limits<double>::infinity();
         o.x1 = o.y1 = -o.x0;
+        o.margin = airborne ? 2.0 * t.spacing() : 0.0;
         for (std::uint32_t i : t.boundary) {
             const Vec3& q = h.cloud.positions[i];
             const double x = dot(q, p.u), y = dot(q, p.v);
@@ -198,6 +233,7 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
     mean_size /= static_cast<double>(outlines.size());
     if (!(mean_size > 0.0)) {
         p.used = true;
+        p.steep = std::move(steep);
         return p;
     }
     const double cell = mean_size;
@@ -215,11 +251,12 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
         for (std::int64_t cx = c0.first; cx <= c1.first; ++cx) {
             auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(std::make_pair(cx, c0.second), 0u));
             for (; it != grid.end() && it->first.first == cx && it->first.second <= c1.second; ++it)
-                if (it->second != k && point_in_convex(o.poly, centres[it->second][0], centres[it->second][1]))
+                if (it->second != k && point_in_convex(o.poly, centres[it->second][0], centres[it->second][1], o.margin))
                     return p;
         }
     }
     p.used = true;
+    p.steep = std::move(steep);
     return p;
 }
 

@@ -94,9 +94,18 @@ struct Projection
 {
     bool used = false;
     Vec3 axis{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0};
+    //! With `used`: per tile, whether it is steeper than SurfaceOptions::max_tilt_degrees (it gets no
+    //! fan; its points join the gap triangulation).
+    std::vector<bool> steep;
 };
 
-Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
+// Largest share of the points on steep tiles for which HeightField::Auto still chooses a height field.
+constexpr double kMaxSteepShare = 0.1;
+
+// check_overlap false: Auto does not test whether tiles overlap along the axis (a caller that tests the
+// tiles it builds in the plane; see choose_height_field).
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
+                             bool check_overlap = true);
 
 // ---------------------------------------------------------------------------------------------------
 // Step 2c: consistent tile orientation.

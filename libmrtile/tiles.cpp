@@ -169,6 +169,16 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
     t.centre = n.moments.mean;
     t.normal = n.frame.vectors[0];
     t.axis_u = n.frame.vectors[2];
+    if (squared_norm(options.plane_axis) > 0.0) {
+        // The given plane, its normal on the side of the PCA normal (which keeps its sign convention).
+        const Vec3 axis = normalized(options.plane_axis);
+        t.normal = dot(axis, t.normal) < 0.0 ? -axis : axis;
+        // The largest PCA axis laid into the plane, so that a tile whose own plane is that plane (a
+        // flat one) keeps its frame exactly; a helper axis where it stands on the plane.
+        const Vec3 along = t.axis_u - t.normal * dot(t.axis_u, t.normal);
+        const Vec3 helper = std::abs(t.normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        t.axis_u = squared_norm(along) > 1e-6 ? normalized(along) : normalized(cross(helper, t.normal));
+    }
     // Right-handed plane basis so that counter-clockwise in (u, v) is counter-clockwise seen from normal.
     t.axis_v = cross(t.normal, t.axis_u);
     t.points = static_cast<std::uint32_t>(count);
@@ -355,8 +365,31 @@ std::vector<std::uint32_t> node_sample(const Hierarchy& h, const Node& n, std::s
     return sample;
 }
 
+// A point in the coordinates the Voronoi partition is taken in: as it is, or in the plane normal to
+// TileOptions::plane_axis (u, v, 0: exactly coplanar, so that the Delaunay graph is the plane's).
+struct PartitionSpace
+{
+    bool flat = false;
+    Vec3 u{1, 0, 0}, v{0, 1, 0};
+    Vec3 operator()(const Vec3& p) const { return flat ? Vec3{dot(p, u), dot(p, v), 0.0} : p; }
+};
+
+PartitionSpace partition_space(const TileOptions& options)
+{
+    PartitionSpace space;
+    if (squared_norm(options.plane_axis) > 0.0) {
+        const Vec3 axis = normalized(options.plane_axis);
+        const Vec3 helper = std::abs(axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        space.flat = true;
+        space.u = normalized(cross(helper, axis));
+        space.v = cross(axis, space.u);
+    }
+    return space;
+}
+
 Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>& cut, const std::vector<Vec3>& centres,
-                            const std::vector<std::vector<std::uint32_t>>& graph, std::size_t max_points)
+                            const std::vector<std::vector<std::uint32_t>>& graph, std::size_t max_points,
+                            const PartitionSpace& space)
 {
     const auto tiles = static_cast<std::uint32_t>(cut.size());
     // Coincident centres: the Delaunay graph keeps only the first; walks start there.
@@ -380,7 +413,7 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
     for (std::uint32_t k = 0; k < tiles; ++k) {
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
         for (std::uint32_t i : node_sample(h, n, max_points)) {
-            const Vec3& p = h.cloud.positions[i];
+            const Vec3 p = space(h.cloud.positions[i]);
             std::uint32_t best = representative[k];
             double best_d = squared_distance(p, centres[best]);
             // Greedy walk: (distance, index) strictly decreases, so it ends, at a nearest centre.
@@ -440,6 +473,8 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         throw InvalidInput("TileOptions::collinear_tolerance must be >= 0");
     if (!(options.adjacency_factor >= 0.0))
         throw InvalidInput("TileOptions::adjacency_factor must be >= 0");
+    if (!std::isfinite(options.plane_axis.x) || !std::isfinite(options.plane_axis.y) || !std::isfinite(options.plane_axis.z))
+        throw InvalidInput("TileOptions::plane_axis must be finite");
     for (std::int32_t node : cut)
         check_node(h, node);
     std::vector<Tile> tiles;
@@ -449,11 +484,15 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
             tiles.push_back(make_tile(h, node, options));
         return tiles;
     }
+    // Height-field mode partitions in the plane: cells that do not overlap seen along the axis, so
+    // that neither do the tiles' hulls (a ground cell beside a wall otherwise took in wall points and
+    // reached under the roof's edge).
+    const PartitionSpace space = partition_space(options);
     std::vector<Vec3> centres;
     for (std::int32_t node : cut)
-        centres.push_back(h.nodes[static_cast<std::size_t>(node)].moments.mean);
+        centres.push_back(space(h.nodes[static_cast<std::size_t>(node)].moments.mean));
     const std::vector<std::vector<std::uint32_t>> graph = delaunay_graph(centres);
-    const Partition part = voronoi_partition(h, cut, centres, graph, options.max_points);
+    const Partition part = voronoi_partition(h, cut, centres, graph, options.max_points, space);
     std::vector<std::uint32_t> own;
     for (std::size_t k = 0; k < cut.size(); ++k) {
         const std::uint32_t* cell = part.order.data() + part.start[k];
@@ -486,6 +525,44 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         std::sort(t.neighbours.begin(), t.neighbours.end());
         t.neighbours.erase(std::unique(t.neighbours.begin(), t.neighbours.end()), t.neighbours.end());
     }
+    return tiles;
+}
+
+std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options,
+                             const std::vector<bool>& fanless)
+{
+    if (fanless.size() != cut.size())
+        throw InvalidInput("make_tiles: one fanless flag per cut entry expected, got " + std::to_string(fanless.size()) +
+                           " for " + std::to_string(cut.size()));
+    std::vector<std::int32_t> kept;
+    std::vector<std::size_t> position; // in `cut`, of each kept entry
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        if (!fanless[k]) {
+            kept.push_back(cut[k]);
+            position.push_back(k);
+        }
+    if (kept.size() == cut.size())
+        return make_tiles(h, cut, options);
+    for (std::int32_t node : cut)
+        check_node(h, node);
+    std::vector<Tile> built = kept.empty() ? std::vector<Tile>{} : make_tiles(h, kept, options);
+    std::vector<Tile> tiles(cut.size());
+    for (std::size_t j = 0; j < built.size(); ++j) {
+        for (std::uint32_t& n : built[j].neighbours)
+            n = static_cast<std::uint32_t>(position[n]); // still ascending: positions grow with j
+        tiles[position[j]] = std::move(built[j]);
+    }
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        if (fanless[k]) {
+            const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
+            Tile& t = tiles[k];
+            t.node = cut[k];
+            t.centre = t.apex = n.moments.mean;
+            t.normal = n.frame.vectors[0];
+            t.axis_u = n.frame.vectors[2];
+            t.axis_v = cross(t.normal, t.axis_u);
+            t.fanless = true;
+        }
     return tiles;
 }
 

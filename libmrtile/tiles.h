@@ -48,6 +48,11 @@ struct TileOptions
     //! Measure Tile::coverage_gap of every tile; with voronoi_trim, a tile whose cell's hull covers a
     //! hole is built from its own node's points of the cell only (see Tile::coverage_gap).
     bool measure_gaps = true;
+    //! Nonzero: every tile's plane is normal to this axis instead of its PCA plane, so that its hull
+    //! is taken in the plane the surface is a graph over (height-field mode, set by mesh_cut). A tile
+    //! of a roof edge with some wall points has a PCA plane tilted toward the wall; its hull in that
+    //! plane, mapped back to the points' heights, folds over itself seen from above.
+    Vec3 plane_axis{0, 0, 0};
 };
 
 struct Tile
@@ -92,12 +97,23 @@ struct Tile
         const std::uint32_t n = distinct_points > 0 ? distinct_points : points;
         return n > 0 && area > 0.0 ? std::sqrt(area / n) : 0.0;
     }
-    bool has_fan() const { return boundary.size() >= 3; }
+    //! No fan although the hull has three points or more: a steep tile in height-field mode (a wall of
+    //! a few points between a roof and the ground), whose points join the gap triangulation instead.
+    bool fanless = false;
+    bool has_fan() const { return !fanless && boundary.size() >= 3; }
 };
 
 //! \brief Builds the tile of every node of `cut`, in cut order.
 //! \throw InvalidInput if a cut entry is not a node id of `h` or names an empty node.
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options = {});
+
+//! \brief The same with the cut entries marked in `fanless` built as fanless tiles without points
+//! (Tile::fanless, empty boundary), left out of the others' partition: the walls of a height field
+//! (mesh_cut), whose few points would otherwise join the roof's and the ground's cells and pull
+//! their fans up and down across the step, which the gap triangulation bridges instead.
+//! \throw InvalidInput as make_tiles, or if `fanless` is not one flag per cut entry.
+std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options,
+                             const std::vector<bool>& fanless);
 
 //! Builds one tile from all of the node's points and its frame (no Voronoi partition; for tests).
 Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {});

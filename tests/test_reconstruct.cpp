@@ -3,6 +3,7 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/reconstruct.h"
+#include "libmrtile/point_cloud.h"
 #include "libmrtile/shapes.h"
 #include "formats/read_points.h"
 #include "mesh_fixtures.h"
@@ -617,6 +618,81 @@ TEST(Reconstruct, a_refinement_that_makes_the_surface_cross_itself_is_undone)
     const TopologyStats t = topology_stats(r.mesh);
     EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
     EXPECT_EQ(r.surface.refused_faces, 0u);
+}
+
+// An airborne lidar scene: terrain with two box buildings, roofs and ground sampled every 0.7 m, the
+// walls by a point every 3 m. In a height field the walls' few points are steep tiles: they get no
+// fan and no cell, and the gap triangulation bridges roof to ground across them, so the surface is
+// one piece with one border, the scene's. Auto takes such tiles for walls in a georeferenced cloud
+// facing up; meshed in 3D instead (no CRS) the footprints stayed open, and --height-field on had
+// 2-6 loops at them before.
+PointCloud airborne_scene()
+{
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> jitter(-0.35, 0.35), unit(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.03);
+    struct Building { double x, y, w, d, height; };
+    const Building buildings[] = {{30, 40, 30, 20, 12}, {95, 90, 25, 35, 20}};
+    const auto terrain = [](double x, double y) { return 3.0 * std::sin(x / 37.0) * std::cos(y / 41.0) + 0.02 * x; };
+    const auto roof = [&](double x, double y) {
+        for (const Building& b : buildings)
+            if (x >= b.x && x <= b.x + b.w && y >= b.y && y <= b.y + b.d)
+                return b.height;
+        return 0.0;
+    };
+    PointCloud c;
+    const double spacing = 0.7, size = 160.0;
+    for (int j = 0; j * spacing <= size; ++j)
+        for (int i = 0; i * spacing <= size; ++i) {
+            const double x = (i + jitter(rng)) * spacing, y = (j + jitter(rng)) * spacing;
+            if (x < 0 || y < 0 || x > size || y > size)
+                continue;
+            c.positions.push_back({500000.0 + x, 5000000.0 + y, 300.0 + terrain(x, y) + roof(x, y) + noise(rng)});
+        }
+    for (const Building& b : buildings) {
+        const double perimeter = 2.0 * (b.w + b.d);
+        for (int k = 0; k < static_cast<int>(perimeter / 3.0); ++k) {
+            double s = unit(rng) * perimeter, x, y;
+            if (s < b.w) { x = b.x + s; y = b.y; }
+            else if ((s -= b.w) < b.d) { x = b.x + b.w; y = b.y + s; }
+            else if ((s -= b.d) < b.w) { x = b.x + b.w - s; y = b.y + b.d; }
+            else { x = b.x; y = b.y + b.d - (s - b.w); }
+            c.positions.push_back({500000.0 + x, 5000000.0 + y, 300.0 + terrain(x, y) + unit(rng) * b.height});
+        }
+    }
+    recenter(c);
+    return c;
+}
+
+TEST(Reconstruct, airborne_walls_are_bridged_in_a_height_field)
+{
+    PointCloud georeferenced = airborne_scene();
+    georeferenced.crs = "EPSG:32632";
+    const Hierarchy h = build_hierarchy(georeferenced);
+    const Hierarchy local = build_hierarchy(airborne_scene());
+    for (const double tolerance : {0.002, 0.001}) {
+        SCOPED_TRACE(tolerance);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        ASSERT_TRUE(r.surface.height_field_used);
+        const TopologyStats t = topology_stats(r.mesh);
+        EXPECT_EQ(t.boundary_loops, 1u);
+        EXPECT_EQ(t.components, 1u);
+        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+        EXPECT_LE(self_intersecting_faces(r.mesh).size(), 2u);
+        EXPECT_EQ(r.surface.refused_faces, 0u);
+        // A bridged wall slopes across the gap between the roof's and the ground's tiles: the points
+        // at the roof's edge and on the wall stand up to about 2% of the diagonal off it.
+        const DistanceStats d = point_to_mesh_distance(h.cloud.positions, r.mesh);
+        EXPECT_LT(d.max, 0.03);
+        EXPECT_LT(d.mean, 5e-4);
+        // The same points without a CRS: Auto does not take steep tiles for walls (a range scan's are
+        // surface seen at a grazing angle), but --height-field on does.
+        MeshOptions on;
+        on.surface.height_field = HeightField::On;
+        const MeshResult forced = mesh_cut(local, cut_by_tolerance(local, tolerance), on);
+        EXPECT_EQ(topology_stats(forced.mesh).boundary_loops, 1u);
+        EXPECT_FALSE(mesh_cut(local, cut_by_tolerance(local, tolerance)).surface.height_field_used);
+    }
 }
 
 // E_RMS (eq. 4-6) against a direct evaluation; zero on a plane.
