@@ -243,10 +243,9 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     return mesh;
 }
 
-HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
-                                     bool check_overlap)
+HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
-    const Projection p = choose_projection(h, tiles, options, check_overlap);
+    const Projection p = choose_projection(h, tiles, options);
     HeightFieldChoice choice;
     choice.used = p.used;
     choice.axis = p.axis;

@@ -132,12 +132,12 @@ struct SurfaceStats
 
 //! The height-field decision build_surface makes for these tiles (SurfaceOptions::height_field): whether
 //! the surface is meshed as a graph over the plane normal to `axis`, and which tiles are steeper than
-//! max_tilt_degrees there (walls: they get no fan, and the gap triangulation bridges across them; Auto
-//! allows them while they hold at most a tenth of the points). Auto also requires that no tile's
-//! centre lies inside another's outline seen along the axis (no overhangs); `check_overlap` false
-//! leaves that test out, for a caller that builds the tiles in the plane first and tests those
-//! (mesh_cut: TileOptions::plane_axis; a tile tilted toward a wall overlaps its neighbours seen from
-//! above in its own plane, not in the ground's).
+//! max_tilt_degrees there (walls: they get no fan, and the gap triangulation bridges across them).
+//! Auto requires that no tile's centre lies inside another's outline seen along the axis (no
+//! overhangs) and no tile is steep, but in a georeferenced cloud facing up (an airborne scan), where
+//! steep tiles holding at most a tenth of the points are walls and centres within two spacings of an
+//! outline's edge pass. mesh_cut asks it first, and builds a height field with walls in its plane
+//! (TileOptions::plane_axis, make_tiles with the walls fanless).
 struct HeightFieldChoice
 {
     bool used = false;
@@ -145,8 +145,7 @@ struct HeightFieldChoice
     std::vector<bool> steep; //!< per tile, when used
 };
 
-HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
-                                     bool check_overlap = true);
+HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
 
 //! \brief Meshes the tiles of a cut (from make_tiles) into an oriented 2-manifold.
 //! \details Deterministic. Closed components are oriented outward (positive signed volume); open ones

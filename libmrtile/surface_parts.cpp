@@ -133,8 +133,7 @@ bool point_in_convex(const std::vector<std::array<double, 2>>& poly, double x, d
 
 } // namespace
 
-Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
-                             bool check_overlap)
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
     Projection p;
     if (options.height_field == HeightField::Off)
@@ -190,11 +189,6 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
     const bool airborne = !h.cloud.crs.empty() && std::abs(p.axis.z) >= std::cos(radians(10.0));
     if (steep_points > (airborne ? kMaxSteepShare : 0.0) * fan_points || steep_points == fan_points)
         return p;
-    if (!check_overlap) {
-        p.used = true;
-        p.steep = std::move(steep);
-        return p;
-    }
     // Overlap test: bucket projected tile centres in a grid, test each against the outlines whose
     // bounding boxes cover its cell. In an airborne scan a centre within two spacings of an outline's
     // edge is no overhang: at a wall the tiles on both sides reach the wall's line.

@@ -102,10 +102,7 @@ struct Projection
 // Largest share of the points on steep tiles for which HeightField::Auto still chooses a height field.
 constexpr double kMaxSteepShare = 0.1;
 
-// check_overlap false: Auto does not test whether tiles overlap along the axis (a caller that tests the
-// tiles it builds in the plane; see choose_height_field).
-Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options,
-                             bool check_overlap = true);
+Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
 
 // ---------------------------------------------------------------------------------------------------
 // Step 2c: consistent tile orientation.
