@@ -166,7 +166,15 @@ void derive_noise_floor(Hierarchy& h)
                     stack.push_back(m.right);
                 }
             }
-            n.noise_floor = leaves.rms.size() >= kMinLeaves ? floor_of(leaves, Roughness::node_roughness(n)) : global;
+            // A small region (under half the largest) is judged at its parent's scale too, whichever
+            // is smoother: under heavy noise a region of 250 points is itself still blob-like.
+            double region_roughness = Roughness::node_roughness(n);
+            if (n.parent >= 0 && 2 * n.count() < region_max) {
+                const Node& parent = h.nodes[static_cast<std::size_t>(n.parent)];
+                if (parent.frame.values[1] > 0)
+                    region_roughness = std::min(region_roughness, Roughness::node_roughness(parent));
+            }
+            n.noise_floor = leaves.rms.size() >= kMinLeaves ? floor_of(leaves, region_roughness) : global;
         }
     }
     // Above the regions: the smallest floor below, so that a node is refined wherever a part needs it.

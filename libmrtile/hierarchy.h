@@ -122,8 +122,10 @@ void update_derived(Hierarchy& h);
 //! that says whether roughness rises with scale (curvature: 2–13 on every clean scan and CAD part) or
 //! falls (noise: 0.2–0.5). The floor is 3 × the leaves' median RMS plane distance (a 16-point leaf fits
 //! its plane to the noise: about half its σ), weighted from 0 at leaf roughness 0.2 to 1 at 0.4 and from
-//! 0 at a ratio of 1 to 1 at 0.6; clean regions get 0. Smaller regions take the same measure over the
-//! whole sample; nodes below a region take its floor, nodes above the smallest of their children's.
+//! 0 at a ratio of 1 to 1 at 0.6; clean regions get 0. A region under half the largest is judged at its
+//! parent's scale too, whichever is smoother (under noise of 1.5 spacings or more a region of 250 points
+//! is still blob-like itself). Smaller regions take the same measure over the whole sample; nodes below
+//! a region take its floor, nodes above the smallest of their children's.
 void derive_noise_floor(Hierarchy& h);
 
 //! Sets every node's noise_floor to 0 (cut below the noise anyway).
