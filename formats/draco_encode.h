@@ -35,7 +35,7 @@ struct DracoOptions
     int normal_bits = 10;    //!< 1..30
     //! 0 (best compression) .. 10 (fastest). Default 3/3 = `draco_encoder`'s default -cl 7.
     int encoding_speed = 3;
-    int decoding_speed = 3;
+    int decoding_speed = 3; //!< 0 .. 10, as encoding_speed: what the encoder may trade for faster decoding
     //! Default: none, Draco quantizes on the mesh's own bounding cube.
     std::optional<QuantizationGrid> grid;
 };

@@ -8,9 +8,10 @@
 //!  - .stl: binary; float positions, per-facet normals computed from the triangle.
 //!  - .om:  OpenMesh's binary format; **double** positions, vertex normals, vertex colours.
 //! Positions are written as origin + position. OpenMesh 9 hands single-precision points to its
-//! PLY/OBJ/OFF/STL writers, so those formats hold float coordinates (about 7 significant digits:
-//! ~0.5 m at 5·10⁶); only .om keeps the full double. Use .om (or glTF with its origin transform) for
-//! georeferenced output.
+//! PLY/OBJ/OFF/STL writers (about 7 significant digits: ~0.5 m at 5·10⁶), so a mesh far from the
+//! origin (where float would lose more than a millionth of its extent, as georeferenced meshes are) is
+//! written with double coordinates by our own PLY, OBJ and OFF writers; .stl stays float (the format
+//! has nothing else), .om is always double.
 
 #include "libmrtile/mesh.h"
 #include "libmrtile/vec3.h"

@@ -128,13 +128,7 @@ void check_writable_file(const std::filesystem::path& path)
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw IoError(path.string() + ": is a directory");
-    // Renaming over a file needs only the directory's permission: a file made read-only (no write
-    // bit for anyone, or none for this user) would be replaced all the same.
-    struct stat existing;
-    if (::stat(path.c_str(), &existing) == 0 &&
-        ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(path.c_str(), W_OK) != 0))
-        throw IoError(path.string() + ": is read-only; not replacing it");
-    AtomicFile probe(path); // removed again, uncommitted
+    AtomicFile probe(path); // removed again, uncommitted (it refuses a read-only target)
 }
 
 void check_writable_directory(const std::filesystem::path& dir)
@@ -161,6 +155,12 @@ TemporaryDirectory::~TemporaryDirectory()
 
 AtomicFile::AtomicFile(const std::filesystem::path& path) : path_(path), temp_(temporary_name(path))
 {
+    // Renaming over a file needs only the directory's permission: a file made read-only (no write
+    // bit for anyone, or none for this user) would be replaced all the same.
+    struct stat existing;
+    if (::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode) &&
+        ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(path.c_str(), W_OK) != 0))
+        throw IoError(path.string() + ": is read-only; not replacing it");
     remember_temporary(temp_);
     out_.open(temp_, std::ios::binary | std::ios::trunc);
     if (!out_) {

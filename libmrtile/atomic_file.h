@@ -3,7 +3,8 @@
 //! \brief Writes that never leave a partial or corrupted output behind.
 //! \details Every writer streams into "<path>.tmp.<pid>" next to the target and renames it over the
 //! target on commit(); if anything throws before that, the destructor removes the temporary file, so
-//! a failed run leaves either the old file or nothing.
+//! a failed run leaves either the old file or nothing. A target that exists keeps its permissions, and
+//! a read-only one (no write bit, or none for this user) is refused, not replaced.
 
 #include <cstddef>
 #include <filesystem>
@@ -15,7 +16,8 @@ namespace mrt {
 class AtomicFile
 {
 public:
-    //! Opens the temporary file. \throw IoError naming `path` if it cannot be created.
+    //! Opens the temporary file. \throw IoError naming `path` if it cannot be created or `path` is a
+    //! read-only file.
     explicit AtomicFile(const std::filesystem::path& path);
     ~AtomicFile();
     AtomicFile(const AtomicFile&) = delete;

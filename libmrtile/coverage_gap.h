@@ -50,6 +50,8 @@ struct CoverageOptions
     //! the points it misses: a hole holds no points (a stray few), the sparse part of an uneven sample
     //! holds some.
     double max_island_share = 0.01;
+    //! The smallest disc radius (in sample spacings) a sampled cluster's hole must fit (see
+    //! sample_fraction above).
     double min_sample_radius_spacings = 2.5;
     //! Callers judge at most about this many points of a cluster (every k-th: coverage_stride); 0 = all.
     std::size_t max_points = 1024;

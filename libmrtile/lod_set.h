@@ -40,6 +40,8 @@ struct LodSetOptions
     //! max_levels), leaving out a level whose next finer one has less than 1.5× its tiles (a step
     //! that adds a few tiles costs a whole mesh and shows nothing new).
     std::size_t levels = 0;
+    //! The most levels `levels = 0` makes (each halves the tolerance: 2^-16 of level 0's is below any
+    //! scan's noise); an explicit `levels` may ask for more.
     std::size_t max_levels = 16;
     //! Explicit scale-free tolerances, coarse to fine (overrides levels).
     std::vector<double> tolerances;
@@ -47,6 +49,7 @@ struct LodSetOptions
     bool tileset = true;
     //! Add skirts to tiles (3D Tiles only).
     bool skirts = true;
+    //! How every level is meshed (mesh_cut's options; defaults as there).
     MeshOptions mesh;
     //! Levels are meshed in parallel on this many threads (0 = one per hardware thread). The result
     //! does not depend on it: every level is meshed on its own, deterministically.

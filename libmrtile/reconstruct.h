@@ -52,7 +52,7 @@ struct MeshOptions
     //! distance over 3 of its spacings: surface the mesh does not have, not a fan its neighbours' gap
     //! faces cover) is refined and the cut meshed again, up to this many times (0 = never; leaves are
     //! never refined). The two bunny scans of bun.conf at tolerance 0.01: a 388-point strip at the base
-    //! was left out, 10% of the diagonal from the mesh; now within 1%. Costs a meshing per round, only
+    //! was left out, 10% of the diagonal from the mesh; now within 2.8%. Costs a meshing per round, only
     //! when such a tile exists. A round whose surface crosses itself more than the one before
     //! (self_intersecting_faces, before the fit) is undone and ends the rounds: refined tiles can fold
     //! into their neighbours where the untangling cannot undo it. Points of tiles still away are not

@@ -13,7 +13,7 @@
 //! genus (OpenMesh's is_flip_ok / is_collapse_ok; border vertices are never collapsed) and refuses to
 //! turn any face by more than `max_turn_degrees`.
 //! \code
-//!   Mesh m = mesh_cut(h, cut).mesh;           // mesh_cut runs it last (MeshOptions::slivers)
+//!   Mesh m = mesh_cut(h, cut).mesh;           // mesh_cut runs it before the fit (MeshOptions::slivers)
 //!   SliverOptions o;
 //!   o.cap_angle_degrees = 170;                // only the worst caps
 //!   SliverStats s = remove_slivers(m, o);

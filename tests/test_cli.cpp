@@ -205,6 +205,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {"build " + in + " -o " + (dir / "s.mrt").string() + " --skip-missing-scans", "no input is one"},
         {"reconstruct " + in + " -o " + mesh + " --crs EPSG:32632", "no effect here"},
         {"reconstruct " + in + " -o " + (dir / "x.glb").string() + " --format lod-glb --crs EPSG:32632", "no effect here"},
+        {glb + " --store-levels", "this output is one mesh"},
+        {"reconstruct " + in + " -o " + mesh + " --model " + model + " --store-levels", "this output is one mesh"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);
@@ -232,10 +234,19 @@ TEST(Cli, tolerance_zero_no_quality_and_unreachable_triangles)
     EXPECT_EQ(finest["tiles"].get<std::size_t>(), leaves);
     EXPECT_EQ(finest["genus"].get<int>(), 0);
     EXPECT_EQ(finest["nonmanifold_edges"].get<int>(), 0);
-    EXPECT_TRUE(finest["e_rms"].is_null());
-    EXPECT_TRUE(finest["mean_distance"].is_null());
+    // Every key a measured mesh has, the skipped measurements null (six were missing: audit).
+    for (const char* key : {"e_rms", "mean_distance", "max_distance", "median_distance", "p99_distance",
+                            "mesh_to_points_mean", "mesh_to_points_max", "self_intersections"}) {
+        ASSERT_TRUE(finest.contains(key)) << key;
+        EXPECT_TRUE(finest[key].is_null()) << key;
+    }
+    EXPECT_TRUE(finest["caps"].is_number());
     ASSERT_EQ(mrtile(mesh, dir).code, 0);
-    EXPECT_LT(nlohmann::json::parse(slurp(dir / "s.json"))["tiles"].get<std::size_t>(), leaves); // the default 0.002
+    const nlohmann::json measured = nlohmann::json::parse(slurp(dir / "s.json"));
+    EXPECT_LT(measured["tiles"].get<std::size_t>(), leaves); // the default 0.002
+    for (const auto& item : measured.items())
+        EXPECT_TRUE(finest.contains(item.key())) << item.key() << " missing with --no-quality";
+    EXPECT_EQ(finest.size(), measured.size());
     const Result few = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "f.ply").string() + " --triangles 2", dir);
     ASSERT_EQ(few.code, 0) << few.err;
     EXPECT_NE(few.out.find("no cut meshes to 2 triangles or fewer"), std::string::npos) << few.out;

@@ -506,7 +506,9 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["nonmanifold_edges"] = t.nonmanifold_edges;
         j["nonmanifold_vertices"] = t.nonmanifold_vertices;
         j["consistently_oriented"] = t.consistently_oriented;
-        for (const char* key : {"e_rms", "mean_distance", "max_distance"})
+        j["caps"] = count_caps(r.mesh); // cheap, like the topology
+        for (const char* key : {"e_rms", "mean_distance", "max_distance", "median_distance", "p99_distance",
+                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections"})
             j[key] = nullptr;
     }
     j["seconds"] = seconds;
@@ -849,11 +851,6 @@ std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, cons
 }
 
 // --store-levels on an export that made no LOD set: a note says why nothing was stored.
-void note_nothing_stored(const LevelStore& store, bool lod_set)
-{
-    if (store.keep && !lod_set && store.stored == 0)
-        std::printf("note: --store-levels applies to LOD sets (--format 3dtiles or lod-glb); nothing stored\n");
-}
 
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
 // tileset stays in the input's coordinates.
@@ -1484,7 +1481,15 @@ int run(int argc, char** argv)
     };
     if (*build)
         check_build(build_args, build_in);
+    // --store-levels stores a LOD set's levels: on one mesh it would do nothing.
+    const auto check_store = [](bool store_levels, const ProduceArgs& a) {
+        if (store_levels && !a.exp.lod_set())
+            throw UsageError("--store-levels: stores a LOD set's levels (--format 3dtiles or lod-glb); this output is one mesh");
+    };
+    if (*exp)
+        check_store(exp_store_levels, exp_args);
     if (*rec) {
+        check_store(rec_store_levels, rec_args);
         check_build(rec_build, rec_in);
         if (!rec_build.crs.empty() && rec_model.empty() && rec_args.exp.format != "3dtiles")
             throw UsageError("--crs: places a 3D Tiles set on the globe or is stored with --model; it has no effect here");
@@ -1553,7 +1558,6 @@ int run(int argc, char** argv)
         store.hierarchy = &h;
         store.model_crs = h.cloud.crs;
         naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
-        note_nothing_stored(store, rec_args.exp.lod_set());
         // Last, so that a failed command leaves no model either (with --store-levels it is already
         // written, with its levels, before the tileset).
         if (!rec_model.empty() && store.stored == 0) {
@@ -1591,7 +1595,6 @@ int run(int argc, char** argv)
         store.model_crs = model_crs;
         store.save.record_build_time = std::isfinite(h.info.build_seconds);
         naming_input(exp_in, [&] { exp_args.write(h, g, exp_out, store); });
-        note_nothing_stored(store, lod_set);
         return 0;
     }
     if (*demo) {

@@ -7,7 +7,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 debs=(build-essential cmake pkg-config git ca-certificates
       libopenmesh-dev libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
       libdraco-dev draco libtinygltf-dev libmeshoptimizer-dev libnanoflann-dev
-      nlohmann-json3-dev libcli11-dev libtbb-dev zlib1g-dev libgtest-dev libbenchmark-dev)
+      nlohmann-json3-dev libcli11-dev zlib1g-dev libgtest-dev)
 command -v node >/dev/null 2>&1 || debs+=(nodejs)
 command -v npm >/dev/null 2>&1 || debs+=(npm)
 
