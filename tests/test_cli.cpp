@@ -194,7 +194,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {glb + " --enu 7,45,0", "no effect"},
         {glb + " --format ply", "does not match"},
         {glb + " --quantize 12", "add --draco"},
-        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "use export"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "3dtiles not in"},
         // Options the output would ignore (session 15 QA: all were accepted).
         {a + " --draco", "a .ply file has no Draco"},
         {a + " --up y", "--up y"},

@@ -345,7 +345,8 @@ struct MeshArgs
     bool no_colors = false;
     std::size_t close_holes = 0;
 
-    void add(CLI::App* cmd)
+    //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
+    void add(CLI::App* cmd, bool one_mesh = true)
     {
         cmd->add_option("--alpha", alpha, "gap triangulation alpha in model units (default: automatic)")
             ->check(kNonNegative);
@@ -353,7 +354,8 @@ struct MeshArgs
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
         cmd->add_flag("--keep-steps", keep_steps, "height fields: keep step discontinuities open (paper Fig. 9b)");
-        cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file")->check(kNonEmpty);
+        if (one_mesh)
+            cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file")->check(kNonEmpty);
         cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
@@ -599,20 +601,28 @@ struct ExportArgs
     std::string enu;
     double geoid_height = 0.0;
 
-    void add(CLI::App* cmd)
+    //! `lods_command`: the `lods` command, which writes mesh files only (no 3D Tiles placement).
+    void add(CLI::App* cmd, bool lods_command = false)
     {
-        cmd->add_option("--format", format,
-                        "3dtiles (a directory), lod-glb (one .glb with every level, MSFT_lod), or by the output's extension")
-            ->check(CLI::IsMember({"3dtiles", "lod-glb", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om", "lods"}));
-        enu_option = cmd->add_option("--enu", enu,
-                                     "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); "
-                                     "the root transform maps it to ECEF")
-                         ->check(kNonEmpty);
-        geoid_option = cmd->add_option("--geoid-height", geoid_height,
-                                       "3D Tiles placed by the model's CRS: metres added to every height (the geoid's "
-                                       "height above the ellipsoid, for orthometric heights; |M| <= 10000)");
+        if (lods_command) {
+            cmd->add_option("--format", format, "the level files' format (default ply)")
+                ->check(CLI::IsMember({"glb", "gltf", "drc", "ply", "obj", "off", "stl", "om"}));
+        } else {
+            cmd->add_option("--format", format,
+                            "3dtiles (a directory), lod-glb (one .glb with every level, MSFT_lod), or by the output's extension")
+                ->check(CLI::IsMember({"3dtiles", "lod-glb", "glb", "gltf", "drc", "ply", "obj", "off", "stl", "om"}));
+            enu_option = cmd->add_option("--enu", enu,
+                                         "3D Tiles: the model is in local east-north-up metres at LON,LAT,HEIGHT (WGS84); "
+                                         "the root transform maps it to ECEF")
+                             ->check(kNonEmpty);
+            geoid_option = cmd->add_option("--geoid-height", geoid_height,
+                                           "3D Tiles placed by the model's CRS: metres added to every height (the geoid's "
+                                           "height above the ellipsoid, for orthometric heights; |M| <= 10000)");
+        }
         lod_options.push_back(cmd->add_option("--max-tile-triangles", max_tile_triangles,
-                                              "largest number of triangles in one 3D Tiles tile")
+                                              lods_command ? "level 0's budget: three quarters of this many triangles "
+                                                             "(at most 4096)"
+                                                           : "largest number of triangles in one 3D Tiles tile")
                                   ->check(integer_check(64, 1ull << 31))
                                   ->capture_default_str());
         auto* l = cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)")
@@ -636,10 +646,7 @@ struct ExportArgs
     {
         const std::string ext = lower_extension(out);
         if (lods_command) {
-            if (format == "3dtiles" || format == "lod-glb")
-                throw UsageError("--format " + format + ": lods writes one mesh file per level; use export for " + format);
-        } else if (format == "lods") {
-            throw UsageError("--format lods: for the lods command");
+            // Its --format names the level files' format (the option's own check): nothing to match.
         } else if (format == "lod-glb" && ext != ".glb") {
             throw UsageError(out.string() + ": --format lod-glb writes a .glb file");
         } else if (!format.empty() && !lod_set() && ext != "." + format) {
@@ -966,7 +973,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     const TemporaryDirectory temporary(dir);
     const fs::path& built = temporary.path();
     nlohmann::json index = nlohmann::json::array();
-    const std::string ext = lower_extension(dir / ("x." + (e.format.empty() || e.format == "lods" ? std::string("ply") : e.format)));
+    const std::string ext = lower_extension(dir / ("x." + (e.format.empty() ? std::string("ply") : e.format)));
     for (std::size_t level = 0; level < quality.size(); ++level) {
         const LodLevel& l = set.levels[level];
         const QualityReport& q = quality[level];
@@ -994,13 +1001,14 @@ struct ProduceArgs
     OutputArgs output;
     ExportArgs exp;
 
+    //! `with_cut` false: the `lods` command (levels, not a cut; mesh files only).
     void add(CLI::App* cmd, bool with_cut = true)
     {
         if (with_cut)
             cut.add(cmd);
-        mesh.add(cmd);
+        mesh.add(cmd, with_cut);
         output.add(cmd);
-        exp.add(cmd);
+        exp.add(cmd, !with_cut);
     }
 
     //! Before any work: options that contradict each other or that the output would ignore.
@@ -1009,16 +1017,15 @@ struct ProduceArgs
         cut.validate();
         const std::string written = exp.format == "3dtiles" ? std::string("3dtiles")
                                     : exp.format == "lod-glb" ? std::string(".glb")
-                                    : lods_command ? "." + (exp.format.empty() || exp.format == "lods" ? std::string("ply") : exp.format)
+                                    : lods_command ? "." + (exp.format.empty() ? std::string("ply") : exp.format)
                                                    : std::string();
         output.validate(out, written);
         exp.validate(out, lods_command);
         if (exp.lod_set() && cut.any_given())
             throw UsageError("cut options (--tolerance, --error, --tau, --tiles, --triangles, --focus, --camera) choose one mesh; "
                              "a LOD set's levels are chosen by --levels or --lod-tolerances");
-        if ((exp.lod_set() || lods_command) && !mesh.stats_json.empty())
-            throw UsageError(std::string("--stats-json: describes one mesh; ") +
-                             (lods_command ? "lods writes each level's statistics to DIR/lods.json" : "not a LOD set"));
+        if (exp.lod_set() && !mesh.stats_json.empty()) // lods has no --stats-json: its lods.json has the levels'
+            throw UsageError("--stats-json: describes one mesh; not a LOD set");
     }
 
     //! `stored`: levels stored with the model (reused when made with the same options); with
