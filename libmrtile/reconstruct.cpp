@@ -181,6 +181,97 @@ Cut refine_marked(const Hierarchy& h, const Cut& cut, const std::vector<bool>& m
     return refined;
 }
 
+// The tiles of `cut`. A height field with walls (steep tiles, choose_height_field: an airborne scan's
+// buildings) gets tiles in the height field's plane, partitioned there, the walls left out: every fan
+// is a graph over the plane, the roofs' and the ground's cells meet at the walls without taking in
+// their points, and the gap triangulation bridges each wall as a step (paper Fig. 9c). The surface
+// stage is told the choice (`surface`), which tiles built in one plane could not show it. A height
+// field without walls keeps its tiles as they are.
+std::vector<Tile> tiles_for(const Hierarchy& h, const Cut& cut, const MeshOptions& options, SurfaceOptions& surface)
+{
+    std::vector<Tile> pca = make_tiles(h, cut, options.tiles);
+    surface = options.surface;
+    if (options.surface.height_field == HeightField::Off)
+        return pca;
+    const HeightFieldChoice choice = choose_height_field(h, pca, options.surface);
+    if (!choice.used || std::none_of(choice.steep.begin(), choice.steep.end(), [](bool b) { return b; }))
+        return pca;
+    TileOptions in_plane = options.tiles;
+    in_plane.plane_axis = choice.axis;
+    std::vector<Tile> graph = make_tiles(h, cut, in_plane, choice.steep);
+    surface.height_field = HeightField::On;
+    return graph;
+}
+
+// The tiles of `cut` after refining, before any meshing, the tiles of small separate objects
+// (MeshOptions::small_object_rounds) and those whose outline reaches over a hole farther than their
+// node's error (gap_rounds). `cut` becomes the cut meshed.
+std::vector<Tile> refine_before_meshing(const Hierarchy& h, const MeshOptions& options, Cut& cut, SurfaceOptions& surface)
+{
+    std::vector<Tile> tiles = tiles_for(h, cut, options, surface);
+    const int rounds = std::max(options.small_object_rounds, options.gap_rounds);
+    for (int round = 0; round < rounds && options.tiles.voronoi_trim; ++round) {
+        std::vector<bool> marked = round < options.small_object_rounds ? small_object_tiles(h, cut, tiles)
+                                                                       : std::vector<bool>(tiles.size(), false);
+        if (round < options.gap_rounds)
+            for (std::size_t k = 0; k < tiles.size(); ++k) {
+                const Node& node = h.nodes[static_cast<std::size_t>(cut[k])];
+                if (!node.is_leaf() && tiles[k].coverage_gap > node_error(node))
+                    marked[k] = true;
+            }
+        if (std::none_of(marked.begin(), marked.end(), [](bool b) { return b; }))
+            break;
+        cut = refine_marked(h, cut, marked);
+        tiles = tiles_for(h, cut, options, surface);
+    }
+    return tiles;
+}
+
+// After the surface: tiles whose fans it left out although their points lie away from it are refined
+// and the cut meshed again (MeshOptions::dropped_rounds), into `result` and `tiles`. A round whose
+// surface crosses itself more than the one before is undone and ends the rounds: where refined tiles
+// fold into each other or into their neighbours (a roof tile that is half wall in a height field, a
+// thin rod's tiles), the untangling cannot always undo it, and a piece left out is the smaller harm.
+// Returns the tiles still away from the mesh (away_tiles), whose points the fit leaves out.
+std::vector<bool> refine_dropped_tiles(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface,
+                                       MeshResult& result, std::vector<Tile>& tiles)
+{
+    std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
+    std::size_t crossings = 0; // self-intersecting pairs of the surface, counted once a round starts
+    for (int round = 0; round < options.dropped_rounds && !away.empty(); ++round) {
+        bool refinable = false;
+        for (std::size_t k = 0; k < away.size(); ++k)
+            refinable = refinable || (away[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
+        if (!refinable)
+            break;
+        if (round == 0)
+            crossings = self_intersecting_faces(result.mesh).size();
+        MeshResult before; // kept to go back to
+        before.cut = result.cut;
+        before.mesh = result.mesh;
+        before.surface = result.surface;
+        std::vector<Tile> tiles_before = tiles;
+        const SurfaceOptions surface_before = surface;
+        result.cut = refine_marked(h, result.cut, away);
+        tiles = tiles_for(h, result.cut, options, surface);
+        result.mesh = Mesh();
+        result.surface = SurfaceStats{};
+        build_surface(h, tiles, result.mesh, surface, &result.surface);
+        const std::size_t now = self_intersecting_faces(result.mesh).size();
+        if (now > crossings) {
+            result.cut = std::move(before.cut);
+            result.mesh = before.mesh;
+            result.surface = before.surface;
+            tiles = std::move(tiles_before);
+            surface = surface_before;
+            break;
+        }
+        crossings = now;
+        away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
+    }
+    return away;
+}
+
 } // namespace
 
 MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& options)
@@ -202,83 +293,10 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
         }
         result.mesh = Mesh(); // no hull: the tiles below build the mesh afresh
     }
-    // A height field with walls (steep tiles, choose_height_field: an airborne scan's buildings) gets
-    // tiles in the height field's plane, partitioned there, the walls left out: every fan is a graph
-    // over the plane, the roofs' and the ground's cells meet at the walls without taking in their
-    // points, and the gap triangulation bridges each wall as a step (paper Fig. 9c). The surface
-    // stage is told the choice, which tiles built in one plane could not show it. A height field
-    // without walls keeps its tiles as they are.
     SurfaceOptions surface_options = options.surface;
-    const auto tiles_of = [&](const Cut& cut) {
-        std::vector<Tile> pca = make_tiles(h, cut, options.tiles);
-        surface_options = options.surface;
-        if (options.surface.height_field == HeightField::Off)
-            return pca;
-        const HeightFieldChoice choice = choose_height_field(h, pca, options.surface);
-        if (!choice.used || std::none_of(choice.steep.begin(), choice.steep.end(), [](bool b) { return b; }))
-            return pca;
-        TileOptions in_plane = options.tiles;
-        in_plane.plane_axis = choice.axis;
-        std::vector<Tile> graph = make_tiles(h, cut, in_plane, choice.steep);
-        surface_options.height_field = HeightField::On;
-        return graph;
-    };
-    std::vector<Tile> tiles = tiles_of(result.cut);
-    const int rounds = std::max(options.small_object_rounds, options.gap_rounds);
-    for (int round = 0; round < rounds && options.tiles.voronoi_trim; ++round) {
-        std::vector<bool> small = round < options.small_object_rounds ? small_object_tiles(h, result.cut, tiles)
-                                                                      : std::vector<bool>(tiles.size(), false);
-        if (round < options.gap_rounds)
-            for (std::size_t k = 0; k < tiles.size(); ++k) {
-                const Node& node = h.nodes[static_cast<std::size_t>(result.cut[k])];
-                if (!node.is_leaf() && tiles[k].coverage_gap > node_error(node))
-                    small[k] = true;
-            }
-        if (std::none_of(small.begin(), small.end(), [](bool b) { return b; }))
-            break;
-        result.cut = refine_marked(h, result.cut, small);
-        tiles = tiles_of(result.cut);
-    }
+    std::vector<Tile> tiles = refine_before_meshing(h, options, result.cut, surface_options);
     build_surface(h, tiles, result.mesh, surface_options, &result.surface);
-    // Tiles whose fans the surface left out although their points lie away from it are refined and
-    // the cut meshed again (MeshOptions::dropped_rounds); what is left away is not fitted to.
-    std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
-    std::size_t crossings = 0; // self-intersecting pairs of the surface, counted once a round starts
-    for (int round = 0; round < options.dropped_rounds && !away.empty(); ++round) {
-        bool refinable = false;
-        for (std::size_t k = 0; k < away.size(); ++k)
-            refinable = refinable || (away[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
-        if (!refinable)
-            break;
-        MeshResult before; // kept to go back to
-        before.cut = result.cut;
-        before.mesh = result.mesh;
-        before.surface = result.surface;
-        if (round == 0)
-            crossings = self_intersecting_faces(result.mesh).size();
-        std::vector<Tile> tiles_before = tiles;
-        std::vector<bool> away_before = away;
-        result.cut = refine_marked(h, result.cut, away);
-        tiles = tiles_of(result.cut);
-        result.mesh = Mesh();
-        result.surface = SurfaceStats{};
-        build_surface(h, tiles, result.mesh, surface_options, &result.surface);
-        // The new surface may not cross itself more than the one before: where refined tiles fold
-        // into each other or into their neighbours (a roof tile that is half wall in a height field, a
-        // thin rod's tiles), the untangling cannot always undo it, and a piece left out is the smaller
-        // harm. Back to the mesh before the round then.
-        const std::size_t now = self_intersecting_faces(result.mesh).size();
-        if (now > crossings) {
-            result.cut = std::move(before.cut);
-            result.mesh = before.mesh;
-            result.surface = before.surface;
-            tiles = std::move(tiles_before);
-            away = std::move(away_before);
-            break;
-        }
-        crossings = now;
-        away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
-    }
+    const std::vector<bool> away = refine_dropped_tiles(h, options, surface_options, result, tiles);
     result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     // A height field stays a graph through both: every face they change faces up its axis.
