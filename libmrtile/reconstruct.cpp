@@ -1,7 +1,9 @@
 // Glue of the method's stages (paper Fig. 1: clustering → tiles → reconstruction) and the error
 // measures of paper §5 (eq. 4-6), so the CLI, the demo and the benchmarks all run the same pipeline.
-// One step between the stages goes beyond the paper: a separate object that a cut gives one to three
-// tiles cannot close, so those tiles are refined before meshing (MeshOptions::small_object_rounds).
+// Steps between the stages go beyond the paper: a separate object that a cut gives one to three tiles
+// cannot close, and a tile reaching over a hole covers it, so those tiles are refined before meshing;
+// a tile the surface left out although its points lie away from it is refined after (and its points
+// are not fitted to); a height field with walls gets its tiles in its own plane, the walls left out.
 // And a cloud too small to split (one leaf) that is no piece of plane gets its convex hull.
 #include "libmrtile/reconstruct.h"
 
