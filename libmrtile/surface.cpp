@@ -332,6 +332,8 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
         positions.push_back(v.position);
     if (options.max_gap_width > 0.0)
         drop_uncovered_candidates(h, layout, positions, options.threads, candidates);
+    if (!projection.used) // a height field bridges its steps on purpose (SurfaceOptions::bridge_steps)
+        drop_seen_through_candidates(h, layout, positions, options.threads, candidates);
     // The front runs on consensus candidates first. Where it strands tiles (at a thin feature such as
     // the tip of an ear, the planes of neighbouring tiles disagree too much for consensus, the tiles
     // are seeded one by one and end up as islands that would be dropped and covered over), it runs

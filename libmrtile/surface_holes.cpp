@@ -602,6 +602,28 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
     return false;
 }
 
+// Removes the candidates for which drop(triangle) holds, keeping the others' order. Judged in parallel
+// blocks, each candidate on its own: the result does not depend on the thread count.
+template <typename Drop>
+void drop_candidates_if(Candidates& candidates, std::size_t threads, const Drop& drop)
+{
+    const std::size_t count = candidates.triangles.size();
+    std::vector<char> dropped(count, 0);
+    constexpr std::size_t kBlock = 64;
+    run_parallel((count + kBlock - 1) / kBlock, threads, [&](std::size_t block) {
+        for (std::size_t i = block * kBlock; i < std::min(count, (block + 1) * kBlock); ++i)
+            dropped[i] = drop(candidates.triangles[i]) ? 1 : 0;
+    });
+    Candidates kept;
+    for (std::size_t i = 0; i < count; ++i)
+        if (!dropped[i]) {
+            kept.triangles.push_back(candidates.triangles[i]);
+            kept.relative_radius.push_back(candidates.relative_radius[i]);
+            kept.fallback.push_back(candidates.fallback[i]);
+        }
+    candidates = std::move(kept);
+}
+
 } // namespace
 
 bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,
@@ -662,31 +684,66 @@ bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int
 void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,
                                std::size_t threads, Candidates& candidates)
 {
-    const std::size_t count = candidates.triangles.size();
-    std::vector<char> drop(count, 0);
-    constexpr std::size_t kBlock = 256;
-    run_parallel((count + kBlock - 1) / kBlock, threads, [&](std::size_t block) {
-        for (std::size_t i = block * kBlock; i < std::min(count, (block + 1) * kBlock); ++i) {
-            const Tri& t = candidates.triangles[i];
-            double spacing = 0.0, full_spacing = 0.0;
-            for (std::uint32_t v : t) {
-                const TileLoop& tile = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)];
-                spacing = std::max(spacing, tile.spacing);
-                full_spacing = std::max(full_spacing, tile.full_spacing);
-            }
-            const std::array<std::int32_t, 3> tiles{layout.vertices[t[0]].tile, layout.vertices[t[1]].tile, layout.vertices[t[2]].tile};
-            if (full_spacing > 0.0 && full_spacing < spacing)
-                drop[i] = covers_sample_hole(h, layout, tiles.data(), 3, positions, {t}, full_spacing);
+    drop_candidates_if(candidates, threads, [&](const Tri& t) {
+        double spacing = 0.0, full_spacing = 0.0;
+        for (std::uint32_t v : t) {
+            const TileLoop& tile = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)];
+            spacing = std::max(spacing, tile.spacing);
+            full_spacing = std::max(full_spacing, tile.full_spacing);
         }
+        const std::array<std::int32_t, 3> tiles{layout.vertices[t[0]].tile, layout.vertices[t[1]].tile, layout.vertices[t[2]].tile};
+        return full_spacing > 0.0 && full_spacing < spacing &&
+               covers_sample_hole(h, layout, tiles.data(), 3, positions, {t}, full_spacing);
     });
-    Candidates kept;
-    for (std::size_t i = 0; i < count; ++i)
-        if (!drop[i]) {
-            kept.triangles.push_back(candidates.triangles[i]);
-            kept.relative_radius.push_back(candidates.relative_radius[i]);
-            kept.fallback.push_back(candidates.fallback[i]);
+}
+
+void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,
+                                  std::size_t threads, Candidates& candidates)
+{
+    if (!h.cloud.viewpoint)
+        return;
+    const Vec3 eye = *h.cloud.viewpoint;
+    // A gap triangle may cut across a concave corner: the corner's points lie behind it by up to half
+    // its longest edge (a right angle), so only points deeper than that, and than a few spacings of
+    // noise, count; and three of them, against stray points.
+    constexpr double kDepthPerEdge = 0.75;
+    constexpr double kDepthSpacings = 4.0;
+    constexpr std::size_t kMinHits = 3;
+    drop_candidates_if(candidates, threads, [&](const Tri& t) {
+        const Vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
+        double spacing = 0.0;
+        for (std::uint32_t v : t)
+            spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].full_spacing);
+        const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
+        const double margin = std::max(kDepthPerEdge * longest, kDepthSpacings * spacing);
+        const Vec3 n = cross(b - a, c - a);
+        if (!(norm(n) > 0.0) || std::abs(dot(eye - a, n)) < 1e-12 * norm(n) * norm(eye - a))
+            return false; // degenerate, or seen edge-on: nothing is seen through it
+        const Vec3 unit_n = normalized(n);
+        const double eye_side = dot(eye - a, unit_n);
+        // The part of its view cone behind it, as deep as the margin's reach and then some.
+        const double depth = 4.0 * margin;
+        BoundingBox box = bounding_box(std::vector<Vec3>{a, b, c});
+        for (const Vec3& p : {a, b, c}) {
+            const Vec3 beyond = p + normalized(p - eye) * depth;
+            box.min = min(box.min, beyond);
+            box.max = max(box.max, beyond);
         }
-    candidates = std::move(kept);
+        std::size_t hits = 0;
+        for (const std::uint32_t j : points_in_box(h, box)) {
+            const Vec3& p = h.cloud.positions[j];
+            const double side = dot(p - a, unit_n);
+            if (std::abs(side) <= margin || (side > 0.0) == (eye_side > 0.0))
+                continue; // near its plane, or on the eye's side
+            // Does the ray from the eye to p pass through the triangle? (The plane test above puts the
+            // eye and p on opposite sides, so the crossing lies between them.)
+            const Vec3 x = eye + (p - eye) * (eye_side / (eye_side - side));
+            const double wa = dot(cross(b - x, c - x), n), wb = dot(cross(c - x, a - x), n), wc = dot(cross(a - x, b - x), n);
+            if (wa >= 0.0 && wb >= 0.0 && wc >= 0.0 && ++hits >= kMinHits)
+                return true;
+        }
+        return false;
+    });
 }
 
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,

@@ -36,6 +36,11 @@
 namespace mrt {
 namespace {
 
+// In a scan from one viewpoint, a neighbouring node's point in a tile's Voronoi cell belongs to another
+// surface when it lies farther from the tile's plane than this many times the larger of the node's own
+// largest plane distance and the tile's point spacing.
+constexpr double kForeignPlaneFactor = 4.0;
+
 struct Projected
 {
     double x, y;
@@ -498,16 +503,26 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         const std::uint32_t* cell = part.order.data() + part.start[k];
         const std::size_t size = part.start[k + 1] - part.start[k];
         tiles.push_back(tile_from_points(h, cut[k], cell, size, options));
-        if (!(tiles.back().coverage_gap > 0.0))
-            continue;
-        // The cell took in points across a hole from a neighbouring node, and its hull covers the
-        // hole: the tile keeps only its own node's points of the cell (a subset of a convex cell, so
-        // it still overlaps no other tile; the gap triangulation covers the points it leaves out).
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
+        const bool own_node_only = tiles.back().coverage_gap > 0.0;
+        // In a scan seen from one viewpoint, a neighbouring node's points of the cell far off the
+        // tile's plane are another surface across a depth jump (a ball's underside and the floor
+        // behind it, in a depth camera's view), and the hull would join the two. Only there: in
+        // merged scans the points off the plane are as often the same surface seen twice, a little
+        // misregistered (bun.conf at 0.002 lost a 70-face strip to them).
+        const bool single_view = h.cloud.viewpoint.has_value();
+        if (!own_node_only && !single_view)
+            continue;
+        const double off_plane = kForeignPlaneFactor * std::max(n.max_plane_distance, tiles.back().spacing());
         own.clear();
         for (std::size_t i = 0; i < size; ++i)
-            if (cell[i] >= n.begin && cell[i] < n.end)
+            if ((cell[i] >= n.begin && cell[i] < n.end) ||
+                (!own_node_only && std::abs(dot(h.cloud.positions[cell[i]] - n.moments.mean, n.frame.vectors[0])) <= off_plane))
                 own.push_back(cell[i]);
+        // The cell took in points across a hole from a neighbouring node (coverage_gap), or from
+        // another surface: the tile keeps its own node's points of the cell, and the others near its
+        // plane (a subset of a convex cell, so it still overlaps no other tile; the gap triangulation
+        // covers the points it leaves out).
         if (own.size() < size && own.size() >= 3)
             tiles.back() = tile_from_points(h, cut[k], own.data(), own.size(), options);
     }

@@ -723,6 +723,84 @@ TEST(Reconstruct, tori_with_heavy_noise_are_closed)
     }
 }
 
+// A depth camera's view (one ray per pixel, the first hit, pixels at depth jumps dropped as such
+// cameras do): a sphere in front of a wall, standing a little above the floor. The sphere's underside
+// and the floor behind it are neighbouring tiles across the jump. Gap faces between them (at 0.005
+// and 0.002), and the fans of sphere tiles whose Voronoi cells took in floor points (at 0.001), joined
+// the sphere to the floor, whose orientation then turned the whole sphere away from the camera. Gap
+// candidates the camera saw through are dropped, and cells keep a neighbour's points only near their
+// tile's plane: the sphere is a piece of its own, facing the camera.
+TEST(Reconstruct, a_depth_jump_is_not_bridged_in_3d)
+{
+    const Vec3 centre{0.1, 0.1, 1.8};
+    const double radius = 0.45;
+    const int width = 320, height = 240;
+    const double focal = 262.5;
+    std::vector<double> depth(static_cast<std::size_t>(width) * height);
+    const auto ray_of = [&](int row, int col) {
+        return Vec3{(col - 0.5 * width) / focal, (row - 0.5 * height) / focal, 1.0};
+    };
+    for (int row = 0; row < height; ++row)
+        for (int col = 0; col < width; ++col) {
+            const Vec3 ray = ray_of(row, col); // z = 1: t is the depth
+            double t = 3.0;                    // the wall, z = 3
+            if (ray.y > 0.0)
+                t = std::min(t, 0.6 / ray.y); // the floor, y = 0.6 (y points down)
+            const double a = squared_norm(ray), b = dot(ray, centre);
+            const double disc = b * b - a * (squared_norm(centre) - radius * radius);
+            if (disc >= 0.0 && (b - std::sqrt(disc)) / a > 0.0)
+                t = std::min(t, (b - std::sqrt(disc)) / a);
+            depth[static_cast<std::size_t>(row) * width + col] = t;
+        }
+    PointCloud cloud;
+    for (int row = 2; row < height - 2; ++row)
+        for (int col = 2; col < width - 2; ++col) {
+            const double t = depth[static_cast<std::size_t>(row) * width + col];
+            bool jump = false;
+            for (int dr = -2; dr <= 2; ++dr)
+                for (int dc = -2; dc <= 2; ++dc)
+                    jump = jump || std::abs(depth[static_cast<std::size_t>(row + dr) * width + col + dc] - t) > 0.05 * t;
+            if (!jump)
+                cloud.positions.push_back(ray_of(row, col) * t);
+        }
+    cloud.viewpoint = Vec3{0, 0, 0};
+    const Hierarchy h = build_hierarchy(cloud);
+    const Vec3 eye = Vec3{0, 0, 0} - h.cloud.origin;
+    const Vec3 c = centre - h.cloud.origin;
+    for (const double tolerance : {0.005, 0.002, 0.001}) {
+        SCOPED_TRACE(tolerance);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        ASSERT_FALSE(r.surface.height_field_used);
+        // Vertices near the sphere, and near the floor or the wall (fan apexes stand off both).
+        const auto on_sphere = [&](const Vec3& p) { return std::abs(norm(p - c) - radius) < 0.02; };
+        const auto on_room = [&](const Vec3& p) {
+            const Vec3 q = p + h.cloud.origin;
+            return std::abs(q.y - 0.6) < 0.02 || std::abs(q.z - 3.0) < 0.02;
+        };
+        std::size_t bridges = 0;
+        double toward = 0.0, away = 0.0;
+        for (const auto f : r.mesh.faces()) {
+            const std::array<Vec3, 3> p = face_corners(r.mesh, f);
+            std::size_t sphere = 0, room = 0;
+            for (const Vec3& q : p) {
+                sphere += on_sphere(q) ? 1 : 0;
+                room += on_room(q) ? 1 : 0;
+            }
+            if (sphere > 0 && room > 0) {
+                ++bridges;
+            } else if (sphere >= 2) {
+                const Vec3 n = cross(p[1] - p[0], p[2] - p[0]); // twice the area
+                (dot(n, eye - p[0]) > 0.0 ? toward : away) += norm(n);
+            }
+        }
+        EXPECT_EQ(bridges, 0u);
+        EXPECT_GT(toward, 20.0 * away); // the visible sphere faces the camera
+        const TopologyStats t = topology_stats(r.mesh);
+        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+        EXPECT_GE(t.components, 2u);
+    }
+}
+
 // E_RMS (eq. 4-6) against a direct evaluation; zero on a plane.
 TEST(Reconstruct, e_rms_matches_brute_force)
 {
