@@ -569,6 +569,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         bool is_left;
     };
     std::vector<Item> stack;
+    h.nodes.reserve(clusters); // at most one node per cluster (splicing drops some): no regrowth copies
     if (n > 0)
         stack.push_back({0, -1, true});
     while (!stack.empty()) {
@@ -675,8 +676,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
     for (std::size_t k = h.nodes.size(); k-- > 0;) {
         Node& node = h.nodes[k];
         if (node.is_leaf()) {
-            std::vector<Vec3> pts(h.cloud.positions.begin() + node.begin, h.cloud.positions.begin() + node.end);
-            node.box = bounding_box(pts);
+            node.box = bounding_box(h.cloud.positions.data() + node.begin, node.count());
         } else {
             const BoundingBox& l = h.nodes[static_cast<std::size_t>(node.left)].box;
             const BoundingBox& r = h.nodes[static_cast<std::size_t>(node.right)].box;

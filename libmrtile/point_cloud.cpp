@@ -26,13 +26,18 @@ double BoundingBox::diagonal() const { return norm(size()); }
 
 BoundingBox bounding_box(const std::vector<Vec3>& positions)
 {
+    return bounding_box(positions.data(), positions.size());
+}
+
+BoundingBox bounding_box(const Vec3* positions, std::size_t count)
+{
     BoundingBox box;
-    if (positions.empty())
+    if (count == 0)
         return box;
-    box.min = box.max = positions.front();
-    for (const Vec3& p : positions) {
-        box.min = min(box.min, p);
-        box.max = max(box.max, p);
+    box.min = box.max = positions[0];
+    for (std::size_t i = 1; i < count; ++i) {
+        box.min = min(box.min, positions[i]);
+        box.max = max(box.max, positions[i]);
     }
     return box;
 }

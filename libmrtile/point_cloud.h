@@ -63,6 +63,8 @@ struct PointCloud
 
 //! Bounding box of the positions (relative to origin). An empty cloud gives a zero box.
 BoundingBox bounding_box(const std::vector<Vec3>& positions);
+//! Bounding box of positions[0 .. count) (a zero box for none).
+BoundingBox bounding_box(const Vec3* positions, std::size_t count);
 
 //! Moves the origin, per axis on which the points do not straddle 0, to the median of the absolute
 //! coordinates (of a strided sample of at most 65,536 points), rounded to a whole number so that the
