@@ -708,14 +708,19 @@ void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, cons
     // noise, count; and three of them, against stray points.
     constexpr double kDepthPerEdge = 0.75;
     constexpr double kDepthSpacings = 4.0;
+    constexpr double kDepthNoise = 4.0; // × the tiles' RMS plane distance: a noisy scan's spread
     constexpr std::size_t kMinHits = 3;
     drop_candidates_if(candidates, threads, [&](const Tri& t) {
         const Vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
-        double spacing = 0.0;
-        for (std::uint32_t v : t)
-            spacing = std::max(spacing, layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)].full_spacing);
+        double spacing = 0.0, noise = 0.0;
+        for (std::uint32_t v : t) {
+            const TileLoop& tile = layout.tiles[static_cast<std::size_t>(layout.vertices[v].tile)];
+            spacing = std::max(spacing, tile.full_spacing);
+            if (tile.node >= 0)
+                noise = std::max(noise, h.nodes[static_cast<std::size_t>(tile.node)].rms_plane_distance);
+        }
         const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
-        const double margin = std::max(kDepthPerEdge * longest, kDepthSpacings * spacing);
+        const double margin = std::max({kDepthPerEdge * longest, kDepthSpacings * spacing, kDepthNoise * noise});
         const Vec3 n = cross(b - a, c - a);
         if (!(norm(n) > 0.0) || std::abs(dot(eye - a, n)) < 1e-12 * norm(n) * norm(eye - a))
             return false; // degenerate, or seen edge-on: nothing is seen through it

@@ -538,10 +538,11 @@ void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const s
                                std::size_t threads, Candidates& candidates);
 
 // Drops the candidates the scanner saw through: with the cloud's viewpoint known, at least three input
-// points lie behind one, along their rays from the viewpoint, deeper than 0.75 × its longest edge and 4
-// point spacings (a gap face across a concave corner has its corner's points behind it, at most half its
-// longest edge deep). Such a face spans space the scan saw empty: across a depth jump (a ball above the
-// floor joined to the floor behind it), not between neighbouring tiles of one surface.
+// points lie behind one, along their rays from the viewpoint, deeper than 0.75 × its longest edge, 4
+// point spacings and 4 × its tiles' RMS plane distance (a noisy scan's spread). A gap face across a
+// concave corner has the corner's points behind it, at most half its longest edge deep; a face with
+// points deeper behind it spans space the scan saw empty: across a depth jump (a ball above the floor
+// joined to the floor behind it), not between neighbouring tiles of one surface.
 void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,
                                   std::size_t threads, Candidates& candidates);
 
