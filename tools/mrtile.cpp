@@ -158,8 +158,9 @@ struct BuildArgs
         cmd->add_flag("--skip-missing-scans", skip_missing_scans,
                       "scan lists (.conf): read the scans that exist, leave out the missing ones");
         cmd->add_option("--viewpoint", viewpoint,
-                        "X,Y,Z where the scanner stood (input coordinates): open surfaces face it (default: from "
-                        "the file, as a PTX scan or an organized PCD tells it)")
+                        "X,Y,Z where the scanner stood, for a single view (input coordinates): open surfaces face "
+                        "it, and gap faces do not span space it saw through (default: from the file, as a PTX scan or an "
+                        "organized PCD tells it)")
             ->check(kNonEmpty);
         cmd->add_option("--crs", crs,
                         "coordinate system of the input: EPSG:N, WKT, or a .prj/.wkt file holding WKT (default: "
