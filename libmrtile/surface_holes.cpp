@@ -728,7 +728,7 @@ void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, cons
         const double eye_side = dot(eye - a, unit_n);
         // The part of its view cone behind it, as deep as the margin's reach and then some.
         const double depth = 4.0 * margin;
-        BoundingBox box = bounding_box(std::vector<Vec3>{a, b, c});
+        BoundingBox box{min(min(a, b), c), max(max(a, b), c)};
         for (const Vec3& p : {a, b, c}) {
             const Vec3 beyond = p + normalized(p - eye) * depth;
             box.min = min(box.min, beyond);

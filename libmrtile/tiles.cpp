@@ -498,6 +498,12 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         centres.push_back(space(h.nodes[static_cast<std::size_t>(node)].moments.mean));
     const std::vector<std::vector<std::uint32_t>> graph = delaunay_graph(centres);
     const Partition part = voronoi_partition(h, cut, centres, graph, options.max_points, space);
+    // In a scan seen from one viewpoint, a neighbouring node's points of a cell far off the tile's
+    // plane are another surface across a depth jump (a ball's underside and the floor behind it, in
+    // a depth camera's view), and the hull would join the two. Only there: in merged scans the points
+    // off the plane are as often the same surface seen twice, a little misregistered (bun.conf at
+    // 0.002 lost a 70-face strip to them).
+    const bool single_view = h.cloud.viewpoint.has_value();
     std::vector<std::uint32_t> own;
     for (std::size_t k = 0; k < cut.size(); ++k) {
         const std::uint32_t* cell = part.order.data() + part.start[k];
@@ -505,12 +511,6 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
         tiles.push_back(tile_from_points(h, cut[k], cell, size, options));
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
         const bool own_node_only = tiles.back().coverage_gap > 0.0;
-        // In a scan seen from one viewpoint, a neighbouring node's points of the cell far off the
-        // tile's plane are another surface across a depth jump (a ball's underside and the floor
-        // behind it, in a depth camera's view), and the hull would join the two. Only there: in
-        // merged scans the points off the plane are as often the same surface seen twice, a little
-        // misregistered (bun.conf at 0.002 lost a 70-face strip to them).
-        const bool single_view = h.cloud.viewpoint.has_value();
         if (!own_node_only && !single_view)
             continue;
         const double off_plane = kForeignPlaneFactor * std::max(n.max_plane_distance, tiles.back().spacing());

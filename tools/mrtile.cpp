@@ -858,8 +858,6 @@ std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, cons
     return levels;
 }
 
-// --store-levels on an export that made no LOD set: a note says why nothing was stored.
-
 // The model's CRS when it can place a tileset on the globe; otherwise a note says why not and the
 // tileset stays in the input's coordinates.
 std::optional<ProjectedCrs> placement_crs(const Hierarchy& h)
