@@ -560,9 +560,8 @@ void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions&
 {
     const std::size_t count = h.nodes.size();
     std::vector<double> gap(count, 0.0);
-    constexpr std::size_t kChunk = 256;
-    run_parallel((count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-        for (std::size_t k = chunk * kChunk; k < std::min(count, (chunk + 1) * kChunk); ++k)
+    run_parallel_ranges(count, 256, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k)
             if (h.nodes[k].count() >= options.max_points)
                 gap[k] = node_gap(h, h.nodes[k], options);
     });

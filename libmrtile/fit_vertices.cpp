@@ -240,11 +240,9 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
                                                 const std::vector<ClosestPoint>& previous, std::size_t threads)
 {
     std::vector<ClosestPoint> out(points.size());
-    constexpr std::size_t kChunk = 4096;
     constexpr int kMaxSteps = 16;
-    run_parallel((points.size() + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-        const std::size_t end = std::min(points.size(), (chunk + 1) * kChunk);
-        for (std::size_t i = chunk * kChunk; i < end; ++i) {
+    run_parallel_ranges(points.size(), 4096, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
             const Vec3& p = points[i];
             auto closest_on = [&](Mesh::FaceHandle f) {
                 const std::array<Vec3, 3> t = face_corners(mesh, f);

@@ -107,10 +107,8 @@ std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& 
 void update_derived(Hierarchy& h)
 {
     // Each node on its own (a loaded 1M-point model has 170k of them): in chunks, on every thread.
-    constexpr std::size_t kChunk = 4096;
-    run_parallel((h.nodes.size() + kChunk - 1) / kChunk, 0, [&](std::size_t c) {
-        const std::size_t end = std::min(h.nodes.size(), (c + 1) * kChunk);
-        for (std::size_t k = c * kChunk; k < end; ++k) {
+    run_parallel_ranges(h.nodes.size(), 4096, 0, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
             Node& n = h.nodes[k];
             n.frame = eigen_decomposition(n.moments);
             n.rms_plane_distance = n.moments.count ? std::sqrt(n.frame.values[0] / static_cast<double>(n.moments.count)) : 0.0;

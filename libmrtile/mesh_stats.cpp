@@ -449,12 +449,10 @@ std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vecto
     tree.do_not_accelerate_distance_queries();
     tree.build(); // before the threads: queries on a built tree only read it
     const std::vector<std::size_t> order = morton_order(points);
-    constexpr std::size_t kChunk = 4096;
     std::vector<std::pair<std::uint32_t, Vec3>> out(points.size());
-    run_parallel((order.size() + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-        const std::size_t end = std::min(order.size(), (chunk + 1) * kChunk);
-        Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin());
-        for (std::size_t k = chunk * kChunk; k < end; ++k) {
+    run_parallel_ranges(order.size(), 4096, threads, [&](std::size_t begin, std::size_t end) {
+        Tree::Point_and_primitive_id hint(triangles[0].vertex(0), triangles.cbegin()); // per range
+        for (std::size_t k = begin; k < end; ++k) {
             const std::size_t i = order[k];
             hint = tree.closest_point_and_primitive(to_cgal(points[i]), hint);
             out[i] = {static_cast<std::uint32_t>(hint.second - triangles.cbegin()),

@@ -63,10 +63,8 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
     // of it first: whichever, the point's own index is skipped) and their mean distance.
     std::vector<std::uint32_t> near(n * k);
     std::vector<double> spread(n);
-    constexpr std::size_t kBlock = 4096;
-    run_parallel((n + kBlock - 1) / kBlock, o.threads, [&](std::size_t block) {
-        const std::size_t end = std::min(n, (block + 1) * kBlock);
-        for (std::size_t i = block * kBlock; i < end; ++i) {
+    run_parallel_ranges(n, 4096, o.threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
             const Search search(tree, boost::get<0>(entries[i]), static_cast<unsigned>(k + 1));
             double sum = 0.0;
             std::size_t found = 0;

@@ -60,4 +60,15 @@ void run_parallel(std::size_t count, std::size_t threads, const Work& work)
         std::rethrow_exception(failure);
 }
 
+//! \brief Calls work(begin, end) for the ranges [0, block), [block, 2 block), ... that cover
+//! [0, count) (the last one shorter), as run_parallel's jobs: for loops over many small items, whose
+//! ranges are the jobs. A range's items are one job's, in order, so per-range state (a search hint)
+//! may live in `work`. `block` must be at least 1.
+template <typename Work>
+void run_parallel_ranges(std::size_t count, std::size_t block, std::size_t threads, const Work& work)
+{
+    run_parallel((count + block - 1) / block, threads,
+                 [&](std::size_t r) { work(r * block, std::min(count, (r + 1) * block)); });
+}
+
 } // namespace mrt

@@ -609,9 +609,8 @@ void drop_candidates_if(Candidates& candidates, std::size_t threads, const Drop&
 {
     const std::size_t count = candidates.triangles.size();
     std::vector<char> dropped(count, 0);
-    constexpr std::size_t kBlock = 64;
-    run_parallel((count + kBlock - 1) / kBlock, threads, [&](std::size_t block) {
-        for (std::size_t i = block * kBlock; i < std::min(count, (block + 1) * kBlock); ++i)
+    run_parallel_ranges(count, 64, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
             dropped[i] = drop(candidates.triangles[i]) ? 1 : 0;
     });
     Candidates kept;

@@ -1,4 +1,4 @@
-// Tests of parallel.h: every job runs exactly once whatever the thread count, and a job's exception
+// Tests of parallel.h: every job (and every item of ranges) runs exactly once whatever the thread count, and a job's exception
 // reaches the caller after the others have run, and the default thread count can be bounded; and
 // QuietOpenMesh, the one guard of global state that parallel stages share.
 #include "libmrtile/mesh.h"
@@ -26,6 +26,31 @@ TEST(Parallel, every_job_runs_once)
         for (std::size_t k = 0; k < runs.size(); ++k)
             EXPECT_EQ(runs[k].load(), 1) << "job " << k << " with " << threads << " threads";
     }
+}
+
+// Ranges cover [0, count) once each, in blocks of the given size (the last one shorter), whatever the
+// thread count; none for no items.
+TEST(Parallel, ranges_cover_every_item_once)
+{
+    for (std::size_t threads : {1u, 2u, 7u})
+        for (std::size_t count : {0u, 1u, 63u, 64u, 65u, 1000u}) {
+            std::vector<std::atomic<int>> seen(count);
+            std::mutex lock;
+            std::set<std::pair<std::size_t, std::size_t>> ranges;
+            run_parallel_ranges(count, 64, threads, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t i = begin; i < end; ++i)
+                    ++seen[i];
+                const std::lock_guard<std::mutex> hold(lock);
+                ranges.insert({begin, end});
+            });
+            for (std::size_t i = 0; i < count; ++i)
+                EXPECT_EQ(seen[i].load(), 1) << i << " of " << count;
+            EXPECT_EQ(ranges.size(), (count + 63) / 64) << count;
+            for (const auto& [begin, end] : ranges) {
+                EXPECT_EQ(begin % 64, 0u);
+                EXPECT_EQ(end, std::min(count, begin + 64));
+            }
+        }
 }
 
 TEST(Parallel, no_jobs_is_fine)
