@@ -652,7 +652,7 @@ bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int
         return false;
     const std::vector<Vec3> spots = patch_spots(positions, patch, spacing);
     normal = normalized(normal);
-    const Vec3 axis_u = normalized(std::abs(normal.x) < 0.9 ? cross(normal, Vec3{1, 0, 0}) : cross(normal, Vec3{0, 1, 0}));
+    const Vec3 axis_u = -perpendicular_axis(normal); // normal × helper: the frame this map has always had
     const Vec3 axis_v = cross(normal, axis_u);
     // The points around the patch, far enough out to see a hole whole and the density around it.
     BoundingBox box = bounding_box(spots);

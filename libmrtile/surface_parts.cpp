@@ -156,8 +156,7 @@ Projection choose_projection(const Hierarchy& h, const std::vector<Tile>& tiles,
         if (toward < 0.0)
             p.axis = -p.axis;
     }
-    const Vec3 helper = std::abs(p.axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-    p.u = normalized(cross(helper, p.axis));
+    p.u = perpendicular_axis(p.axis);
     p.v = cross(p.axis, p.u);
     // Steep tiles: the walls of a height field (a building's, sampled by a few points of an airborne
     // scan) or parts that are no height field at all. In a height field they get no fan, and the gap

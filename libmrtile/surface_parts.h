@@ -476,8 +476,7 @@ class AngleAround
 public:
     AngleAround(const Vec3& centre, const Vec3& normal) : centre_(centre)
     {
-        const Vec3 helper = std::abs(normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        e1_ = normalized(cross(helper, normal));
+        e1_ = perpendicular_axis(normal);
         e2_ = cross(normal, e1_);
     }
     double operator()(const Vec3& p) const

@@ -181,8 +181,7 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
         // The largest PCA axis laid into the plane, so that a tile whose own plane is that plane (a
         // flat one) keeps its frame exactly; a helper axis where it stands on the plane.
         const Vec3 along = t.axis_u - t.normal * dot(t.axis_u, t.normal);
-        const Vec3 helper = std::abs(t.normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        t.axis_u = squared_norm(along) > 1e-6 ? normalized(along) : normalized(cross(helper, t.normal));
+        t.axis_u = squared_norm(along) > 1e-6 ? normalized(along) : perpendicular_axis(t.normal);
     }
     // Right-handed plane basis so that counter-clockwise in (u, v) is counter-clockwise seen from normal.
     t.axis_v = cross(t.normal, t.axis_u);
@@ -384,9 +383,8 @@ PartitionSpace partition_space(const TileOptions& options)
     PartitionSpace space;
     if (squared_norm(options.plane_axis) > 0.0) {
         const Vec3 axis = normalized(options.plane_axis);
-        const Vec3 helper = std::abs(axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
         space.flat = true;
-        space.u = normalized(cross(helper, axis));
+        space.u = perpendicular_axis(axis);
         space.v = cross(axis, space.u);
     }
     return space;

@@ -60,6 +60,14 @@ inline Vec3 max(const Vec3& a, const Vec3& b)
 {
     return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
 }
+//! A unit axis in the plane normal to the unit vector `normal`: helper × normal, normalized, for the
+//! x axis as helper (the y axis where `normal` lies near x). With v = normal × u, (u, v, normal) is a
+//! right-handed frame of that plane.
+inline Vec3 perpendicular_axis(const Vec3& normal)
+{
+    const Vec3 helper = std::abs(normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    return normalized(cross(helper, normal));
+}
 
 //! The point of triangle (a, b, c) closest to p (Ericson, Real-Time Collision Detection, 5.1.5: the
 //! Voronoi region of p among the triangle's vertices, edges and face).
