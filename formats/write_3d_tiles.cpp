@@ -136,20 +136,14 @@ std::string foreign_entry(const fs::path& dir)
     return ec ? std::string("an unreadable entry (" + ec.message() + ")") : std::string();
 }
 
-// Refuses to replace anything that is not a tileset of ours: the target is removed as a whole.
+// Refuses to replace anything that is not a tileset of ours: the target is removed as a whole. A
+// directory with files but no tileset.json is not one at all.
 void check_replaceable(const fs::path& dir)
 {
     std::error_code ec;
-    if (!fs::exists(dir, ec))
-        return;
-    if (!fs::is_directory(dir, ec))
-        throw IoError(dir.string() + ": exists and is not a directory");
-    if (!fs::is_empty(dir, ec) && !fs::exists(dir / "tileset.json", ec))
+    if (fs::is_directory(dir, ec) && !fs::is_empty(dir, ec) && !fs::exists(dir / "tileset.json", ec))
         throw IoError(dir.string() + ": exists and is not a tileset (no tileset.json); refusing to replace it");
-    const std::string foreign = foreign_entry(dir);
-    if (!foreign.empty())
-        throw IoError(dir.string() + ": holds " + foreign + ", which is not part of a tileset we write; refusing "
-                      "to replace the directory (move it away or write elsewhere)");
+    check_replaceable_directory(dir, "tileset", foreign_entry);
 }
 
 

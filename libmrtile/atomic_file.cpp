@@ -252,4 +252,18 @@ void replace_directory(const std::filesystem::path& built, const std::filesystem
     fs::remove_all(old, ec);
 }
 
+void check_replaceable_directory(const std::filesystem::path& dir, const std::string& what,
+                                 const std::function<std::string(const std::filesystem::path&)>& foreign)
+{
+    std::error_code ec;
+    if (!std::filesystem::exists(dir, ec))
+        return;
+    if (!std::filesystem::is_directory(dir, ec))
+        throw IoError(dir.string() + ": exists and is not a directory");
+    const std::string entry = foreign(dir);
+    if (!entry.empty())
+        throw IoError(dir.string() + ": holds " + entry + ", which is not part of a " + what + " we write; refusing "
+                      "to replace the directory (move it away or write elsewhere)");
+}
+
 } // namespace mrt

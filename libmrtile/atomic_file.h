@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 namespace mrt {
@@ -74,6 +75,14 @@ private:
 //! roll-back. The previous directory is removed. `what` names the output in messages ("tileset").
 //! \throw IoError naming `dir` if it cannot be put in place (the previous one is then kept).
 void replace_directory(const std::filesystem::path& built, const std::filesystem::path& dir, const std::string& what);
+
+//! \brief Before any work: whether replace_directory may replace what is at `dir` (it removes the old
+//! directory whole, so a user's own files in it must stop the write). Nothing there passes; else `dir`
+//! must be a directory whose entries are all an output's own: `foreign(dir)` names the first that is
+//! not ("" for none). `what` names the output in the message ("tileset").
+//! \throw IoError naming `dir` and the foreign entry (or what `foreign` throws).
+void check_replaceable_directory(const std::filesystem::path& dir, const std::string& what,
+                                 const std::function<std::string(const std::filesystem::path&)>& foreign);
 
 //! \brief Names a temporary file or directory to remove if the program is stopped by a signal
 //! (install_signal_cleanup) before it is renamed into place; forget_temporary when it is gone or moved.

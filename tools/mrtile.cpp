@@ -1299,11 +1299,9 @@ std::vector<fs::path> read_files(const std::vector<fs::path>& inputs)
 // (lods.json, levelN.EXT): a user's own files in it stop the command before any work.
 void check_lods_directory(const fs::path& dir)
 {
-    std::error_code ec;
-    if (fs::exists(dir, ec)) {
-        if (!fs::is_directory(dir, ec))
-            throw IoError(dir.string() + ": exists and is not a directory");
-        for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    check_replaceable_directory(dir, "LOD chain", [](const fs::path& d) {
+        std::error_code ec;
+        for (const fs::directory_entry& entry : fs::directory_iterator(d, ec)) {
             const std::string name = entry.path().filename().string();
             const std::string stem = entry.path().stem().string();
             const bool ours = entry.is_regular_file(ec) &&
@@ -1312,12 +1310,12 @@ void check_lods_directory(const fs::path& dir)
                                 std::all_of(stem.begin() + 5, stem.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
                                 is_mesh_extension(lower_extension(entry.path()))));
             if (!ours)
-                throw IoError(dir.string() + ": holds " + name + ", which is not part of a LOD chain we write; refusing "
-                              "to replace the directory (move it away or write elsewhere)");
+                return name;
         }
         if (ec)
-            throw IoError(dir.string() + ": cannot list it (" + ec.message() + ")");
-    }
+            throw IoError(d.string() + ": cannot list it (" + ec.message() + ")");
+        return std::string();
+    });
     check_writable_directory(dir);
 }
 
