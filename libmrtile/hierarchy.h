@@ -124,8 +124,14 @@ void update_derived(Hierarchy& h);
 //! its plane to the noise: about half its σ), weighted from 0 at leaf roughness 0.2 to 1 at 0.4 and from
 //! 0 at a ratio of 1 to 1 at 0.6; clean regions get 0. A region under half the largest is judged at its
 //! parent's scale too, whichever is smoother (under noise of 1.5 spacings or more a region of 250 points
-//! is still blob-like itself). Smaller regions take the same measure over the whole sample; nodes below
-//! a region take its floor, nodes above the smallest of their children's.
+//! is still blob-like itself). Noise of two spacings or more makes the region a blob as well: its first
+//! ancestor that is a slab (roughness under 0.35), if as thick as the region (RMS within 1.5×) and
+//! spread about its plane as noise is (kurtosis over 2.2: a thin plate sampled on both sides has about
+//! 1.3), sets the floor to 2 × its RMS plane distance. A region with noisy leaves whose own measures
+//! give it no floor (across a sharp edge, or curved) takes the median floor of the regions near it in
+//! the tree whose leaves look alike (median RMS within 1.5×), when those are half of the regions there,
+//! else the whole sample's on the same terms. Smaller regions take the same measure over the whole
+//! sample; nodes below a region take its floor, nodes above the smallest of their children's.
 void derive_noise_floor(Hierarchy& h);
 
 //! Sets every node's noise_floor to 0 (cut below the noise anyway).
