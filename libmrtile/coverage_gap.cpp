@@ -556,14 +556,36 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
 
 } // namespace
 
+double children_separation(const Hierarchy& h, const Node& n)
+{
+    constexpr double kMinSpacings = 8.0; // twice the hole's disc radius (min_radius_spacings)
+    constexpr double kMinShare = 0.25;   // of the node's box diagonal
+    if (n.is_leaf() || !(n.frame.values[1] > 0.0))
+        return 0.0;
+    const BoundingBox& a = h.nodes[static_cast<std::size_t>(n.left)].box;
+    const BoundingBox& b = h.nodes[static_cast<std::size_t>(n.right)].box;
+    const double dx = std::max({0.0, a.min.x - b.max.x, b.min.x - a.max.x});
+    const double dy = std::max({0.0, a.min.y - b.max.y, b.min.y - a.max.y});
+    const double dz = std::max({0.0, a.min.z - b.max.z, b.min.z - a.max.z});
+    const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    // The spacing of the node's points over the disc its two largest eigenvalues span (a uniform disc
+    // of radius R has λ = count R² / 4 along each of its axes).
+    const double count = static_cast<double>(n.count());
+    const double area = 4.0 * M_PI * std::sqrt(n.frame.values[2] * n.frame.values[1]) / count;
+    const double spacing = std::sqrt(area / count);
+    return d > std::max(kMinSpacings * spacing, kMinShare * n.box.diagonal()) ? d : 0.0;
+}
+
 void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions& options)
 {
     const std::size_t count = h.nodes.size();
     std::vector<double> gap(count, 0.0);
     run_parallel_ranges(count, 256, threads, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k)
+        for (std::size_t k = begin; k < end; ++k) {
             if (h.nodes[k].count() >= options.max_points)
                 gap[k] = node_gap(h, h.nodes[k], options);
+            gap[k] = std::max(gap[k], children_separation(h, h.nodes[k]));
+        }
     });
     for (std::size_t k = count; k-- > 0;) { // children come after their parents
         Node& node = h.nodes[k];

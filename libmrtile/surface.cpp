@@ -270,6 +270,11 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     if (options.close_holes > kMaxCloseHoles)
         throw InvalidInput("SurfaceOptions::close_holes: at most " + std::to_string(kMaxCloseHoles) +
                            " edges (a hole's fill costs the cube of its edges)");
+    // A line or a point spans no surface whatever tiles its cut has: points on a line stored as floats
+    // are off it by their rounding, enough for a fan of zero-area faces (QA, session 17: 225 of them).
+    const Eigen3x3& whole = h.nodes.front().frame;
+    if (!(whole.values[1] > 1e-12 * whole.values[2]))
+        throw InvalidInput("the points are collinear or coincident: they span no surface to mesh");
     std::size_t fan_tiles = 0;
     for (const Tile& t : given) {
         if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
@@ -280,13 +285,8 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
                                    std::to_string(p) + " beyond the cloud");
         fan_tiles += t.has_fan() ? 1 : 0;
     }
-    if (fan_tiles == 0) {
-        // Whether any cut could do better: not when the whole cloud is a line or a point.
-        const Eigen3x3& whole = h.nodes.front().frame;
-        if (!(whole.values[1] > 1e-12 * whole.values[2]))
-            throw InvalidInput("the points are collinear or coincident: they span no surface to mesh");
+    if (fan_tiles == 0)
         throw InvalidInput("build_surface: no tile has three non-collinear points; choose a coarser cut");
-    }
 
     // A height field's steep tiles get no fan (see choose_height_field): tiles made for one come so
     // (mesh_cut), others are marked here.

@@ -87,6 +87,7 @@ TEST(Cli, version_help_and_usage_errors)
     EXPECT_EQ(mrtile("frobnicate", dir).code, 2);
     EXPECT_EQ(mrtile("build", dir).code, 2); // missing POINTS and -o
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
+    EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 7", dir).code, 2); // leaves too small to mesh
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --tolerance 0.1 --tau 2", dir).code, 2);
     // A usage error is one line too, naming the option.
     r = mrtile("mesh x.mrt -o y.ply --close-holes 3000", dir);

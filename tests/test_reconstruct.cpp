@@ -231,6 +231,42 @@ TEST(Reconstruct, a_second_object_a_few_spacings_away_is_kept)
     }
 }
 
+// A sphere and a cube 1000 radii apart (QA, session 17): the tolerance is relative to the box's longest
+// side, so the root, whose plane passes within 1.4 of every point, was within every tolerance down to
+// 0.001 and became one flat tile spanning the space between them (mesh to points 0.498 of the
+// diagonal). Children whose boxes lie far apart give their parent a coverage gap of that distance:
+// each object is meshed on its own, and no face lies away from the points.
+TEST(Reconstruct, objects_far_apart_are_not_joined_by_a_tile)
+{
+    PointCloud both = shapes::sphere(20000, 1.0, 13);
+    PointCloud cube = shapes::box_surface({2.0, 2.0, 2.0}, 20000 / 24.0);
+    shapes::translate(cube, {1000.0, -1.0, -1.0});
+    both.positions.insert(both.positions.end(), cube.positions.begin(), cube.positions.end());
+    const Hierarchy h = build_hierarchy(both);
+    EXPECT_GT(h.nodes.front().coverage_gap, 990.0);
+    for (const double tolerance : {0.01, 0.002}) {
+        SCOPED_TRACE(tolerance);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        EXPECT_EQ(topology_stats(r.mesh).components, 2u);
+        EXPECT_LT(mesh_to_point_distance(r.mesh, h.cloud.positions).max, 0.001);
+    }
+}
+
+// Points on a line, stored as floats (QA, session 17): rounding puts them off the line by a ten-millionth,
+// enough for one tile's fan of 225 zero-area faces. A line is refused as in double precision.
+TEST(Reconstruct, a_line_rounded_to_floats_is_refused)
+{
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    PointCloud line;
+    for (int i = 0; i < 1000; ++i) {
+        const float t = static_cast<float>(unit(rng));
+        line.positions.push_back({t, static_cast<float>(2.0 * t), static_cast<float>(3.0 * t)});
+    }
+    const Hierarchy h = build_hierarchy(line);
+    EXPECT_THROW(mesh_cut(h, cut_by_tolerance(h, 0.002)), InvalidInput);
+}
+
 // The same sphere as ten near-equal copies (each point repeated with noise of a millionth of the
 // radius, as repeated frames of one view): closed. The tile spacing counts a clump once; counted ten
 // times, the spacing was √10 too small and the gaps between tiles looked like holes (7 / 63 loops).
