@@ -554,12 +554,12 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
     return coverage_gap(points, u, v, sampled, fill);
 }
 
-} // namespace
-
-double children_separation(const Hierarchy& h, const Node& n)
+// Two children whose boxes lie apart: the node's tile would span the space between them (two objects
+// far apart in one cloud). Counted when wider than a hole's disc (twice min_radius_spacings) and a
+// quarter of the node's box diagonal (so that a node split across a little empty space is not).
+double children_separation(const Hierarchy& h, const Node& n, const CoverageOptions& options)
 {
-    constexpr double kMinSpacings = 8.0; // twice the hole's disc radius (min_radius_spacings)
-    constexpr double kMinShare = 0.25;   // of the node's box diagonal
+    constexpr double kMinShare = 0.25;
     if (n.is_leaf() || !(n.frame.values[1] > 0.0))
         return 0.0;
     const BoundingBox& a = h.nodes[static_cast<std::size_t>(n.left)].box;
@@ -573,8 +573,10 @@ double children_separation(const Hierarchy& h, const Node& n)
     const double count = static_cast<double>(n.count());
     const double area = 4.0 * M_PI * std::sqrt(n.frame.values[2] * n.frame.values[1]) / count;
     const double spacing = std::sqrt(area / count);
-    return d > std::max(kMinSpacings * spacing, kMinShare * n.box.diagonal()) ? d : 0.0;
+    return d > std::max(2.0 * options.min_radius_spacings * spacing, kMinShare * n.box.diagonal()) ? d : 0.0;
 }
+
+} // namespace
 
 void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions& options)
 {
@@ -584,7 +586,7 @@ void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions&
         for (std::size_t k = begin; k < end; ++k) {
             if (h.nodes[k].count() >= options.max_points)
                 gap[k] = node_gap(h, h.nodes[k], options);
-            gap[k] = std::max(gap[k], children_separation(h, h.nodes[k]));
+            gap[k] = std::max(gap[k], children_separation(h, h.nodes[k], options));
         }
     });
     for (std::size_t k = count; k-- > 0;) { // children come after their parents

@@ -59,12 +59,17 @@ struct Roughness
 };
 
 constexpr std::size_t kMinLeaves = 8;
+// Median leaf roughness at which a region's leaves are blobs: floor_of's full floor, and where the
+// rules for noise its measures cannot see start.
+constexpr double kNoisyLeaves = 0.4;
+// How far up the tree those rules look: ancestors of up to kReach × the largest region's points.
+constexpr std::size_t kReach = 64;
 
 // The floor of a region whose leaves are `leaves` and whose own roughness is `region` (see
 // derive_noise_floor in hierarchy.h).
 double floor_of(const Roughness& leaves, double region)
 {
-    constexpr double kSmooth = 0.2, kRough = 0.4; // leaf roughness: no floor .. full floor
+    constexpr double kSmooth = 0.2; // leaf roughness: no floor (full floor at kNoisyLeaves)
     constexpr double kCurved = 1.0, kNoisy = 0.7; // region roughness / leaf roughness: no .. full
     constexpr double kFactor = 3.0;
     if (leaves.rms.size() < kMinLeaves)
@@ -72,7 +77,7 @@ double floor_of(const Roughness& leaves, double region)
     const double rough = median(leaves.roughness);
     if (!(rough > 0))
         return 0.0;
-    const double weight = std::clamp((rough - kSmooth) / (kRough - kSmooth), 0.0, 1.0) *
+    const double weight = std::clamp((rough - kSmooth) / (kNoisyLeaves - kSmooth), 0.0, 1.0) *
                           std::clamp((kCurved - region / rough) / (kCurved - kNoisy), 0.0, 1.0);
     return weight > 0 ? weight * kFactor * median(leaves.rms) : 0.0;
 }
@@ -101,20 +106,17 @@ double plane_kurtosis(const Hierarchy& h, const Node& n)
 // (roughness under kSlab), provided that RMS is within kSaturated of the region's own (else the
 // thickness grows with the scale: a rod, a corner, shape and not noise) and the points spread about
 // that plane as noise does, unimodally (kurtosis over kMinKurtosis; a thin plate sampled on both
-// sides spreads as two sheets and keeps its detail). 0 when it does not apply. `kurtosis` caches
-// plane_kurtosis per node (NaN = not computed).
-double plateau_floor(const Hierarchy& h, const Node& region, const Roughness& leaves, std::size_t region_max,
+// sides spreads as two sheets and keeps its detail). 0 when it does not apply. `leaf_roughness` is
+// the median of the region's leaves; `kurtosis` caches plane_kurtosis per node (NaN = not computed).
+double plateau_floor(const Hierarchy& h, const Node& region, double leaf_roughness, std::size_t region_max,
                      std::vector<double>& kurtosis)
 {
-    constexpr double kRough = 0.4;   // leaf roughness: blobs
     constexpr double kBlob = 0.4;    // region roughness: still a blob
     constexpr double kSlab = 0.35;   // an ancestor this smooth is a piece of noisy surface
     constexpr double kSaturated = 1.5;
     constexpr double kMinKurtosis = 2.2;
     constexpr double kPlateauFactor = 2.0;
-    constexpr std::size_t kReach = 64; // ancestors of up to kReach × region_max points are asked
-    if (leaves.rms.size() < kMinLeaves || !(region.frame.values[1] > 0) || median(leaves.roughness) < kRough ||
-        Roughness::node_roughness(region) < kBlob)
+    if (!(region.frame.values[1] > 0) || leaf_roughness < kNoisyLeaves || Roughness::node_roughness(region) < kBlob)
         return 0.0;
     for (std::int32_t a = region.parent; a >= 0; a = h.nodes[static_cast<std::size_t>(a)].parent) {
         const Node& up = h.nodes[static_cast<std::size_t>(a)];
@@ -147,17 +149,15 @@ struct JudgedRegion
 // rises with the scale like a curved surface's, and its measures give it no floor: a cut then refines
 // it down to blobs, and the mesh along the edge breaks up (a box with noise of one spacing: 4 loops
 // and 315 crossing faces at tolerance 0.002). Noise comes from the sensor and is the same nearby, and
-// the leaves show it: a region with noisy leaves (roughness over kRough) takes the median floor of the
-// regions near it in the tree (under its lowest ancestor with kNeighbours regions or more, of at most
+// the leaves show it: a region with noisy leaves (roughness over kNoisyLeaves) takes the median floor
+// of the regions near it in the tree (under its lowest ancestor with kNeighbours regions or more, of at most
 // kReach × region_max points) whose leaves look alike (median RMS within kAlike of its own) and that
 // have a floor, when they are at least half of the regions there. A floor only rises; the floors of
 // the regions' own measures are the ones taken (no chains).
 void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judged, std::size_t region_max)
 {
-    constexpr double kRough = 0.4;
     constexpr double kAlike = 1.5;
     constexpr std::size_t kNeighbours = 8;
-    constexpr std::size_t kReach = 64;
     const std::size_t count = h.nodes.size();
     std::vector<std::int32_t> judged_at(count, -1);  // node -> index in `judged`
     std::vector<std::uint32_t> regions_under(count, 0); // judged regions at or under a node
@@ -176,7 +176,7 @@ void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judge
     std::vector<double> floored_rms, floored_floor;
     std::size_t noisy_leaves = 0;
     for (const JudgedRegion& j : judged)
-        if (j.leaf_roughness >= kRough) {
+        if (j.leaf_roughness >= kNoisyLeaves) {
             ++noisy_leaves;
             if (j.floor > 0.0) {
                 floored_rms.push_back(j.leaf_rms);
@@ -193,7 +193,7 @@ void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judge
     std::vector<std::int32_t> stack;
     for (std::size_t r = 0; r < judged.size(); ++r) {
         const JudgedRegion& me = judged[r];
-        if (me.leaf_roughness < kRough)
+        if (me.leaf_roughness < kNoisyLeaves)
             continue;
         std::int32_t around = h.nodes[static_cast<std::size_t>(me.node)].parent;
         while (around >= 0 && regions_under[static_cast<std::size_t>(around)] < kNeighbours &&
@@ -215,7 +215,7 @@ void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judge
                 if (other.node == me.node)
                     continue;
                 ++others;
-                if (other.floor > 0.0 && other.leaf_roughness >= kRough && other.leaf_rms <= kAlike * me.leaf_rms &&
+                if (other.floor > 0.0 && other.leaf_roughness >= kNoisyLeaves && other.leaf_rms <= kAlike * me.leaf_rms &&
                     me.leaf_rms <= kAlike * other.leaf_rms)
                     floors.push_back(other.floor);
             } else if (!n.is_leaf() && n.count() >= region_max) {
@@ -333,8 +333,9 @@ void derive_noise_floor(Hierarchy& h)
             if (parent.frame.values[1] > 0)
                 region_roughness = std::min(region_roughness, Roughness::node_roughness(parent));
         }
-        n.noise_floor = std::max(floor_of(leaves, region_roughness), plateau_floor(h, n, leaves, region_max, kurtosis));
-        judged.push_back({static_cast<std::int32_t>(k), median(leaves.rms), median(leaves.roughness), n.noise_floor});
+        const double leaf_roughness = median(leaves.roughness);
+        n.noise_floor = std::max(floor_of(leaves, region_roughness), plateau_floor(h, n, leaf_roughness, region_max, kurtosis));
+        judged.push_back({static_cast<std::int32_t>(k), median(leaves.rms), leaf_roughness, n.noise_floor});
     }
     take_neighbours_floors(h, judged, region_max);
     // Nodes under a region take its floor.
