@@ -698,7 +698,9 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
     return h;
 }
 
-Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
+namespace {
+
+Hierarchy build_once(PointCloud cloud, const BuildOptions& options)
 {
     const auto start = std::chrono::steady_clock::now();
     validate(cloud, "build_hierarchy");
@@ -743,6 +745,48 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     h.info.pca_limit = static_cast<std::uint32_t>(std::min<std::size_t>(options.pca_limit, std::numeric_limits<std::uint32_t>::max()));
     h.info.min_cluster = static_cast<std::uint32_t>(std::min<std::size_t>(options.min_cluster, std::numeric_limits<std::uint32_t>::max()));
     h.info.reclassify = options.reclassify;
+    h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return h;
+}
+
+} // namespace
+
+Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    using Denoise = BuildOptions::Denoise;
+    if (options.denoise == Denoise::On)
+        validate(cloud, "build_hierarchy");
+    Hierarchy h;
+    if (options.denoise == Denoise::On) {
+        // Duplicates first, as the build would: a point repeated is its own nearest neighbours.
+        const std::size_t input_size = cloud.size();
+        std::vector<std::uint32_t> kept;
+        if (options.merge_duplicates)
+            kept = remove_duplicates(cloud);
+        const std::size_t merged = input_size - cloud.size();
+        denoise_points(cloud.positions, options.denoising);
+        h = build_once(std::move(cloud), options);
+        if (!kept.empty())
+            for (std::uint32_t& i : h.input_index)
+                i = kept[i];
+        h.info.duplicates_merged += merged;
+    } else {
+        h = build_once(std::move(cloud), options);
+        if (options.denoise == Denoise::Off || !sample_is_noisy(h))
+            return h;
+        // Noisy: again from the moved points (tree order: input_index maps them to the input).
+        PointCloud moved = std::move(h.cloud);
+        denoise_points(moved.positions, options.denoising);
+        BuildOptions again = options;
+        again.merge_duplicates = false; // merged already
+        Hierarchy second = build_once(std::move(moved), again);
+        for (std::uint32_t& i : second.input_index)
+            i = h.input_index[i];
+        second.info.duplicates_merged = h.info.duplicates_merged;
+        h = std::move(second);
+    }
+    h.info.denoised = true;
     h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return h;
 }

@@ -31,7 +31,8 @@ constexpr std::size_t kNodeSize = 176;
 constexpr std::size_t kNodeSizeV1 = 168; // version 1: no coverage gap
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
-constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels;
+constexpr std::uint32_t kFlagDenoised = 32; // BuildInfo::denoised: no section of its own
+constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels | kFlagDenoised;
 // Stored levels: a LOD set has at most LodSetOptions::max_levels (16) levels; a recipe is a line of options.
 constexpr std::uint32_t kMaxStoredLevels = 64;
 constexpr std::uint32_t kMaxRecipeBytes = 1u << 16;
@@ -488,7 +489,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
-          (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u));
+          (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u) |
+          (h.info.denoised ? kFlagDenoised : 0u));
     w.u64(n);
     w.u64(h.nodes.size());
     w.f64(h.cloud.origin.x);
@@ -605,6 +607,7 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     h.info.pca_limit = r.u32();
     h.info.min_cluster = r.u32();
     h.info.reclassify = r.u32() != 0;
+    h.info.denoised = (flags & kFlagDenoised) != 0;
     h.info.criterion_value = r.f64();
     const double seconds = r.f64();
     h.info.build_seconds = (flags & kFlagBuildTime) ? seconds : std::numeric_limits<double>::quiet_NaN();

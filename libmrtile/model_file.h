@@ -5,7 +5,8 @@
 //! the coverage gap, are read too and their gaps computed on load):
 //! \code
 //!   header   104 bytes: magic "MRTILE\r\n", u32 version, u32 endian marker 0x01020304, u32 header size,
-//!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint, 8 = CRS), u64 points, u64 nodes, f64 origin[3],
+//!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint, 8 = CRS, 16 = levels,
+//!            32 = points denoised), u64 points, u64 nodes, f64 origin[3],
 //!            u32 criterion, u32 pca_limit, u32 min_cluster, u32 reclassify, f64 criterion value,
 //!            f64 build seconds, u64 payload size
 //!   payload  positions (points × 3 f64, relative to origin, tree order), colours (points × 4 u8, if

@@ -3,20 +3,12 @@
 // The test is the classic statistical one (mean distance to the k nearest neighbours) made relative
 // twice, so that it needs no scale: against the point's own neighbours (density may vary across a scan)
 // and against the whole cloud (stray points among stray points). See outliers.h.
-// Neighbours come from CGAL's kd-tree (mesh_stats.cpp uses it too, for nearest distances only: here each
-// point's neighbour indices are needed, so the tree stores them).
+// Neighbours come from neighbours.h (denoise.cpp uses them too).
 #include "libmrtile/outliers.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/neighbours.h"
 #include "libmrtile/parallel.h"
-
-#include <CGAL/Orthogonal_k_neighbor_search.h>
-#include <CGAL/Search_traits_3.h>
-#include <CGAL/Search_traits_adapter.h>
-#include <CGAL/Simple_cartesian.h>
-#include <CGAL/property_map.h>
-
-#include <boost/tuple/tuple.hpp>
 
 #include <algorithm>
 #include <cassert>
@@ -25,13 +17,6 @@
 
 namespace mrt {
 namespace {
-
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point = Kernel::Point_3;
-using Entry = boost::tuple<Point, std::uint32_t>;
-using Traits = CGAL::Search_traits_adapter<Entry, CGAL::Nth_of_tuple_property_map<0, Entry>, CGAL::Search_traits_3<Kernel>>;
-using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
-using Tree = Search::Tree;
 
 double median_of(std::vector<double>& values)
 {
@@ -52,30 +37,21 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
             throw InvalidInput("find_outliers: position " + std::to_string(i) + " is not finite");
     if (n <= k || (o.local_ratio == 0.0 && o.global_ratio == 0.0))
         return {};
-    std::vector<Entry> entries;
-    entries.reserve(n);
-    for (std::uint32_t i = 0; i < n; ++i)
-        entries.emplace_back(Point(positions[i].x, positions[i].y, positions[i].z), i);
-    Tree tree(entries.begin(), entries.end());
-    tree.build(); // built before the threads query it (CGAL builds lazily otherwise)
-
-    // The k nearest other points of every point (the query finds the point itself too, or a duplicate
-    // of it first: whichever, the point's own index is skipped) and their mean distance.
+    // The k nearest other points of every point and their mean distance.
+    const NearestNeighbours search(positions);
     std::vector<std::uint32_t> near(n * k);
     std::vector<double> spread(n);
     run_parallel_ranges(n, 4096, o.threads, [&](std::size_t begin, std::size_t end) {
+        std::vector<std::uint32_t> index;
+        std::vector<double> distance;
         for (std::size_t i = begin; i < end; ++i) {
-            const Search search(tree, boost::get<0>(entries[i]), static_cast<unsigned>(k + 1));
+            search.query(static_cast<std::uint32_t>(i), k, index, distance);
+            assert(index.size() == k);
             double sum = 0.0;
-            std::size_t found = 0;
-            for (auto it = search.begin(); it != search.end() && found < k; ++it) {
-                const std::uint32_t j = boost::get<1>(it->first);
-                if (j == i)
-                    continue;
-                near[i * k + found++] = j;
-                sum += std::sqrt(it->second);
+            for (std::size_t m = 0; m < k; ++m) {
+                near[i * k + m] = index[m];
+                sum += distance[m];
             }
-            assert(found == k);
             spread[i] = sum / static_cast<double>(k);
         }
     });

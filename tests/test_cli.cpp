@@ -980,12 +980,12 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     text.resize(text.rfind('\n') + 1);
     write_text(dir / "noisy.xyz", text);
     const Result floored = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "a.ply").string() +
-                                      " --tolerance 0.002 --stats-json " + (dir / "a.json").string(), dir);
+                                      " --tolerance 0.002 --denoise off --stats-json " + (dir / "a.json").string(), dir);
     ASSERT_EQ(floored.code, 0) << floored.err;
     EXPECT_NE(floored.out.find("duplicates merged)"), std::string::npos) << floored.out;
     EXPECT_NE(floored.out.find("note: the points are noisy"), std::string::npos) << floored.out;
     const Result below = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "b.ply").string() +
-                                    " --tolerance 0.002 --below-noise --stats-json " + (dir / "b.json").string(), dir);
+                                    " --tolerance 0.002 --denoise off --below-noise --stats-json " + (dir / "b.json").string(), dir);
     ASSERT_EQ(below.code, 0) << below.err;
     EXPECT_EQ(below.out.find("note: the points are noisy"), std::string::npos) << below.out;
     const auto a = nlohmann::json::parse(slurp(dir / "a.json")), b = nlohmann::json::parse(slurp(dir / "b.json"));
@@ -993,7 +993,7 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_EQ(a["boundary_loops"].get<int>(), 0);
     EXPECT_EQ(a["components"].get<int>(), 1);
     // `info` says how much of the sample is noisy and up to which floor.
-    ASSERT_EQ(mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "n.mrt").string(), dir).code, 0);
+    ASSERT_EQ(mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "n.mrt").string() + " --denoise off", dir).code, 0);
     const Result info = mrtile("info --json " + (dir / "n.mrt").string(), dir);
     ASSERT_EQ(info.code, 0) << info.err;
     const auto j = nlohmann::json::parse(info.out);
@@ -1004,6 +1004,26 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     const Result lods = mrtile("lods " + (dir / "n.mrt").string() + " -o " + (dir / "lods").string(), dir);
     ASSERT_EQ(lods.code, 0) << lods.err;
     EXPECT_NE(lods.out.find("note: the points are noisy: the levels end at the noise floor"), std::string::npos) << lods.out;
+
+    // By default a sample this noisy is denoised first, and every output says so.
+    const Result denoised = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "d.ply").string() +
+                                       " --tolerance 0.002 --stats-json " + (dir / "d.json").string() + " --model " +
+                                       (dir / "d.mrt").string(), dir);
+    ASSERT_EQ(denoised.code, 0) << denoised.err;
+    EXPECT_NE(denoised.out.find("(noisy: denoised)"), std::string::npos) << denoised.out;
+    EXPECT_NE(denoised.out.find("(to the denoised points)"), std::string::npos) << denoised.out;
+    const auto d = nlohmann::json::parse(slurp(dir / "d.json"));
+    EXPECT_TRUE(d["denoised"].get<bool>());
+    EXPECT_FALSE(a["denoised"].get<bool>());
+    EXPECT_EQ(d["boundary_loops"].get<int>(), 0);
+    EXPECT_EQ(d["components"].get<int>(), 1);
+    EXPECT_LT(d["mean_distance"].get<double>(), a["mean_distance"].get<double>());
+    const Result denoised_info = mrtile("info --json " + (dir / "d.mrt").string(), dir);
+    ASSERT_EQ(denoised_info.code, 0) << denoised_info.err;
+    EXPECT_TRUE(nlohmann::json::parse(denoised_info.out)["denoised"].get<bool>());
+    EXPECT_FALSE(j["denoised"].get<bool>());
+    EXPECT_EQ(mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "x.mrt").string() + " --denoise maybe", dir).code, 2);
+    EXPECT_FALSE(fs::exists(dir / "x.mrt"));
 }
 
 } // namespace

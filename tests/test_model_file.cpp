@@ -73,7 +73,7 @@ TEST(ModelFile, viewpoint_round_trip_and_unknown_flags)
     EXPECT_EQ(serialize_model(back), bytes);
     EXPECT_FALSE(deserialize_model(serialize_model(sample()), "memory").cloud.viewpoint.has_value());
     std::string unknown = bytes;
-    unknown[20] = static_cast<char>(unknown[20] | 32); // flags: the u32 after magic, version, marker, header size
+    unknown[20] = static_cast<char>(unknown[20] | 64); // flags: the u32 after magic, version, marker, header size
     try {
         deserialize_model(unknown, "m.mrt");
         ADD_FAILURE() << "an unknown flag was accepted";

@@ -147,7 +147,9 @@ TEST(Reconstruct, a_noisy_sample_is_meshed_at_its_noise_floor)
     PointCloud cloud = shapes::sphere(30000);
     const double sigma = 0.02; // about the point spacing
     shapes::add_noise(cloud, sigma);
-    const Hierarchy h = build_hierarchy(cloud);
+    BuildOptions raw; // the noise kept: this test is about the floor
+    raw.denoise = BuildOptions::Denoise::Off;
+    const Hierarchy h = build_hierarchy(cloud, raw);
     ASSERT_GT(max_noise_floor(h), 0.0);
     for (double tolerance : {0.005, 0.002}) {
         const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
@@ -759,6 +761,26 @@ TEST(Reconstruct, tori_with_heavy_noise_are_closed)
     }
 }
 
+// A generated shape with Gaussian noise of `noise_spacings` point spacings (its spacing from its area).
+struct NoisyShape
+{
+    const char* name;
+    PointCloud cloud;
+    double spacing;
+    double noise_spacings;
+    int genus;
+};
+
+NoisyShape noisy_shape(const char* name, PointCloud cloud, double area, double noise_spacings, int genus)
+{
+    const double spacing = std::sqrt(area / static_cast<double>(cloud.size()));
+    shapes::add_noise(cloud, noise_spacings * spacing);
+    return {name, std::move(cloud), spacing, noise_spacings, genus};
+}
+
+constexpr double kTorusArea = 4.0 * M_PI * M_PI * 0.35;                 // shapes::torus
+constexpr double kBoxArea = 2.0 * (1.0 * 2.0 + 2.0 * 0.5 + 0.5 * 1.0); // box_surface({1, 2, 0.5})
+
 // Noise wider than the regions the noise floor judges, and noise at sharp edges (derive_noise_floor):
 // a sphere with noise of 3 point spacings (its regions and leaves are blobs alike, so their roughness
 // does not fall; the floor comes from the first slab above them) and a torus with 2; a box with noise
@@ -768,30 +790,70 @@ TEST(Reconstruct, tori_with_heavy_noise_are_closed)
 // at the noise level, with hardly any crossing faces.
 TEST(Reconstruct, heavy_noise_and_noise_at_sharp_edges_are_meshed_at_the_noise_floor)
 {
-    struct Case
-    {
-        const char* name;
-        PointCloud cloud;
-        double area;
-        double noise_spacings;
-        int genus;
-    };
-    std::vector<Case> cases;
-    cases.push_back({"sphere", shapes::sphere(30000), 4.0 * M_PI, 3.0, 0});
-    cases.push_back({"torus", shapes::torus(60000), 4.0 * M_PI * M_PI * 0.35, 2.0, 1});
-    const double box_area = 2.0 * (1.0 * 2.0 + 2.0 * 0.5 + 0.5 * 1.0);
-    cases.push_back({"box", shapes::box_surface({1.0, 2.0, 0.5}, 60000 / box_area), box_area, 1.0, 0});
-    for (Case& c : cases) {
+    std::vector<NoisyShape> cases;
+    cases.push_back(noisy_shape("sphere", shapes::sphere(30000), 4.0 * M_PI, 3.0, 0));
+    cases.push_back(noisy_shape("torus", shapes::torus(60000), kTorusArea, 2.0, 1));
+    cases.push_back(noisy_shape("box", shapes::box_surface({1.0, 2.0, 0.5}, 60000 / kBoxArea), kBoxArea, 1.0, 0));
+    for (const NoisyShape& c : cases) {
         SCOPED_TRACE(c.name);
-        const double spacing = std::sqrt(c.area / static_cast<double>(c.cloud.size()));
-        shapes::add_noise(c.cloud, c.noise_spacings * spacing);
-        const Hierarchy h = build_hierarchy(c.cloud);
+        const double spacing = c.spacing;
+        BuildOptions raw; // the floor's rules, on the noisy points (denoised, see the test below)
+        raw.denoise = BuildOptions::Denoise::Off;
+        const Hierarchy h = build_hierarchy(c.cloud, raw);
         EXPECT_GT(max_noise_floor(h), c.noise_spacings * spacing);
         const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
         expect_closed(r.mesh, c.genus);
         EXPECT_LE(self_intersecting_faces(r.mesh).size(), r.mesh.n_faces() / 200);
         // Within the noise: the mean distance of a Gaussian's points to its mean plane is 0.8 σ.
         EXPECT_LT(point_to_mesh_distance(h.cloud.positions, r.mesh).mean, 1.5 * c.noise_spacings * spacing / h.bbox().diagonal());
+    }
+}
+
+// Noise the floor alone leaves in pieces, denoised by the build (BuildOptions::denoise): a torus with
+// noise of 3 point spacings (71 loops at tolerance 0.01 and 13 in 37 pieces at 0.002 before) and a box
+// with 2 (14 loops in 8 pieces at 0.002) are closed now, within the noise of their points. A real scan:
+// the bunny with noise of about one spacing is meshed much nearer its clean scan (the floor alone stops
+// the cut at the noise: a coarse mesh). Its thin ears still come apart into a few pieces at some
+// seeds, with or without denoising (README, Known limits): not asserted.
+TEST(Reconstruct, noisy_samples_are_denoised_meshed_closed_and_nearer_the_surface)
+{
+    std::vector<NoisyShape> cases;
+    cases.push_back(noisy_shape("torus", shapes::torus(100000), kTorusArea, 3.0, 1));
+    cases.push_back(noisy_shape("box", shapes::box_surface({1.0, 2.0, 0.5}, 100000 / kBoxArea), kBoxArea, 2.0, 0));
+    for (const NoisyShape& c : cases) {
+        SCOPED_TRACE(c.name);
+        const double spacing = c.spacing;
+        const Hierarchy h = build_hierarchy(c.cloud);
+        EXPECT_TRUE(h.info.denoised);
+        for (double tolerance : {0.01, 0.002}) {
+            SCOPED_TRACE(tolerance);
+            const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+            EXPECT_EQ(r.surface.refused_faces, 0u);
+            expect_closed(r.mesh, c.genus);
+            EXPECT_LE(self_intersecting_faces(r.mesh).size(), r.mesh.n_faces() / 100);
+            // Within the noise of the input points (0.8 σ is a Gaussian's mean distance to its plane).
+            EXPECT_LT(point_to_mesh_distance(c.cloud.positions, r.mesh).mean, c.noise_spacings * spacing / h.bbox().diagonal());
+        }
+    }
+
+    const PointCloud clean = read_points(MRTILE_SHARED_DATA "/bun_zipper.ply");
+    PointCloud noisy = clean;
+    shapes::add_noise(noisy, 0.0013); // about the point spacing
+    BuildOptions raw;
+    raw.denoise = BuildOptions::Denoise::Off;
+    const Hierarchy denoised = build_hierarchy(noisy), kept = build_hierarchy(noisy, raw);
+    ASSERT_TRUE(denoised.info.denoised);
+    // The clean scan's points are relative to the same origin as the noisy copy and both meshes.
+    ASSERT_EQ(denoised.cloud.origin, clean.origin);
+    for (double tolerance : {0.005, 0.002}) {
+        SCOPED_TRACE(tolerance);
+        const MeshResult a = mesh_cut(denoised, cut_by_tolerance(denoised, tolerance));
+        const MeshResult b = mesh_cut(kept, cut_by_tolerance(kept, tolerance));
+        const TopologyStats t = topology_stats(a.mesh);
+        EXPECT_EQ(a.surface.refused_faces, 0u);
+        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+        EXPECT_GT(a.mesh.n_faces(), b.mesh.n_faces()); // the cut goes below the raw points' floor
+        EXPECT_LT(point_to_mesh_distance(clean.positions, a.mesh).mean, 0.75 * point_to_mesh_distance(clean.positions, b.mesh).mean);
     }
 }
 

@@ -154,7 +154,9 @@ Hierarchy noisy_sphere()
 {
     PointCloud cloud = shapes::sphere(30000);
     shapes::add_noise(cloud, 0.01);
-    Hierarchy h = build_hierarchy(cloud);
+    BuildOptions raw; // the noise kept: a crumpled mesh is what these tests need
+    raw.denoise = BuildOptions::Denoise::Off;
+    Hierarchy h = build_hierarchy(cloud, raw);
     clear_noise_floor(h);
     return h;
 }

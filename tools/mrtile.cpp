@@ -132,6 +132,7 @@ struct BuildArgs
     std::size_t min_cluster = BuildOptions{}.min_cluster;
     bool no_reclassify = false;
     bool remove_outliers = false;
+    std::string denoise = "auto";
     bool keep_duplicates = false;
     bool skip_missing_scans = false;
     std::string viewpoint;
@@ -173,6 +174,11 @@ struct BuildArgs
                       "drop isolated points first (mean distance to " + std::to_string(outliers.neighbours) + " neighbours > " +
                           CLI::detail::to_string(outliers.local_ratio) + "x theirs or > " +
                           CLI::detail::to_string(outliers.global_ratio) + "x the cloud's median)");
+        cmd->add_option("--denoise", denoise,
+                        "move the points onto a quadric fitted to their " + std::to_string(DenoiseOptions{}.neighbours) +
+                            " nearest neighbours and build again: auto (when half of the sample is noisy), on, off")
+            ->check(CLI::IsMember({"auto", "on", "off"}))
+            ->capture_default_str();
     }
 
     BuildOptions options(const Globals& g) const
@@ -184,6 +190,7 @@ struct BuildArgs
         o.min_cluster = min_cluster;
         o.reclassify = !no_reclassify;
         o.merge_duplicates = !keep_duplicates;
+        o.denoise = denoise == "on" ? BuildOptions::Denoise::On : denoise == "off" ? BuildOptions::Denoise::Off : BuildOptions::Denoise::Auto;
         if (g.progress())
             o.progress = [](double f) { std::fprintf(stderr, "\rbuilding hierarchy %5.1f%%", 100.0 * f); };
         return o;
@@ -534,6 +541,8 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
                     j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
                     j["nonmanifold_vertices"].get<std::size_t>(), j["e_rms"].get<double>(), j["mean_distance"].get<double>(),
                     j["max_distance"].get<double>(), j["mesh_to_points_max"].get<double>());
+    if (j.contains("genus") && !j["e_rms"].is_null() && j.value("denoised", false))
+        std::printf(" (to the denoised points)");
     std::printf(" (%.2f s)\n", j["seconds"].get<double>());
 }
 
@@ -553,6 +562,7 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
         q = measure_quality(h, r.cut, r.mesh);
     write_any_mesh(r.mesh, h.cloud.origin, out, out_args);
     nlohmann::json j = mesh_json(r, mesh_args.no_quality ? nullptr : &q, seconds_since(start));
+    j["denoised"] = h.info.denoised; // distances are to the model's points: the denoised ones then
     if (!mesh_args.stats_json.empty())
         write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
     print_mesh_report(j, out);
@@ -1142,6 +1152,8 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
         std::printf(" (%zu duplicates merged)", duplicates);
     if (args.remove_outliers)
         std::printf(" (%zu outliers removed)", removed);
+    if (h.info.denoised)
+        std::printf(" (noisy: denoised)");
     std::printf(", %zu nodes, %zu leaves, depth %u (%.2f s)\n", h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
     return h;
 }
@@ -1208,6 +1220,7 @@ int run_info(const fs::path& model, bool json)
         j["pca_limit"] = h.info.pca_limit;
         j["min_cluster"] = h.info.min_cluster;
         j["reclassify"] = h.info.reclassify;
+        j["denoised"] = h.info.denoised;
         j["colors"] = h.cloud.has_colors();
         j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
         j["crs"] = h.cloud.crs.empty() ? nlohmann::json(nullptr) : nlohmann::json(h.cloud.crs);
@@ -1236,6 +1249,8 @@ int run_info(const fs::path& model, bool json)
     }
     if (!h.cloud.crs.empty())
         std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
+    if (h.info.denoised)
+        std::printf("denoised    the points were moved onto the surface before the build (a noisy sample)\n");
     if (noisy_points > 0)
         std::printf("noise       %.0f%% of the points are noisy: cuts by tolerance stop at floors up to %.3g of the scale\n",
                     100.0 * noisy_share, floor_max);
