@@ -25,6 +25,7 @@ const std::vector<BenchSuite>& suites()
         {"mesh", "reconstruction vs. CGAL AFSR (+ meshoptimizer), 1M points end to end, the paper's Table 2 layout", mesh_tables},
         {"cuts", "budget and focus cuts + meshing from a loaded 4M-point model; model file size", cuts_tables},
         {"export", "3D Tiles export of a 1M-point model (glTF, Draco); Draco size vs. draco_encoder", export_tables},
+        {"noise", "noisy shapes and scans: the noise floor alone vs. denoised, loops, pieces, distance to the clean points", noise_tables},
     };
     return all;
 }

@@ -37,5 +37,7 @@ std::vector<Table> mesh_tables(const BenchContext& context);
 std::vector<Table> cuts_tables(const BenchContext& context);
 // 3D Tiles export and Draco size (bench_export.cpp).
 std::vector<Table> export_tables(const BenchContext& context);
+// Noisy samples: the noise floor alone vs. denoised (bench_noise.cpp).
+std::vector<Table> noise_tables(const BenchContext& context);
 
 } // namespace mrt::bench
