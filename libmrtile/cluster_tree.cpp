@@ -775,7 +775,9 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
         h = build_once(std::move(cloud), options);
         if (options.denoise == Denoise::Off || !sample_is_noisy(h))
             return h;
-        // Noisy: again from the moved points (tree order: input_index maps them to the input).
+        // Noisy: again from the moved points (tree order: input_index maps them to the input). The
+        // first tree's nodes are of no further use: freed before the second build's peak.
+        std::vector<Node>().swap(h.nodes);
         PointCloud moved = std::move(h.cloud);
         denoise_points(moved.positions, options.denoising);
         BuildOptions again = options;
