@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -104,6 +105,7 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
         return 0.0;
     const NearestNeighbours search(positions);
     std::vector<Vec3> moved(n);
+    std::vector<double> spread(n); // mean distance to the neighbours
     run_parallel_ranges(n, 4096, options.threads, [&](std::size_t begin, std::size_t end) {
         std::vector<std::uint32_t> index;
         std::vector<double> distance;
@@ -114,11 +116,25 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
             for (const std::uint32_t j : index)
                 points.push_back(positions[j]);
             moved[i] = onto_jet(points);
+            double sum = 0.0;
+            for (const double d : distance)
+                sum += d;
+            spread[i] = sum / static_cast<double>(distance.size());
         }
     });
+    // An isolated point (a stray return among others: neighbours far apart) stays where it is: its
+    // neighbourhood is no surface, and a quadric through stray points would turn them into a sheet of
+    // their own (a sphere with 1.5% stray points: 8 pieces, 1 when they stay).
+    std::vector<double> sorted = spread;
+    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(n / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
+    const double isolated = options.isolated_ratio * *middle;
     double sum = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) {
+        if (options.isolated_ratio > 0.0 && spread[i] > isolated)
+            moved[i] = positions[i];
         sum += dot(moved[i] - positions[i], moved[i] - positions[i]);
+    }
     positions = std::move(moved);
     return std::sqrt(sum / static_cast<double>(n));
 }

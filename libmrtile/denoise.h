@@ -24,13 +24,16 @@ struct DenoiseOptions
     //! a third without reaching across features several spacings wide (their radius is about 4
     //! spacings): 24 left a torus with noise of 3 spacings 8 loops at tolerance 0.002, 48 none.
     std::size_t neighbours = 48;
+    //! A point whose mean distance to its neighbours exceeds this many times the median over all
+    //! points is isolated (a stray return) and stays where it is (0 = every point moves).
+    double isolated_ratio = 3.0;
     //! Threads (0 = the default, parallel.h). The result does not depend on it.
     std::size_t threads = 0;
 };
 
 //! \brief Moves every point onto the quadric fitted to its neighbourhood (see the file comment).
 //! Returns the RMS distance the points moved. Points whose neighbourhood spans no surface (collinear
-//! or coincident) stay; a cloud of at most `neighbours` points is left as it is (returns 0).
+//! or coincident) stay, and so do isolated ones (DenoiseOptions::isolated_ratio); a cloud of at most `neighbours` points is left as it is (returns 0).
 //! Deterministic whatever the thread count.
 //! \throw InvalidInput if neighbours < 6 (a quadric has 6 coefficients) or a position is not finite.
 double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& options = {});

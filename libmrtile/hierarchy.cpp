@@ -370,21 +370,18 @@ double max_noise_floor(const Hierarchy& h)
 bool sample_is_noisy(const Hierarchy& h)
 {
     const std::size_t region_max = 32 * std::size_t{h.info.min_cluster > 0 ? h.info.min_cluster : 16u};
-    std::size_t regions = 0, floored = 0;
+    std::size_t regions = 0;
     Roughness leaves;
     for (const Node& n : h.nodes) {
-        if (n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max)) {
+        if (n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max))
             ++regions;
-            floored += n.noise_floor > 0.0 ? 1 : 0;
-        }
         if (n.is_leaf())
             leaves.add(n);
     }
-    if (regions < kMinLeaves)
-        return false;
-    // Noise of 3-4 spacings on a tube, or of one at a CAD part's sharp edges, escapes the floor's
-    // rules, but not the leaves: blobs.
-    return 2 * floored >= regions || (!leaves.roughness.empty() && median(leaves.roughness) >= kNoisyLeaves);
+    // The leaves, not the floors: floors come from noise of a fifth of a spacing on (meshes that the
+    // floor alone keeps whole), and noise that breaks meshes (a spacing or more) makes blobs of leaves
+    // also where the floor's rules miss it (3-4 spacings on a tube, one at a CAD part's sharp edges).
+    return regions >= kMinLeaves && !leaves.roughness.empty() && median(leaves.roughness) >= kNoisyLeaves;
 }
 
 } // namespace mrt

@@ -143,13 +143,12 @@ void clear_noise_floor(Hierarchy& h);
 //! The largest noise floor of any node (0 for a clean sample).
 double max_noise_floor(const Hierarchy& h);
 
-//! \brief Whether the sample is noisy throughout: it has 8 regions or more (the nodes
-//! derive_noise_floor judges; a smaller cloud is not judged) and at least half of them have a noise
-//! floor, or its leaves are blobs (median roughness, RMS plane distance / RMS extent along the second
-//! axis, 0.4 or more). Clean scans, CAD parts and generated shapes measured: 0-11% of the regions
-//! floored, median leaf roughness 0.01-0.17; noise of half a point spacing: 3-99% floored (70-99% on
-//! generated shapes), roughness 0.25-0.32; of one spacing: roughness 0.48-0.54 (CAD parts too, whose
-//! sharp edges hide the noise from the floor: 17% floored).
+//! \brief Whether the sample is noisy throughout, with noise that breaks meshes: it has 8 regions or
+//! more (the nodes derive_noise_floor judges; a smaller cloud is not judged) and its leaves are blobs
+//! (median roughness, RMS plane distance / RMS extent along the second axis, 0.4 or more). Measured:
+//! clean scans, CAD parts and generated shapes 0.01-0.17; noise of half a point spacing 0.25-0.32, of
+//! one 0.48-0.54 (CAD parts too, whose sharp edges hide the noise from the floor's rules). The floors
+//! are no measure of this: they come from noise of a fifth of a spacing on.
 bool sample_is_noisy(const Hierarchy& h);
 
 } // namespace mrt

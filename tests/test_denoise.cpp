@@ -83,6 +83,36 @@ TEST(Denoise, clean_points_stay_and_a_noisy_plane_flattens)
     EXPECT_LT(std::sqrt(moved_xy / static_cast<double>(plane.size())), 0.2 * before); // 0.12 measured
 }
 
+TEST(Denoise, isolated_points_stay_where_they_are)
+{
+    PointCloud cloud = shapes::sphere(20000);
+    shapes::add_noise(cloud, 0.01);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    const std::size_t surface = cloud.size();
+    while (cloud.size() < surface + 300) { // stray points, at least 0.3 off the sphere
+        const Vec3 p{u(rng), u(rng), u(rng)};
+        if (std::abs(norm(p) - 1.0) > 0.3)
+            cloud.positions.push_back(p);
+    }
+    std::vector<Vec3> moved = cloud.positions;
+    denoise_points(moved);
+    for (std::size_t i = surface; i < moved.size(); ++i)
+        EXPECT_EQ(moved[i], cloud.positions[i]) << i;
+    std::size_t surface_moved = 0;
+    for (std::size_t i = 0; i < surface; ++i)
+        surface_moved += moved[i] == cloud.positions[i] ? 0 : 1;
+    EXPECT_GT(surface_moved, surface * 99 / 100);
+    DenoiseOptions all;
+    all.isolated_ratio = 0.0;
+    std::vector<Vec3> everything = cloud.positions;
+    denoise_points(everything, all);
+    std::size_t strays_moved = 0;
+    for (std::size_t i = surface; i < everything.size(); ++i)
+        strays_moved += everything[i] == cloud.positions[i] ? 0 : 1;
+    EXPECT_GT(strays_moved, 250u);
+}
+
 TEST(Denoise, same_result_on_any_thread_count_and_bad_input_refused)
 {
     PointCloud cloud = shapes::torus(20000);
@@ -122,6 +152,15 @@ TEST(Denoise, the_build_denoises_noisy_samples_only)
     EXPECT_FALSE(build_hierarchy(shapes::three_holes(40000)).info.denoised);
     for (const char* scan : {"bun_zipper.ply", "bun000.ply", "igea.ply", "fandisk.obj", "rocker-arm.obj"})
         EXPECT_FALSE(build_hierarchy(read_points(std::string(MRTILE_SHARED_DATA "/") + scan)).info.denoised) << scan;
+
+    // Noise of a fifth of a spacing: the floor alone keeps such meshes whole, and a fit would round
+    // a CAD part's edges (QA, session 18): not denoised.
+    PointCloud slight = shapes::sphere(20000);
+    shapes::add_noise(slight, 0.005);
+    EXPECT_FALSE(build_hierarchy(slight).info.denoised);
+    PointCloud slight_box = shapes::box_surface({1.0, 2.0, 0.5}, 20000 / 7.0);
+    shapes::add_noise(slight_box, 0.3 * std::sqrt(7.0 / static_cast<double>(slight_box.size())));
+    EXPECT_FALSE(build_hierarchy(slight_box).info.denoised);
 
     // Noisy (one spacing), with duplicates: denoised, every stored point maps to an input point, and
     // the stored position is that point moved by about the noise.
