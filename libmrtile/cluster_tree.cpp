@@ -765,8 +765,12 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
         if (options.merge_duplicates)
             kept = remove_duplicates(cloud);
         const std::size_t merged = input_size - cloud.size();
+        const std::vector<Vec3> raw = cloud.positions;
         denoise_points(cloud.positions, options.denoising);
         h = build_once(std::move(cloud), options);
+        h.raw_positions.resize(raw.size());
+        for (std::size_t i = 0; i < h.input_index.size(); ++i)
+            h.raw_positions[i] = raw[h.input_index[i]];
         if (!kept.empty())
             for (std::uint32_t& i : h.input_index)
                 i = kept[i];
@@ -779,12 +783,16 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
         // first tree's nodes are of no further use: freed before the second build's peak.
         std::vector<Node>().swap(h.nodes);
         PointCloud moved = std::move(h.cloud);
+        const std::vector<Vec3> raw = moved.positions;
         denoise_points(moved.positions, options.denoising);
         BuildOptions again = options;
         again.merge_duplicates = false; // merged already
         Hierarchy second = build_once(std::move(moved), again);
-        for (std::uint32_t& i : second.input_index)
-            i = h.input_index[i];
+        second.raw_positions.resize(raw.size());
+        for (std::size_t i = 0; i < second.input_index.size(); ++i) {
+            second.raw_positions[i] = raw[second.input_index[i]];
+            second.input_index[i] = h.input_index[second.input_index[i]];
+        }
         second.info.duplicates_merged = h.info.duplicates_merged;
         h = std::move(second);
     }

@@ -96,6 +96,11 @@ struct Hierarchy
     std::vector<std::uint32_t> input_index;
     std::vector<Node> nodes;
     BuildInfo info;
+    //! The input's positions before denoising (BuildInfo::denoised), in tree order like cloud.positions,
+    //! so that distances can be measured to what was read (measure_quality). Only in a hierarchy just
+    //! built: not stored in the model file (a loaded denoised model has the moved points only); empty
+    //! otherwise.
+    std::vector<Vec3> raw_positions;
     //! The length scale-free tolerances are relative to: tolerance_scale(cloud.positions) (the largest
     //! side of the bounding box, far stray points aside; point_cloud.h). Derived (update_derived).
     double scale = 0.0;

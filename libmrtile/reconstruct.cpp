@@ -395,9 +395,11 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     QualityReport q;
     q.topology = topology_stats(mesh);
     q.e_rms = e_rms(h, cut);
+    // A hierarchy just built from denoised points still has the points read: the distances are to them.
+    const std::vector<Vec3>& points = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;
     if (mesh.n_faces() > 0 && h.bbox().diagonal() > 0) {
-        q.point_to_mesh = point_to_mesh_distance(h.cloud.positions, mesh);
-        q.mesh_to_points = mesh_to_point_distance(mesh, h.cloud.positions);
+        q.point_to_mesh = point_to_mesh_distance(points, mesh);
+        q.mesh_to_points = mesh_to_point_distance(mesh, points);
     }
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();

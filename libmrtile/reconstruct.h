@@ -101,7 +101,9 @@ struct QualityReport
     //! Paper eq. 4-6: mean distance of each point to the plane of its tile, divided by the object
     //! diameter (the bounding box's largest side, as the paper's 0.1557 for the bunny is).
     double e_rms = 0.0;
-    //! Distances from every input point to the mesh, as fractions of the bounding-box diagonal.
+    //! Distances from every input point to the mesh, as fractions of the bounding-box diagonal (the
+    //! points read: Hierarchy::raw_positions after a denoised build; a loaded denoised model has only
+    //! its moved points, and the distances are to them).
     DistanceStats point_to_mesh;
     //! The other way: from the mesh (its vertices and face centroids) to the closest input point, as
     //! fractions of the same diagonal. The point-to-mesh distance cannot see a spike or a flap that

@@ -188,16 +188,28 @@ TEST(Denoise, the_build_denoises_noisy_samples_only)
               }())
                   .rms,
               0.4 * 0.025);
-    EXPECT_TRUE(deserialize_model(serialize_model(h), "memory").info.denoised);
+    // The points read are kept beside the moved ones (to measure against), in the same order.
+    ASSERT_EQ(h.raw_positions.size(), h.cloud.size());
+    for (std::size_t i = 0; i < h.cloud.size(); ++i)
+        ASSERT_EQ(h.raw_positions[i] + h.cloud.origin, noisy.positions[h.input_index[i]]) << i;
+    const Hierarchy loaded = deserialize_model(serialize_model(h), "memory");
+    EXPECT_TRUE(loaded.info.denoised);
+    EXPECT_TRUE(loaded.raw_positions.empty()); // not stored: the model holds the moved points only
     EXPECT_FALSE(deserialize_model(serialize_model(build_hierarchy(shapes::sphere(2000))), "memory").info.denoised);
 
     BuildOptions off, on;
     off.denoise = BuildOptions::Denoise::Off;
     on.denoise = BuildOptions::Denoise::On;
     EXPECT_FALSE(build_hierarchy(noisy, off).info.denoised);
-    const Hierarchy forced = build_hierarchy(shapes::sphere(5000), on);
+    PointCloud repeated = shapes::sphere(5000);
+    repeated.positions.insert(repeated.positions.end(), repeated.positions.begin(), repeated.positions.begin() + 100);
+    const Hierarchy forced = build_hierarchy(repeated, on);
     EXPECT_TRUE(forced.info.denoised);
     EXPECT_EQ(forced.cloud.size(), 5000u);
+    EXPECT_EQ(forced.info.duplicates_merged, 100u);
+    ASSERT_EQ(forced.raw_positions.size(), 5000u);
+    for (std::size_t i = 0; i < forced.cloud.size(); ++i)
+        ASSERT_EQ(forced.raw_positions[i] + forced.cloud.origin, repeated.positions[forced.input_index[i]]) << i;
 }
 
 } // namespace

@@ -541,7 +541,7 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
                     j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
                     j["nonmanifold_vertices"].get<std::size_t>(), j["e_rms"].get<double>(), j["mean_distance"].get<double>(),
                     j["max_distance"].get<double>(), j["mesh_to_points_max"].get<double>());
-    if (j.contains("genus") && !j["e_rms"].is_null() && j.value("denoised", false))
+    if (j.contains("genus") && !j["e_rms"].is_null() && j.value("distances_to", "") == "denoised points")
         std::printf(" (to the denoised points)");
     std::printf(" (%.2f s)\n", j["seconds"].get<double>());
 }
@@ -562,7 +562,9 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
         q = measure_quality(h, r.cut, r.mesh);
     write_any_mesh(r.mesh, h.cloud.origin, out, out_args);
     nlohmann::json j = mesh_json(r, mesh_args.no_quality ? nullptr : &q, seconds_since(start));
-    j["denoised"] = h.info.denoised; // distances are to the model's points: the denoised ones then
+    // A denoised model loaded has only its moved points to measure against (measure_quality).
+    j["denoised"] = h.info.denoised;
+    j["distances_to"] = h.info.denoised && h.raw_positions.empty() ? "denoised points" : "input points";
     if (!mesh_args.stats_json.empty())
         write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
     print_mesh_report(j, out);
