@@ -984,6 +984,7 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     ASSERT_EQ(floored.code, 0) << floored.err;
     EXPECT_NE(floored.out.find("duplicates merged)"), std::string::npos) << floored.out;
     EXPECT_NE(floored.out.find("note: the points are noisy"), std::string::npos) << floored.out;
+    EXPECT_NE(floored.out.find("or build with --denoise on"), std::string::npos) << floored.out; // the other remedy
     const Result below = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "b.ply").string() +
                                     " --tolerance 0.002 --denoise off --below-noise --stats-json " + (dir / "b.json").string(), dir);
     ASSERT_EQ(below.code, 0) << below.err;
@@ -1011,6 +1012,7 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
                                        (dir / "d.mrt").string(), dir);
     ASSERT_EQ(denoised.code, 0) << denoised.err;
     EXPECT_NE(denoised.out.find("(noisy: denoised)"), std::string::npos) << denoised.out;
+    EXPECT_EQ(denoised.out.find("--denoise on"), std::string::npos) << denoised.out; // done already
     EXPECT_EQ(denoised.out.find("(to the denoised points)"), std::string::npos) << denoised.out;
     const auto d = nlohmann::json::parse(slurp(dir / "d.json"));
     EXPECT_TRUE(d["denoised"].get<bool>());

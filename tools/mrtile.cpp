@@ -471,6 +471,13 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
     }
 }
 
+// Where the noise floor stops a cut of points the build did not denoise (noise too little or too
+// local for the automatic rule), the other remedy.
+const char* denoise_hint(const Hierarchy& h)
+{
+    return h.info.denoised ? "" : "; or build with --denoise on to move the points onto the surface first";
+}
+
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 
 nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double seconds)
@@ -602,8 +609,8 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     }
     if (stopped > 0)
         std::printf("note: the points are noisy: %zu of %zu tiles stop at their noise floor (up to %.3g of the "
-                    "size); --below-noise goes on\n",
-                    stopped, cut.size(), max_noise_floor(h) / h.scale);
+                    "size); --below-noise goes on%s\n",
+                    stopped, cut.size(), max_noise_floor(h) / h.scale, denoise_hint(h));
     return write_meshed(h, r, mesh_args, out_args, out, also, start);
 }
 
@@ -730,8 +737,8 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
     const std::size_t finest = cut_by_tolerance(h, 0.0).size();
     if (finest < h.leaf_count() && set.levels.back().cut.size() <= finest * 3 / 2)
         std::printf("note: the points are noisy: the levels end at the noise floor (%zu tiles, not the %zu leaves); "
-                    "--below-noise goes on\n",
-                    finest, h.leaf_count());
+                    "--below-noise goes on%s\n",
+                    finest, h.leaf_count(), denoise_hint(h));
 }
 
 // A tileset without --enu is placed at its input coordinates, taken as ECEF metres. Input far from the
