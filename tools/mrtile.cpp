@@ -1162,7 +1162,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     if (args.remove_outliers)
         std::printf(" (%zu outliers removed)", removed);
     if (h.info.denoised)
-        std::printf(" (noisy: denoised)");
+        std::printf(args.denoise == "on" ? " (denoised)" : " (noisy: denoised)");
     std::printf(", %zu nodes, %zu leaves, depth %u (%.2f s)\n", h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
     return h;
 }
