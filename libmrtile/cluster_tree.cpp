@@ -755,47 +755,39 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
 {
     const auto start = std::chrono::steady_clock::now();
     using Denoise = BuildOptions::Denoise;
-    if (options.denoise == Denoise::On)
-        validate(cloud, "build_hierarchy");
-    Hierarchy h;
+    // The points to denoise, without duplicates (a point repeated is its own nearest neighbours), and
+    // where each came from in the input (empty: the same index).
+    std::vector<std::uint32_t> to_input;
+    std::size_t merged = 0;
     if (options.denoise == Denoise::On) {
-        // Duplicates first, as the build would: a point repeated is its own nearest neighbours.
+        validate(cloud, "build_hierarchy");
         const std::size_t input_size = cloud.size();
-        std::vector<std::uint32_t> kept;
         if (options.merge_duplicates)
-            kept = remove_duplicates(cloud);
-        const std::size_t merged = input_size - cloud.size();
-        const std::vector<Vec3> raw = cloud.positions;
-        denoise_points(cloud.positions, options.denoising);
-        h = build_once(std::move(cloud), options);
-        h.raw_positions.resize(raw.size());
-        for (std::size_t i = 0; i < h.input_index.size(); ++i)
-            h.raw_positions[i] = raw[h.input_index[i]];
-        if (!kept.empty())
-            for (std::uint32_t& i : h.input_index)
-                i = kept[i];
-        h.info.duplicates_merged += merged;
+            to_input = remove_duplicates(cloud);
+        merged = input_size - cloud.size();
     } else {
-        h = build_once(std::move(cloud), options);
-        if (options.denoise == Denoise::Off || !sample_is_noisy(h))
-            return h;
-        // Noisy: again from the moved points (tree order: input_index maps them to the input). The
-        // first tree's nodes are of no further use: freed before the second build's peak.
-        std::vector<Node>().swap(h.nodes);
-        PointCloud moved = std::move(h.cloud);
-        const std::vector<Vec3> raw = moved.positions;
-        denoise_points(moved.positions, options.denoising);
-        BuildOptions again = options;
-        again.merge_duplicates = false; // merged already
-        Hierarchy second = build_once(std::move(moved), again);
-        second.raw_positions.resize(raw.size());
-        for (std::size_t i = 0; i < second.input_index.size(); ++i) {
-            second.raw_positions[i] = raw[second.input_index[i]];
-            second.input_index[i] = h.input_index[second.input_index[i]];
-        }
-        second.info.duplicates_merged = h.info.duplicates_merged;
-        h = std::move(second);
+        Hierarchy first = build_once(std::move(cloud), options);
+        if (options.denoise == Denoise::Off || !sample_is_noisy(first))
+            return first;
+        // Noisy: again from the moved points, in the first tree's order. Its nodes are of no further
+        // use: freed before the second build's peak.
+        std::vector<Node>().swap(first.nodes);
+        to_input = std::move(first.input_index);
+        merged = first.info.duplicates_merged;
+        cloud = std::move(first.cloud);
     }
+    const std::vector<Vec3> raw = cloud.positions;
+    denoise_points(cloud.positions, options.denoising);
+    BuildOptions again = options;
+    again.merge_duplicates = false; // merged already
+    Hierarchy h = build_once(std::move(cloud), again);
+    h.raw_positions.resize(raw.size());
+    for (std::size_t i = 0; i < h.input_index.size(); ++i) {
+        h.raw_positions[i] = raw[h.input_index[i]];
+        if (!to_input.empty())
+            h.input_index[i] = to_input[h.input_index[i]];
+    }
+    h.info.duplicates_merged = merged;
     h.info.denoised = true;
     h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return h;

@@ -67,9 +67,10 @@ struct BuildOptions
     bool split_gaps = true;
     //! Beyond the paper: a noisy sample's points are moved onto the surface they sample (denoise.h)
     //! and the hierarchy is built again from them. Auto (default): when the first build finds the
-    //! sample noisy (sample_is_noisy, hierarchy.h: half of its regions or more have a noise floor;
-    //! no clean scan, CAD part or generated shape measured has more than 6%). The hierarchy then
-    //! holds the moved points (BuildInfo::denoised): distances measured to it are to them.
+    //! sample noisy (sample_is_noisy, hierarchy.h: its leaves are blobs, as under noise of about a
+    //! point spacing; no clean scan, CAD part or generated shape measured comes near). The hierarchy
+    //! then holds the moved points (BuildInfo::denoised) and, until saved, the points read
+    //! (Hierarchy::raw_positions), which measure_quality measures to.
     enum class Denoise { Auto, Off, On };
     Denoise denoise = Denoise::Auto;
     DenoiseOptions denoising;
@@ -84,8 +85,8 @@ struct BuildOptions
 //! \details Degenerate clouds (one point, duplicates, collinear or coplanar points) give a valid
 //! hierarchy (typically a single leaf: they are flat). With merge_duplicates, the hierarchy holds the
 //! distinct positions only (BuildInfo::duplicates_merged says how many points went). Deterministic: the same cloud and options give
-//! the same hierarchy bit for bit. A denoised build (BuildOptions::denoise) costs a first build, the
-//! denoising (about 10 µs per point) and the second build.
+//! the same hierarchy bit for bit. A denoised build (BuildOptions::denoise) costs a first build (not
+//! with Denoise::On), the denoising (about 6-10 µs per point) and the second build.
 Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options = {});
 
 //! Builds the tree's nodes from a final assignment of points to leaves and their split history; the

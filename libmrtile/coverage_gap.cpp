@@ -554,21 +554,22 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
     return coverage_gap(points, u, v, sampled, fill);
 }
 
-// Two children whose boxes lie apart: the node's tile would span the space between them (two objects
-// far apart in one cloud; the two sides of a thin plate, where a narrow strip of both is flat in the
-// plane across the plate and coarse cuts kept it as a wall inside it: a plate 6.6 spacings thick at
-// tolerance 0.01 had 66 loops in 11 pieces, now 15 in one). Counted when wider than a hole the surface
-// keeps open (min_radius_spacings; twice that until session 18, which left the plate's 6.6 spacings
-// out) and a quarter of the node's box diagonal (so that a node split across a little empty space is
-// not, nor a pair of scan lines among many).
+// Two children whose boxes lie apart: the node's tile would span the space between them. Counted
+// when wider than a quarter of the node's box diagonal (so that a node split across a little empty
+// space is not) and than twice min_radius_spacings (two objects far apart in one cloud; two scan lines
+// of one surface side by side stay under it) — or, where the children face each other across the
+// space, than min_radius_spacings, the width of a hole the surface keeps open: the two sides of a thin
+// plate, where a narrow strip of both is flat in the plane across the plate and coarse cuts kept it as
+// a wall inside it (a plate 6.6 spacings thick at tolerance 0.01: 66 loops in 11 pieces, now 15 in one).
 double children_separation(const Hierarchy& h, const Node& n, const CoverageOptions& options)
 {
     constexpr double kMinShare = 0.25;
-    const double kFacing = std::cos(30.0 * M_PI / 180.0);
+    const double kFacing = std::cos(30.0 * M_PI / 180.0); // children's normals this near the line between them
     if (n.is_leaf() || !(n.frame.values[1] > 0.0))
         return 0.0;
-    const BoundingBox& a = h.nodes[static_cast<std::size_t>(n.left)].box;
-    const BoundingBox& b = h.nodes[static_cast<std::size_t>(n.right)].box;
+    const Node& l = h.nodes[static_cast<std::size_t>(n.left)];
+    const Node& r = h.nodes[static_cast<std::size_t>(n.right)];
+    const BoundingBox &a = l.box, &b = r.box;
     const double dx = std::max({0.0, a.min.x - b.max.x, b.min.x - a.max.x});
     const double dy = std::max({0.0, a.min.y - b.max.y, b.min.y - a.max.y});
     const double dz = std::max({0.0, a.min.z - b.max.z, b.min.z - a.max.z});
@@ -578,11 +579,6 @@ double children_separation(const Hierarchy& h, const Node& n, const CoverageOpti
     const double count = static_cast<double>(n.count());
     const double area = 4.0 * M_PI * std::sqrt(n.frame.values[2] * n.frame.values[1]) / count;
     const double spacing = std::sqrt(area / count);
-    // Children that face each other across the space (their normals along the line between them) are
-    // two sheets, the sides of a thin part: counted from the width of a hole the surface keeps open.
-    // Others (two objects, or two scan lines of one surface, side by side) from twice that.
-    const Node& l = h.nodes[static_cast<std::size_t>(n.left)];
-    const Node& r = h.nodes[static_cast<std::size_t>(n.right)];
     const Vec3 between = r.centre() - l.centre();
     const double length = norm(between);
     const bool facing = length > 0.0 && l.frame.values[1] > 0.0 && r.frame.values[1] > 0.0 &&

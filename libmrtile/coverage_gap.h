@@ -91,9 +91,9 @@ std::size_t coverage_stride(std::size_t count, const CoverageOptions& options = 
 //! \brief Sets every node's Node::coverage_gap: its own gap in its PCA plane (judged from a regular
 //! sample of options.max_points of its points), with the points of other nodes within its largest
 //! plane distance of that plane filling the grid, or, if larger, the distance between its children's
-//! boxes when that exceeds 8 of its point spacings and a quarter of its box's diagonal (two objects far
-//! apart in one cloud: its tile would span the space between them), then the largest of its own and
-//! its children's.
+//! boxes when that exceeds a quarter of its box's diagonal and 8 of its point spacings (two objects
+//! far apart in one cloud: its tile would span the space between them), 4 where the children face each
+//! other across it (the two sides of a thin part), then the largest of its own and its children's.
 //! Nodes of fewer than options.max_points points get no gap of their own (the build has judged
 //! its leaves at full resolution, and mesh_cut judges every tile it makes): that keeps the cost to
 //! about two passes over the points (0.15 s for a million, single-threaded). build_hierarchy and load_model call it. Parallel over nodes on up to

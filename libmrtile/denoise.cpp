@@ -1,8 +1,8 @@
 // Denoising before the hierarchy (beyond the paper; the paper assumes a clean sample): a point is
 // moved onto the 2-jet fitted to its k nearest neighbours, as in point-set processing (Cazals and
 // Pouget's jet fitting, which CGAL's jet_smooth_point_set also uses). Written here instead of calling
-// CGAL's: that one fits in a general-degree basis, 3-4x slower than this fixed quadratic (about 10 µs
-// per point with 48 neighbours), and the fit should use our deterministic PCA (pca.h) for its frame.
+// CGAL's: that one fits in a general-degree basis, 3-4x slower than this fixed quadratic (6-10 µs per
+// point with 48 neighbours), and the fit should use our deterministic PCA (pca.h) for its frame.
 // See denoise.h.
 #include "libmrtile/denoise.h"
 
@@ -99,7 +99,7 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
                            std::to_string(options.neighbours));
     const std::size_t n = positions.size();
     for (std::size_t i = 0; i < n; ++i)
-        if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+        if (!is_finite(positions[i]))
             throw InvalidInput("denoise_points: position " + std::to_string(i) + " is not finite");
     if (n <= options.neighbours)
         return 0.0;

@@ -65,6 +65,13 @@ constexpr double kNoisyLeaves = 0.4;
 // How far up the tree those rules look: ancestors of up to kReach × the largest region's points.
 constexpr std::size_t kReach = 64;
 
+// The regions derive_noise_floor judges: the highest nodes under 32 × min_cluster points.
+std::size_t min_cluster_of(const Hierarchy& h) { return h.info.min_cluster > 0 ? h.info.min_cluster : 16; }
+bool is_region(const Hierarchy& h, const Node& n, std::size_t region_max)
+{
+    return n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max);
+}
+
 // The floor of a region whose leaves are `leaves` and whose own roughness is `region` (see
 // derive_noise_floor in hierarchy.h).
 double floor_of(const Roughness& leaves, double region)
@@ -278,11 +285,8 @@ void derive_noise_floor(Hierarchy& h)
     const std::size_t count = h.nodes.size();
     if (count == 0)
         return;
-    const std::size_t min_cluster = h.info.min_cluster > 0 ? h.info.min_cluster : 16;
+    const std::size_t min_cluster = min_cluster_of(h);
     const std::size_t region_max = 32 * min_cluster, region_min = 8 * min_cluster;
-    auto is_region = [&](const Node& n) {
-        return n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max);
-    };
     // The whole sample's measure, for regions too small to judge alone: all its leaves, and the median
     // roughness of all its nodes of 16-31 x min_cluster points.
     Roughness all;
@@ -303,7 +307,7 @@ void derive_noise_floor(Hierarchy& h)
     for (std::size_t k = 0; k < count; ++k) {
         Node& n = h.nodes[k];
         n.noise_floor = 0.0;
-        if (!is_region(n))
+        if (!is_region(h, n, region_max))
             continue;
         if (n.count() < region_min || !(n.frame.values[1] > 0)) {
             n.noise_floor = global;
@@ -369,11 +373,11 @@ double max_noise_floor(const Hierarchy& h)
 
 bool sample_is_noisy(const Hierarchy& h)
 {
-    const std::size_t region_max = 32 * std::size_t{h.info.min_cluster > 0 ? h.info.min_cluster : 16u};
+    const std::size_t region_max = 32 * min_cluster_of(h);
     std::size_t regions = 0;
     Roughness leaves;
     for (const Node& n : h.nodes) {
-        if (n.count() < region_max && (n.parent < 0 || h.nodes[static_cast<std::size_t>(n.parent)].count() >= region_max))
+        if (is_region(h, n, region_max))
             ++regions;
         if (n.is_leaf())
             leaves.add(n);

@@ -33,7 +33,7 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
         throw InvalidInput("OutlierOptions: neighbours must be > 0 and local_ratio, global_ratio >= 0");
     const std::size_t n = positions.size(), k = o.neighbours;
     for (std::size_t i = 0; i < n; ++i)
-        if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+        if (!is_finite(positions[i]))
             throw InvalidInput("find_outliers: position " + std::to_string(i) + " is not finite");
     if (n <= k || (o.local_ratio == 0.0 && o.global_ratio == 0.0))
         return {};

@@ -176,7 +176,7 @@ struct BuildArgs
                           CLI::detail::to_string(outliers.global_ratio) + "x the cloud's median)");
         cmd->add_option("--denoise", denoise,
                         "move the points onto a quadric fitted to their " + std::to_string(DenoiseOptions{}.neighbours) +
-                            " nearest neighbours and build again: auto (when half of the sample is noisy), on, off")
+                            " nearest neighbours and build again: auto (when the sample is noisy, about a point spacing or more), on, off")
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
     }
