@@ -1035,6 +1035,11 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     ASSERT_EQ(denoised_info.code, 0) << denoised_info.err;
     EXPECT_TRUE(nlohmann::json::parse(denoised_info.out)["denoised"].get<bool>());
     EXPECT_FALSE(j["denoised"].get<bool>());
+    // Forced, the build says it denoised, not that it found the sample noisy.
+    const Result forced = mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "f.mrt").string() + " --denoise on", dir);
+    ASSERT_EQ(forced.code, 0) << forced.err;
+    EXPECT_NE(forced.out.find(" (denoised)"), std::string::npos) << forced.out;
+    EXPECT_EQ(forced.out.find("(noisy: denoised)"), std::string::npos) << forced.out;
     EXPECT_EQ(mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "x.mrt").string() + " --denoise maybe", dir).code, 2);
     EXPECT_FALSE(fs::exists(dir / "x.mrt"));
 }
