@@ -23,6 +23,24 @@ namespace mrt {
 
 namespace {
 
+// The file a path names, its symbolic links followed (as far as they lead: a dangling link gives the
+// file it would create). Renaming onto the link itself would replace the link by a plain file.
+std::filesystem::path follow_links(const std::filesystem::path& path)
+{
+    std::filesystem::path at = path;
+    for (int hop = 0; hop < 40; ++hop) { // the kernel's own bound on a chain of links
+        struct stat link;
+        if (::lstat(at.c_str(), &link) != 0 || !S_ISLNK(link.st_mode))
+            return at;
+        std::error_code ec;
+        const std::filesystem::path to = std::filesystem::read_symlink(at, ec);
+        if (ec)
+            return at;
+        at = to.is_absolute() ? to : at.parent_path() / to;
+    }
+    return at; // a loop: opening it fails and names the path
+}
+
 std::filesystem::path temporary_name(const std::filesystem::path& path)
 {
     std::filesystem::path temp = path;
@@ -153,7 +171,8 @@ TemporaryDirectory::~TemporaryDirectory()
     forget_temporary(path_);
 }
 
-AtomicFile::AtomicFile(const std::filesystem::path& path) : path_(path), temp_(temporary_name(path))
+AtomicFile::AtomicFile(const std::filesystem::path& path)
+    : path_(path), target_(follow_links(path)), temp_(temporary_name(target_))
 {
     // Renaming over a file needs only the directory's permission: a file made read-only (no write
     // bit for anyone, or none for this user) would be replaced all the same.
@@ -196,9 +215,9 @@ void AtomicFile::commit()
     // A file replaced keeps its permissions (a private model stays private); a new one gets the
     // process's defaults, as the temporary file has them.
     struct stat existing;
-    if (::stat(path_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+    if (::stat(target_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
         ::chmod(temp_.c_str(), existing.st_mode & 07777);
-    std::filesystem::rename(temp_, path_, ec);
+    std::filesystem::rename(temp_, target_, ec);
     if (ec)
         throw IoError(path_.string() + ": cannot rename temporary file into place (" + ec.message() + ")");
     committed_ = true;

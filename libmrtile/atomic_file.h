@@ -4,7 +4,9 @@
 //! \details Every writer streams into "<path>.tmp.<pid>" next to the target and renames it over the
 //! target on commit(); if anything throws before that, the destructor removes the temporary file, so
 //! a failed run leaves either the old file or nothing. A target that exists keeps its permissions, and
-//! a read-only one (no write bit, or none for this user) is refused, not replaced.
+//! a read-only one (no write bit, or none for this user) is refused, not replaced. A target that is a
+//! symbolic link is written through: the file it points to is replaced (created when the link dangles)
+//! and the link stays, as a user who links an output name to a file expects.
 
 #include <cstddef>
 #include <filesystem>
@@ -30,7 +32,8 @@ public:
     void commit();
 
 private:
-    std::filesystem::path path_;
+    std::filesystem::path path_;   //!< as given (named in messages)
+    std::filesystem::path target_; //!< path_ with its symbolic links followed: the file replaced
     std::filesystem::path temp_;
     std::ofstream out_;
     bool committed_ = false;

@@ -249,14 +249,36 @@ double screen_space_error(const Node& node, const Camera& camera)
     return node_error(node) * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
 }
 
+bool in_view(const Node& node, const Camera& camera)
+{
+    const double length = norm(camera.direction);
+    if (!(length > 0))
+        return true;
+    const Vec3 centre = (node.box.min + node.box.max) * 0.5;
+    const double radius = 0.5 * norm(node.box.max - node.box.min);
+    const Vec3 to = centre - camera.position;
+    const double far = norm(to);
+    if (far <= radius)
+        return true;
+    // The sphere is seen under asin(radius / far) around its centre's direction; it misses the cone
+    // when the angle from the view axis exceeds the cone's half-angle by more than that.
+    const double pi = 3.14159265358979323846;
+    const double half_fov = camera.fov_y_degrees * 0.5 * pi / 180.0;
+    const double half_cone = std::atan(std::tan(half_fov) * std::sqrt(1.0 + camera.aspect * camera.aspect));
+    const double off_axis = std::acos(std::clamp(dot(to, camera.direction) / (far * length), -1.0, 1.0));
+    return off_axis - std::asin(radius / far) <= half_cone;
+}
+
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
 {
     if (!(camera.fov_y_degrees > 0 && camera.fov_y_degrees < 180) || !(camera.viewport_height > 0) ||
-        !(camera.max_pixel_error > 0) || !is_finite(camera.position))
-        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height and pixel error, and a finite position");
+        !(camera.max_pixel_error > 0) || !is_finite(camera.position) || !is_finite(camera.direction) ||
+        !(camera.aspect > 0) || !std::isfinite(camera.aspect))
+        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height, pixel error and aspect, "
+                           "and a finite position and direction");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return screen_space_error(n, camera) > camera.max_pixel_error && rougher_than(n, 0.0);
+        return screen_space_error(n, camera) > camera.max_pixel_error && rougher_than(n, 0.0) && in_view(n, camera);
     });
 }
 

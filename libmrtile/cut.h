@@ -94,6 +94,13 @@ struct Camera
     double fov_y_degrees = 60.0;     //!< vertical field of view
     double viewport_height = 1080.0; //!< pixels
     double max_pixel_error = 16.0;   //!< CesiumJS's default maximumScreenSpaceError
+    //! Where the camera looks (any length; zero = all around, every node counts as in view). Nodes
+    //! wholly outside the view cone are not refined: a viewer would cull them, and the mesh keeps them
+    //! coarse so that it stays closed.
+    Vec3 direction{0, 0, 0};
+    //! Viewport width / height: the view cone's half-angle is that of the viewport's corners,
+    //! atan(tan(fov/2) × sqrt(1 + aspect²)).
+    double aspect = 16.0 / 9.0;
 };
 
 //! A node's geometric error in model units: the largest distance of its points to its tile plane,
@@ -104,8 +111,12 @@ double node_error(const Node& node);
 //! with error = node_error(node) and distance to the node's bounding box (0 inside).
 double screen_space_error(const Node& node, const Camera& camera);
 
-//! Refines every node whose screen-space error exceeds the camera's max_pixel_error (down to the
-//! noise floor).
+//! Whether any of the node's bounding box (its bounding sphere) can be inside the camera's view cone
+//! (always true without a direction, or with the camera inside the sphere).
+bool in_view(const Node& node, const Camera& camera);
+
+//! Refines every node in view (in_view) whose screen-space error exceeds the camera's
+//! max_pixel_error (down to the noise floor).
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
 
 //! Σ λ_min over the cut: the total squared distance of the points to their tile planes.

@@ -272,8 +272,12 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
                            " edges (a hole's fill costs the cube of its edges)");
     // A line or a point spans no surface whatever tiles its cut has: points on a line stored as floats
     // are off it by their rounding, enough for a fan of zero-area faces (QA, session 17: 225 of them).
-    const Eigen3x3& whole = h.nodes.front().frame;
-    if (!(whole.values[1] > 1e-12 * whole.values[2]))
+    // The spread across the line is judged against the scale, which far strays do not set (a stray
+    // at 1e8 beside a unit sphere made the largest spread 1e16 times the sphere's: QA, session 19).
+    const Eigen3x3& whole = h.nodes.front().frame; // values: sums of squares over the points
+    const double points = static_cast<double>(std::max<std::size_t>(1, h.nodes.front().count()));
+    const double least_spread = 1e-6 * (h.scale > 0 ? h.scale : std::sqrt(whole.values[2] / points));
+    if (!(whole.values[1] / points > least_spread * least_spread))
         throw InvalidInput("the points are collinear or coincident: they span no surface to mesh");
     std::size_t fan_tiles = 0;
     for (const Tile& t : given) {

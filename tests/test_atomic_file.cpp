@@ -75,6 +75,29 @@ TEST(AtomicFile, a_replaced_file_keeps_its_permissions_and_read_only_files_stay)
     EXPECT_EQ(entries(dir), 1u);
 }
 
+// An output named by a symbolic link is written through it: the file it points to is replaced (or
+// created, when the link dangles), and the link stays a link (QA, session 19: it became a plain file).
+TEST(AtomicFile, a_symbolic_link_is_written_through)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    fs::create_directory(dir / "data");
+    write_text(dir / "data" / "real.ply", "old");
+    fs::create_symlink("data/real.ply", dir / "link.ply"); // relative, as `ln -s` makes them
+    fs::create_symlink(dir / "link.ply", dir / "link2.ply"); // a chain, absolute
+    write_file_atomically(dir / "link2.ply", "new");
+    EXPECT_TRUE(fs::is_symlink(dir / "link.ply"));
+    EXPECT_TRUE(fs::is_symlink(dir / "link2.ply"));
+    std::ifstream in(dir / "data" / "real.ply");
+    std::string text;
+    in >> text;
+    EXPECT_EQ(text, "new");
+    fs::create_symlink("data/later.ply", dir / "dangling.ply");
+    write_file_atomically(dir / "dangling.ply", "made");
+    EXPECT_TRUE(fs::is_symlink(dir / "dangling.ply"));
+    EXPECT_TRUE(fs::is_regular_file(dir / "data" / "later.ply"));
+    EXPECT_EQ(entries(dir), 6u); // data, real.ply, later.ply and three links: no temporaries left
+}
+
 // A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
 // directory (with a subdirectory, as a tileset has) leaves neither, and still dies of the signal.
 TEST(AtomicFile, a_signal_removes_the_temporaries)

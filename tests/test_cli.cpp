@@ -84,7 +84,9 @@ TEST(Cli, version_help_and_usage_errors)
         EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd;
     }
     EXPECT_EQ(mrtile("", dir).code, 2);
-    EXPECT_EQ(mrtile("frobnicate", dir).code, 2);
+    r = mrtile("frobnicate", dir); // named, with the commands there are
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("unknown command 'frobnicate' (commands: build, info, mesh"), std::string::npos) << r.err;
     EXPECT_EQ(mrtile("build", dir).code, 2); // missing POINTS and -o
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 7", dir).code, 2); // leaves too small to mesh
@@ -180,6 +182,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --focus 0,0,0,0.2:", "--focus"},
         {a + " --camera 3,0,0:0,0,0:0:1080", "field of view"},
         {a + " --camera 3,0,0:0,0,0:60:-5", "viewport height"},
+        {a + " --camera 3,0,0:3,0,0:60:1080", "target must differ"},
         {a + " --tiles 18446744073709551616", "--tiles"},
         {a + " --camera ''", "must not be empty"},
         {a + " --stats-json ''", "must not be empty"},

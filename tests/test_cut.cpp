@@ -180,6 +180,49 @@ TEST(Cut, camera_refines_near_the_camera)
     EXPECT_THROW(cut_for_camera(h, bad), InvalidInput);
 }
 
+// A camera that looks somewhere refines only what is in its view cone: beside the torus looking along
+// +y at its near side, the tiles there are those of the camera that looks all around, while the half
+// behind it (x < 0) stays coarse; looking straight away from the torus, nothing is refined.
+TEST(Cut, camera_refines_only_what_is_in_view)
+{
+    const Hierarchy& h = torus();
+    Camera around;
+    around.position = {1.0, -1.5, 0.0};
+    around.fov_y_degrees = 20.0;
+    Camera looking = around;
+    looking.direction = {0.0, 1.0, 0.0};
+    const Cut all = cut_for_camera(h, around), seen = cut_for_camera(h, looking);
+    ASSERT_TRUE(is_partition(h, seen));
+    std::size_t tiles_all = 0, tiles_seen = 0;
+    auto in_view_half = [&](const Node& n) { return n.centre().x > 0.9 && n.centre().y < 0.0; };
+    for (std::int32_t id : all)
+        tiles_all += in_view_half(h.nodes[static_cast<std::size_t>(id)]) ? 1 : 0;
+    for (std::int32_t id : seen) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        tiles_seen += in_view_half(n) ? 1 : 0;
+    }
+    EXPECT_EQ(tiles_seen, tiles_all); // refined as by the camera that looks all around
+    std::size_t behind_all = 0, behind_seen = 0;
+    for (std::int32_t id : all)
+        behind_all += h.nodes[static_cast<std::size_t>(id)].centre().x < 0 ? 1 : 0;
+    for (std::int32_t id : seen)
+        behind_seen += h.nodes[static_cast<std::size_t>(id)].centre().x < 0 ? 1 : 0;
+    EXPECT_LT(4 * behind_seen, behind_all);
+    EXPECT_LT(seen.size(), all.size());
+    for (std::int32_t id : seen) { // a node out of view is there because its parent was in view
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        if (!in_view(n, looking))
+            EXPECT_TRUE(n.parent < 0 || in_view(h.nodes[static_cast<std::size_t>(n.parent)], looking));
+    }
+    Camera away = around;
+    away.position = {0.0, -5.0, 0.0};
+    away.direction = {0.0, -1.0, 0.0};
+    EXPECT_EQ(cut_for_camera(h, away).size(), 1u);
+    Camera bad = looking;
+    bad.aspect = 0.0;
+    EXPECT_THROW(cut_for_camera(h, bad), InvalidInput);
+}
+
 // The general predicate form: refine exactly the nodes above depth 4.
 TEST(Cut, predicate_cut)
 {

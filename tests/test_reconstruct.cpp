@@ -139,6 +139,21 @@ TEST(Reconstruct, a_far_stray_point_leaves_the_tolerance_alone)
     }
 }
 
+// Strays far beyond the sphere (1e8 and 1e20 radii) set the largest spread of the whole cloud: the
+// test that refuses lines (a_line_rounded_to_floats_is_refused) took the sphere for one (QA, session
+// 19). The spread is judged against the scale, which strays do not set: the sphere is meshed closed.
+TEST(Reconstruct, a_stray_1e20_away_still_leaves_a_surface_to_mesh)
+{
+    for (double far : {1e8, 1e20}) {
+        PointCloud cloud = shapes::sphere(3000);
+        cloud.positions.push_back({far, 0, 0});
+        const Hierarchy h = build_hierarchy(cloud);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+        EXPECT_EQ(r.surface.refused_faces, 0u) << far;
+        expect_closed(r.mesh, 0);
+    }
+}
+
 // A sphere with noise of one point spacing meshed at a tolerance below its noise: the cut stops at
 // the noise floor and the mesh is a closed sphere whose vertices lie within about the noise of the
 // true surface. Below the floor (as before it existed), the same cut broke into 60-80 pieces.

@@ -228,7 +228,7 @@ struct CutArgs
         err->excludes(tol)->excludes(t)->excludes(n);
         auto* f = cmd->add_option("--focus", focus, "refine a sphere X,Y,Z,R[:TOL] (repeatable; TOL default 0)")
                       ->check(kNonEmpty);
-        auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS]")
+        auto* c = cmd->add_option("--camera", camera, "view-dependent cut X,Y,Z:TX,TY,TZ:FOV:HEIGHT[:PIXELS] (camera at X,Y,Z looking at TX,TY,TZ; vertical FOV in degrees, viewport HEIGHT in pixels (16:9), PIXELS default 16: refines what is in view while its screen-space error exceeds PIXELS)")
                       ->check(kNonEmpty);
         tol->excludes(t)->excludes(n);
         t->excludes(n);
@@ -264,6 +264,9 @@ struct CutArgs
         };
         Camera cam;
         cam.position = Vec3{p[0], p[1], p[2]};
+        cam.direction = Vec3{target[0], target[1], target[2]} - cam.position; // in view: what it looks at
+        if (!(norm(cam.direction) > 0))
+            throw UsageError("--camera: the target must differ from the position (it sets the view direction)");
         cam.fov_y_degrees = one(parts[2], "--camera fov");
         cam.viewport_height = one(parts[3], "--camera height");
         if (parts.size() == 5)
@@ -478,6 +481,16 @@ const char* denoise_hint(const Hierarchy& h)
     return h.info.denoised ? "" : "; or build with --denoise on to move the points onto the surface first";
 }
 
+// What a noise-floor note calls the points: "noisy" (with the denoising hint) only when the sample is
+// (sample_is_noisy) or was denoised; otherwise a few rough leaves, as at the sharp edges of a clean CAD
+// part (fandisk: 1 of 463 tiles), which denoising would round off.
+std::string noise_note(const Hierarchy& h, const std::string& what)
+{
+    if (h.info.denoised || sample_is_noisy(h))
+        return "note: the points are noisy: " + what + "; --below-noise goes on" + denoise_hint(h);
+    return "note: some points are rough (sharp edges or local noise): " + what + "; --below-noise goes on";
+}
+
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 
 nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double seconds)
@@ -607,10 +620,12 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
         stopped += plain && !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
     }
-    if (stopped > 0)
-        std::printf("note: the points are noisy: %zu of %zu tiles stop at their noise floor (up to %.3g of the "
-                    "size); --below-noise goes on%s\n",
-                    stopped, cut.size(), max_noise_floor(h) / h.scale, denoise_hint(h));
+    if (stopped > 0) {
+        char what[160];
+        std::snprintf(what, sizeof what, "%zu of %zu tiles stop at their noise floor (up to %.3g of the size)", stopped,
+                      cut.size(), max_noise_floor(h) / h.scale);
+        std::printf("%s\n", noise_note(h, what).c_str());
+    }
     return write_meshed(h, r, mesh_args, out_args, out, also, start);
 }
 
@@ -735,10 +750,12 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
     if (set.levels.empty() || max_noise_floor(h) <= 0)
         return;
     const std::size_t finest = cut_by_tolerance(h, 0.0).size();
-    if (finest < h.leaf_count() && set.levels.back().cut.size() <= finest * 3 / 2)
-        std::printf("note: the points are noisy: the levels end at the noise floor (%zu tiles, not the %zu leaves); "
-                    "--below-noise goes on%s\n",
-                    finest, h.leaf_count(), denoise_hint(h));
+    if (finest < h.leaf_count() && set.levels.back().cut.size() <= finest * 3 / 2) {
+        char what[160];
+        std::snprintf(what, sizeof what, "the levels end at the noise floor (%zu tiles, not the %zu leaves)", finest,
+                      h.leaf_count());
+        std::printf("%s\n", noise_note(h, what).c_str());
+    }
 }
 
 // A tileset without --enu is placed at its input coordinates, taken as ECEF metres. Input far from the
@@ -1477,6 +1494,28 @@ int run(int argc, char** argv)
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
         return std::string("mrtile: usage error: ") + e.what() + " (see --help)\n";
     });
+    // A misspelt command would otherwise read "A subcommand is required": name it and the commands.
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg == "--threads") {
+            ++i;
+            continue;
+        }
+        if (!arg.empty() && arg[0] == '-')
+            continue;
+        const auto all = app.get_subcommands([](const CLI::App*) { return true; });
+        std::string names;
+        bool known = false;
+        for (const CLI::App* sub : all) {
+            known = known || sub->get_name() == arg;
+            names += (names.empty() ? "" : ", ") + sub->get_name();
+        }
+        if (!known) {
+            std::fprintf(stderr, "mrtile: usage error: unknown command '%s' (commands: %s; see --help)\n", arg.c_str(), names.c_str());
+            return 2;
+        }
+        break;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
