@@ -489,6 +489,13 @@ using ExactPoint = Epick::Point_3;
 // Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
 // intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
 // touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
+bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
+{
+    const auto p = [](const Vec3& q) { return ExactPoint(q.x, q.y, q.z); };
+    const Epick::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+    return !ta.is_degenerate() && !tb.is_degenerate() && CGAL::do_intersect(ta, tb);
+}
+
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
 {
     const auto a = face_vertices(mesh, f), b = face_vertices(mesh, g);

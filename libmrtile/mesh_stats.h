@@ -93,6 +93,10 @@ std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const
 //! two faces folded onto each other. Faces without area never intersect.
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g);
 
+//! Whether two triangles that share no corner meet at all (CGAL's exact predicates); triangles without
+//! area never do. For faces not yet in a mesh (the surface stage's hole fills).
+bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+
 //! \brief The pairs of self_intersecting_faces that have at least one face in `faces` (smaller index
 //! first, sorted): after an edit that moved only those faces, the pairs that can have changed, found by
 //! box intersection of those faces against all faces instead of a test of the whole mesh. Entries that

@@ -366,6 +366,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     auto fill = [&](FillMode mode) {
         const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, mode);
         filled.holes += more.holes;
+        filled.crossing += more.crossing;
         filled.faces += more.faces;
     };
     if (options.fill_holes)
@@ -622,6 +623,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     st.candidates = candidates.triangles.size();
     st.holes_filled = filled.holes;
     st.hole_faces = filled.faces;
+    st.closings_refused = filled.crossing;
     st.split_vertices = copies.size();
     st.components = roots.size();
     st.dropped_fans = islands + dropped_components;

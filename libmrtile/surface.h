@@ -73,8 +73,9 @@ struct SurfaceOptions
     //! edges, the sample's own holes too (a scan's unseen base; the outline of an open scan as well, if
     //! it has no more edges), for watertight output (3D printing, volumes, simulation). 0 = off (the
     //! default: such holes are where the sample ends, and a fill there is made up). Filled by the same
-    //! triangulation as the gaps, where a manifold patch fits; at most kMaxCloseHoles (the minimum-area
-    //! fill is cubic in a hole's edges: 2,000 edges take about a second).
+    //! triangulation as the gaps, where a manifold patch fits and does not cut through the surface
+    //! (SurfaceStats::closings_refused: a single view's outline, whose surface bulges inside it); at most
+    //! kMaxCloseHoles (the minimum-area fill is cubic in a hole's edges: 2,000 edges take about a second).
     std::size_t close_holes = 0;
     //! A tile is interior (not on the sample's border) when, seen from its centre in its own plane or
     //! in a neighbour's, its surface neighbours (Tile::neighbours) and theirs leave no empty angular
@@ -115,6 +116,9 @@ struct SurfaceStats
     std::size_t refused_faces = 0;   //!< faces OpenMesh's add_face refused (should be 0)
     std::size_t holes_filled = 0;
     std::size_t hole_faces = 0;      //!< faces added by hole filling (part of gap_faces)
+    //! With close_holes: holes left open because their cap would cut through the surface (the border
+    //! of a single view is no hole: the surface bulges inside it).
+    std::size_t closings_refused = 0;
     std::size_t boundary_loops = 0;  //!< boundary loops left open
     std::size_t split_vertices = 0;  //!< pinched vertices duplicated to keep the mesh manifold
     std::size_t collapsed_split_points = 0; //!< loop points (ε-split, then rim) removed after assembly

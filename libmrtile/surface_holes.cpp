@@ -6,6 +6,7 @@
 #include "libmrtile/surface_parts.h"
 
 #include "libmrtile/coverage_gap.h"
+#include "libmrtile/mesh_stats.h"
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -750,6 +753,106 @@ void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, cons
     });
 }
 
+// The faces of a surface on a grid of cubic cells, to find those near a fill. Closing caps a loop
+// whatever its shape, and the cap of a loop that is no hole (the border of a single view, whose
+// surface bulges inside it) cuts through the surface: bun000 closed gained 392 crossing pairs.
+class FaceGrid
+{
+public:
+    FaceGrid(const Surface& s, const std::vector<Vec3>& positions) : s_(s), positions_(positions)
+    {
+        double length = 0.0;
+        std::size_t edges = 0;
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+            if (s.alive(f))
+                for (int k = 0; k < 3; ++k, ++edges)
+                    length += distance(positions[s.faces()[f][k]], positions[s.faces()[f][(k + 1) % 3]]);
+        cell_ = edges > 0 && length > 0.0 ? 2.0 * length / static_cast<double>(edges) : 1.0;
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+            if (!s.alive(f))
+                continue;
+            ++alive_;
+            const auto [lo, hi] = cells(box_of(s.faces()[f]));
+            for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                        cells_[key(x, y, z)].push_back(f);
+        }
+    }
+
+    // Whether a face of `patch` meets a face of the surface with which it shares no corner.
+    bool crosses(const std::vector<Tri>& patch) const
+    {
+        if (patch.empty())
+            return false;
+        BoundingBox box = box_of(patch.front());
+        for (const Tri& t : patch)
+            extend(box, box_of(t));
+        std::vector<std::uint32_t> near;
+        const auto [lo, hi] = cells(box);
+        const double count = static_cast<double>(hi[0] - lo[0] + 1) * static_cast<double>(hi[1] - lo[1] + 1) *
+                             static_cast<double>(hi[2] - lo[2] + 1);
+        if (count > static_cast<double>(alive_)) { // a cap as large as the surface: every face is near
+            for (std::uint32_t f = 0; f < s_.faces().size(); ++f)
+                if (s_.alive(f))
+                    near.push_back(f);
+        } else {
+            for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                        if (const auto it = cells_.find(key(x, y, z)); it != cells_.end())
+                            near.insert(near.end(), it->second.begin(), it->second.end());
+            std::sort(near.begin(), near.end());
+            near.erase(std::unique(near.begin(), near.end()), near.end());
+        }
+        for (const Tri& t : patch) {
+            const BoundingBox bt = box_of(t);
+            const std::array<Vec3, 3> a{positions_[t[0]], positions_[t[1]], positions_[t[2]]};
+            for (std::uint32_t f : near) {
+                const Tri& u = s_.faces()[f];
+                if (!s_.alive(f) || !bt.meets(box_of(u)))
+                    continue;
+                bool shared = false;
+                for (std::uint32_t v : t)
+                    shared = shared || v == u[0] || v == u[1] || v == u[2];
+                if (!shared && triangles_meet(a, {positions_[u[0]], positions_[u[1]], positions_[u[2]]}))
+                    return true;
+            }
+        }
+        return false;
+    }
+
+private:
+    static void extend(BoundingBox& b, const BoundingBox& with)
+    {
+        b.min = {std::min(b.min.x, with.min.x), std::min(b.min.y, with.min.y), std::min(b.min.z, with.min.z)};
+        b.max = {std::max(b.max.x, with.max.x), std::max(b.max.y, with.max.y), std::max(b.max.z, with.max.z)};
+    }
+    BoundingBox box_of(const Tri& t) const
+    {
+        BoundingBox b{positions_[t[0]], positions_[t[0]]};
+        extend(b, {positions_[t[1]], positions_[t[1]]});
+        extend(b, {positions_[t[2]], positions_[t[2]]});
+        return b;
+    }
+    std::pair<std::array<std::int64_t, 3>, std::array<std::int64_t, 3>> cells(const BoundingBox& b) const
+    {
+        const auto c = [&](double x) { return static_cast<std::int64_t>(std::floor(x / cell_)); };
+        return {{c(b.min.x), c(b.min.y), c(b.min.z)}, {c(b.max.x), c(b.max.y), c(b.max.z)}};
+    }
+    static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z)
+    {
+        const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffu; };
+        return u(x) << 42 | u(y) << 21 | u(z);
+    }
+
+    const Surface& s_;
+    const std::vector<Vec3>& positions_;
+    double cell_ = 1.0;
+    std::size_t alive_ = 0;
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+};
+
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
 // max_gap_width), or in FillMode::Close every hole up to SurfaceOptions::close_holes edges, widening those
 // that cannot be triangulated as they are. FillMode::BeforeHandles: the front
@@ -766,6 +869,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
     FillResult result;
     // Vertices around which gap faces were removed to open up a hole that could not be filled as it was.
     std::vector<bool> widened(positions.size(), false);
+    std::unique_ptr<FaceGrid> grid; // closing only: the surface before the caps
     constexpr int kPasses = 4;
     for (int pass = 0; pass < kPasses; ++pass) {
         bool changed = false;
@@ -827,6 +931,15 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             if (!closing && options.max_gap_width > 0.0 && full_spacing > 0.0 && full_spacing < spacing &&
                 covers_sample_hole(h, layout, loop_tiles.data(), loop_tiles.size(), positions, patch, full_spacing))
                 continue;
+            // A cap that cuts through the surface is no closing: the hole stays open (and is counted).
+            if (closing) {
+                if (!grid)
+                    grid = std::make_unique<FaceGrid>(s, positions);
+                if (grid->crosses(patch)) {
+                    ++result.crossing;
+                    continue;
+                }
+            }
             const bool pinched = std::any_of(loop.begin(), loop.end(), [&](std::uint32_t v) { return s.arcs(v).size() > 1; });
             const LocalTopology before = pinched ? local_topology(s, loop) : LocalTopology{};
             std::size_t added = 0;

@@ -719,6 +719,7 @@ struct FillResult
 {
     std::size_t holes = 0;
     std::size_t faces = 0;
+    std::size_t crossing = 0; //!< FillMode::Close: holes left open because their cap would cross the surface
 };
 
 std::vector<bool> interior_tiles(const std::vector<Tile>& tiles, double max_gap_degrees);

@@ -503,6 +503,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["gap_faces"] = r.surface.gap_faces;
     j["refused_faces"] = r.surface.refused_faces;
     j["holes_filled"] = r.surface.holes_filled;
+    j["closings_refused"] = r.surface.closings_refused;
     j["refined_points"] = r.refined_points;
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
@@ -588,6 +589,10 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
     if (!mesh_args.stats_json.empty())
         write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
     print_mesh_report(j, out);
+    if (r.surface.closings_refused > 0)
+        std::printf("note: %zu holes left open: their cap would cut through the surface (a single view's outline "
+                    "is no hole)\n",
+                    r.surface.closings_refused);
     for (const AlsoWrite& a : also) {
         const auto again = Clock::now();
         write_any_mesh(r.mesh, h.cloud.origin, a.path, a.args);
