@@ -319,6 +319,38 @@ void check_lod_options(const Hierarchy& h, const LodSetOptions& o)
 
 } // namespace
 
+// A coarse level in more pieces or with more boundary loops than the finest one is seen through where
+// a viewer shows it (the rocker arm's level 0, 94 tiles of a closed genus-1 part: 5 pieces, 469 open
+// edges, its finer levels closed: thin parts' tiles at a coarse cut, see the README's known limits).
+// Such a level is cut again at a finer tolerance, by steps of √2, up to kMendSteps times, while it
+// stays coarser than the next level (tolerance cuts are monotone in the tolerance, so the levels
+// still nest). Only automatic levels: tolerances the caller chose are kept.
+constexpr int kMendSteps = 3;
+
+bool worse_than(const TopologyStats& t, const TopologyStats& finest)
+{
+    return t.components > finest.components || t.boundary_loops > finest.boundary_loops;
+}
+
+void mend_coarse_levels(const Hierarchy& h, std::vector<LodLevel>& levels, const MeshOptions& mesh)
+{
+    if (levels.size() < 2)
+        return;
+    const TopologyStats finest = topology_stats(levels.back().mesh);
+    for (std::size_t k = 0; k + 1 < levels.size(); ++k)
+        for (int step = 0; step < kMendSteps && worse_than(topology_stats(levels[k].mesh), finest); ++step) {
+            LodLevel finer;
+            finer.tolerance = levels[k].tolerance / std::sqrt(2.0);
+            finer.cut = cut_by_tolerance(h, finer.tolerance);
+            if (finer.cut.size() >= levels[k + 1].cut.size())
+                break;
+            mesh_level(h, finer, mesh);
+            levels[k].tolerance = finer.tolerance;
+            levels[k].cut = std::move(finer.cut);
+            levels[k].mesh = finer.mesh; // a coarse level: the copy is small (OpenMesh has no move)
+        }
+}
+
 std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
 {
     check_lod_options(h, o);
@@ -366,6 +398,8 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
             o.progress(++done, total);
         }
     });
+    if (o.tolerances.empty())
+        mend_coarse_levels(h, levels, o.mesh);
     // Errors in order, coarse to fine (meshing may have refined a level's small separate objects,
     // MeshOptions::small_object_rounds, so they are taken from the cuts as meshed).
     double previous_error = std::numeric_limits<double>::infinity();
