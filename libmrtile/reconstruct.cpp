@@ -19,6 +19,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <unordered_map>
 
 namespace mrt {
 
@@ -229,6 +230,70 @@ std::vector<Tile> refine_before_meshing(const Hierarchy& h, const MeshOptions& o
     return tiles;
 }
 
+// Tiles with a vertex on a boundary loop of the mesh (by the vertices' cluster property), as flags per
+// tile of `cut`.
+std::vector<bool> tiles_on_loops(const Cut& cut, const Mesh& mesh)
+{
+    std::unordered_map<std::int32_t, std::size_t> index;
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        index.emplace(cut[k], k);
+    std::vector<bool> marked(cut.size(), false);
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!mesh.get_property_handle(cluster, kVertexCluster))
+        return marked;
+    for (const Mesh::VertexHandle v : mesh.vertices())
+        if (mesh.is_boundary(v))
+            if (const auto it = index.find(mesh.property(cluster, v)); it != index.end())
+                marked[it->second] = true;
+    return marked;
+}
+
+constexpr double kMinSurroundedShare = 0.9; // of the tiles on the loops, for refine_broken_pieces to try
+
+// After the surface: a mesh in several pieces with open borders is, on a closed thin part at a coarse
+// cut, one surface broken where its tiles straddle the part (the rocker arm at tolerance 0.02: 11
+// pieces, 12 loops; fine cuts are closed). The tiles on the boundary loops are refined and the cut
+// meshed again, up to MeshOptions::piece_rounds times, kept only when it has fewer pieces and no more
+// loops (separate objects and a scan's own borders do not improve and are left as they were).
+void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface, MeshResult& result,
+                          std::vector<Tile>& tiles)
+{
+    for (int round = 0; round < options.piece_rounds; ++round) {
+        const TopologyStats now = topology_stats(result.mesh);
+        if (now.components < 2 || now.boundary_loops == 0)
+            return;
+        // Breaks run between tiles that their neighbours surround; a scan's outline runs along tiles
+        // that face the empty outside (bun045: most of its loop tiles), which refining does not mend.
+        std::vector<bool> marked = tiles_on_loops(result.cut, result.mesh);
+        const std::vector<bool> surrounded = surrounded_tiles(tiles, surface);
+        std::size_t on_loops = 0, inner = 0;
+        bool refinable = false;
+        for (std::size_t k = 0; k < marked.size(); ++k) {
+            if (!marked[k])
+                continue;
+            ++on_loops;
+            inner += surrounded[k] ? 1 : 0;
+            refinable = refinable || !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf();
+        }
+        if (!refinable || static_cast<double>(inner) < kMinSurroundedShare * static_cast<double>(on_loops))
+            return;
+        const Cut cut = refine_marked(h, result.cut, marked);
+        SurfaceOptions again_options;
+        std::vector<Tile> again_tiles = tiles_for(h, cut, options, again_options);
+        SurfaceStats again_stats;
+        Mesh again;
+        build_surface(h, again_tiles, again, again_options, &again_stats);
+        const TopologyStats then = topology_stats(again);
+        if (!(then.components < now.components && then.boundary_loops <= now.boundary_loops))
+            return;
+        result.cut = cut;
+        result.mesh = again;
+        result.surface = again_stats;
+        tiles = std::move(again_tiles);
+        surface = again_options;
+    }
+}
+
 // After the surface: tiles whose fans it left out although their points lie away from it are refined
 // and the cut meshed again (MeshOptions::dropped_rounds), into `result` and `tiles`. A round whose
 // surface crosses itself more than the one before is undone and ends the rounds: where refined tiles
@@ -298,6 +363,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     SurfaceOptions surface_options = options.surface;
     std::vector<Tile> tiles = refine_before_meshing(h, options, result.cut, surface_options);
     build_surface(h, tiles, result.mesh, surface_options, &result.surface);
+    refine_broken_pieces(h, options, surface_options, result, tiles);
     const std::vector<bool> away = refine_dropped_tiles(h, options, surface_options, result, tiles);
     result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);

@@ -58,6 +58,12 @@ struct MeshOptions
     //! into their neighbours where the untangling cannot undo it. Points of tiles still away are not
     //! fitted to.
     int dropped_rounds = 3;
+    //! A mesh in several pieces with open borders (a closed thin part at a coarse cut, its tiles
+    //! straddling it: the rocker arm at tolerance 0.02 was 11 pieces with 12 loops) has the tiles on
+    //! its boundary loops refined and is meshed again, up to this many times (0 = never); a round is
+    //! kept only when it leaves fewer pieces and no more loops. Costs a meshing per round, only for
+    //! meshes in pieces with loops (separate closed objects have none).
+    int piece_rounds = 3;
 };
 
 struct MeshResult

@@ -243,6 +243,11 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     return mesh;
 }
 
+std::vector<bool> surrounded_tiles(const std::vector<Tile>& tiles, const SurfaceOptions& options)
+{
+    return interior_tiles(tiles, options.interior_gap_degrees);
+}
+
 HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
     const Projection p = choose_projection(h, tiles, options);

@@ -151,6 +151,11 @@ struct HeightFieldChoice
 
 HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options);
 
+//! Per tile, whether its surface neighbours (Tile::neighbours) surround it, leaving no empty angular
+//! sector wider than options.interior_gap_degrees: not on the sample's border. Hole filling fills the
+//! holes among such tiles (they are gaps between tiles, not the sample's own holes).
+std::vector<bool> surrounded_tiles(const std::vector<Tile>& tiles, const SurfaceOptions& options = {});
+
 //! \brief Meshes the tiles of a cut (from make_tiles) into an oriented 2-manifold.
 //! \details Deterministic. Closed components are oriented outward (positive signed volume); open ones
 //! face h.cloud.viewpoint when it is set (the scanner's position: a scan's mesh faces its scanner,

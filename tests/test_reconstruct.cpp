@@ -543,6 +543,28 @@ TEST(Reconstruct, close_holes_leaves_a_single_views_outline_open)
     EXPECT_TRUE(self_intersecting_faces(closed.mesh).empty());
 }
 
+// A closed thin part at a coarse cut came out in pieces where its tiles straddle the part (the rocker
+// arm at tolerance 0.02: 11 pieces, 12 loops: QA, session 19). The tiles on the loops, surrounded by
+// neighbours, are refined and the cut meshed again: one piece, and never more loops.
+TEST(Reconstruct, a_mesh_in_pieces_is_mended_along_its_cracks)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/rocker-arm.obj"));
+    const Cut cut = cut_by_tolerance(h, 0.02);
+    MeshOptions as_cut;
+    as_cut.piece_rounds = 0;
+    const MeshResult broken = mesh_cut(h, cut, as_cut), mended = mesh_cut(h, cut);
+    const TopologyStats b = topology_stats(broken.mesh), m = topology_stats(mended.mesh);
+    EXPECT_GT(b.components, 3u);
+    EXPECT_EQ(m.components, 1u);
+    EXPECT_LE(m.boundary_loops, b.boundary_loops);
+    EXPECT_GT(mended.cut.size(), cut.size()); // refined where it broke
+    EXPECT_EQ(mended.surface.refused_faces, 0u);
+    // A single view's outline is no crack: its mesh is the one meshed as cut.
+    const Hierarchy view = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun045.ply"));
+    const Cut view_cut = cut_by_tolerance(view, 0.002);
+    EXPECT_EQ(mesh_cut(view, view_cut).cut, mesh_cut(view, view_cut, as_cut).cut);
+}
+
 TEST(Reconstruct, fan_refinement_lowers_the_deviation)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(20000));
