@@ -197,6 +197,8 @@ DracoDecoded decode_draco(const std::string& bytes, const std::string& what)
 void write_drc(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path, const DracoOptions& options)
 {
     validate(options);
+    if (!is_finite(origin))
+        throw InvalidInput(path.string() + ": the origin is not finite");
     MeshBufferOptions buffer_options;
     buffer_options.up_axis = UpAxis::Y; // .drc has no axis convention: keep the mesh's axes
     buffer_options.offset = draco_grid_offset(options, UpAxis::Y);

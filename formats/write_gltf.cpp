@@ -52,11 +52,15 @@ public:
     //! Adds a node showing `mesh`; returns its index. The node is not put in the scene.
     std::size_t add_mesh_node(const Mesh& mesh, const Vec3& origin, const std::string& name)
     {
+        // A NaN would be written as JSON null, which no viewer reads as a number.
+        if (!is_finite(origin) || (options_.offset && !is_finite(*options_.offset)))
+            throw InvalidInput("glTF: the origin (or offset) is not finite");
         MeshBufferOptions buffer_options;
         buffer_options.up_axis = options_.up_axis;
         buffer_options.normals = options_.normals;
         buffer_options.colors = options_.colors;
-        if (options_.draco)
+        buffer_options.offset = options_.offset;
+        if (options_.draco && options_.draco_options.grid)
             buffer_options.offset = draco_grid_offset(options_.draco_options, options_.up_axis);
         const MeshBuffers buffers = make_mesh_buffers(mesh, buffer_options);
 

@@ -13,6 +13,7 @@
 #include "libmrtile/vec3.h"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,11 @@ struct GltfOptions
     bool double_sided = true; //!< material doubleSided: reconstructed surfaces are often open
     bool draco = false;       //!< KHR_draco_mesh_compression (then also extensionsRequired)
     DracoOptions draco_options; //!< used when draco is true
+    //! Subtracted (in the output frame) from every position before it is stored as float, and put
+    //! into the node's translation. Default: the file's own bounding-box centre, rounded (a Draco grid
+    //! sets its own). Files that must agree bit for bit where they meet (the tiles of one tileset
+    //! level) pass one offset: float(p - offset) is then the same number in each.
+    std::optional<Vec3> offset;
 };
 
 //! \brief Writes one mesh (positions relative to `origin`) as a glTF scene with one node.

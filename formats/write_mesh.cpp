@@ -202,6 +202,8 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
 void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
                 const WriteMeshOptions& options)
 {
+    if (!is_finite(origin))
+        throw InvalidInput(path.string() + ": the origin is not finite (every vertex would be)");
     std::string ext;
     const MeshFormat format = mesh_format(path, ext);
 

@@ -128,14 +128,29 @@ bool intersects(const Node& node, const FocusRegion& region)
     return distance_to_box(region.centre, node.box) <= region.radius;
 }
 
+void check_region(const FocusRegion& r)
+{
+    check_tolerance(r.tolerance, "region tolerance");
+    if (r.shape == FocusRegion::Shape::Sphere && (!(r.radius >= 0) || !std::isfinite(r.radius) || !is_finite(r.centre)))
+        throw InvalidInput("cut: a focus sphere needs a finite centre and a finite radius >= 0");
+    if (r.shape == FocusRegion::Shape::Box &&
+        (!is_finite(r.box.min) || !is_finite(r.box.max) || !(r.box.min.x <= r.box.max.x) ||
+         !(r.box.min.y <= r.box.max.y) || !(r.box.min.z <= r.box.max.z)))
+        throw InvalidInput("cut: a focus box needs finite corners with min <= max on every axis");
+}
+
+void check_node_ids(const Hierarchy& h, const Cut& cut)
+{
+    for (std::int32_t id : cut)
+        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
+            throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
+}
+
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions)
 {
     check_tolerance(base_tolerance, "base tolerance");
-    for (const FocusRegion& r : regions) {
-        check_tolerance(r.tolerance, "region tolerance");
-        if (r.shape == FocusRegion::Shape::Sphere && (!(r.radius >= 0) || !std::isfinite(r.radius)))
-            throw InvalidInput("cut: a focus sphere needs a finite radius >= 0");
-    }
+    for (const FocusRegion& r : regions)
+        check_region(r);
     const double side = h.scale;
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
@@ -176,13 +191,12 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
 {
     check_tolerance(base_tolerance, "base tolerance");
     for (const FocusRegion& r : regions)
-        check_tolerance(r.tolerance, "region tolerance");
+        check_region(r);
+    check_node_ids(h, cut);
     const double side = h.scale;
     Cut out;
     std::vector<std::int32_t> stack;
     for (std::int32_t id : cut) {
-        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
-            throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
         bool meets = false;
         for (const FocusRegion& r : regions)
             meets = meets || intersects(h.nodes[static_cast<std::size_t>(id)], r);
@@ -209,6 +223,8 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance)
 {
     check_tolerance(tolerance, "tolerance");
+    check_region(region);
+    check_node_ids(h, cut);
     const double limit = tolerance * h.scale;
     // For each cut node, its highest ancestor (or itself) inside the region and flat enough; a chain
     // qualifies only as long as every node on it does (a parent is never flatter-tested past a failure).
@@ -284,6 +300,7 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
 
 double cut_plane_error(const Hierarchy& h, const Cut& cut)
 {
+    check_node_ids(h, cut);
     double sum = 0.0;
     for (std::int32_t id : cut)
         sum += h.nodes[static_cast<std::size_t>(id)].frame.values[0];

@@ -70,6 +70,13 @@ struct FocusRegion
 //! True when the node's bounding box meets the region.
 bool intersects(const Node& node, const FocusRegion& region);
 
+//! \throw InvalidInput unless the region's tolerance is >= 0 and finite and, for a sphere, its centre
+//! is finite and its radius finite and >= 0, or, for a box, its corners are finite with min <= max.
+void check_region(const FocusRegion& region);
+
+//! \throw InvalidInput naming the first node id of `cut` that is not in the hierarchy.
+void check_node_ids(const Hierarchy& h, const Cut& cut);
+
 //! Every node meeting a region is refined to the smallest tolerance of the regions it meets; every
 //! other node to `base_tolerance`. Nodes of cut_by_tolerance(h, base_tolerance) that meet no region
 //! are in the result unchanged.

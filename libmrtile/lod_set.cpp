@@ -318,6 +318,8 @@ void check_lod_options(const Hierarchy& h, const LodSetOptions& o)
 {
     if (o.max_tile_triangles < 64)
         throw InvalidInput("lods: max_tile_triangles must be at least 64");
+    if (o.levels == 0 && o.tolerances.empty() && o.max_levels == 0)
+        throw InvalidInput("lods: max_levels must be at least 1");
     if (h.nodes.empty())
         throw InvalidInput("lods: empty hierarchy");
 }

@@ -345,6 +345,10 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
 {
     if (!is_partition(h, cut))
         throw InvalidInput("mesh: the cut is not a partition of the model's points");
+    for (const int rounds : {options.small_object_rounds, options.gap_rounds, options.dropped_rounds, options.piece_rounds})
+        if (rounds < 0 || rounds > kMaxRefineRounds)
+            throw InvalidInput("MeshOptions: small_object_rounds, gap_rounds, dropped_rounds and piece_rounds must be in [0, " +
+                               std::to_string(kMaxRefineRounds) + "]");
     const auto start = std::chrono::steady_clock::now();
     MeshResult result;
     result.cut = cut;
@@ -444,6 +448,7 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
 
 double e_rms(const Hierarchy& h, const Cut& cut)
 {
+    check_node_ids(h, cut);
     double sum = 0.0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
@@ -458,6 +463,7 @@ double e_rms(const Hierarchy& h, const Cut& cut)
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)
 {
+    check_node_ids(h, cut);
     QualityReport q;
     q.topology = topology_stats(mesh);
     q.e_rms = e_rms(h, cut);

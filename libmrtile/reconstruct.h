@@ -22,6 +22,10 @@
 
 namespace mrt {
 
+//! The most rounds of each of MeshOptions' refinements (small objects, gaps, dropped tiles, pieces):
+//! each round can cost a meshing, and every refinement converges in a few.
+inline constexpr int kMaxRefineRounds = 64;
+
 struct MeshOptions
 {
     TileOptions tiles;       //!< tile generation (§4.2)

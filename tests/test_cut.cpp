@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace mrt {
@@ -211,8 +212,9 @@ TEST(Cut, camera_refines_only_what_is_in_view)
     EXPECT_LT(seen.size(), all.size());
     for (std::int32_t id : seen) { // a node out of view is there because its parent was in view
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
-        if (!in_view(n, looking))
+        if (!in_view(n, looking)) {
             EXPECT_TRUE(n.parent < 0 || in_view(h.nodes[static_cast<std::size_t>(n.parent)], looking));
+        }
     }
     Camera away = around;
     away.position = {0.0, -5.0, 0.0};
@@ -224,6 +226,33 @@ TEST(Cut, camera_refines_only_what_is_in_view)
 }
 
 // The general predicate form: refine exactly the nodes above depth 4.
+// Cuts and regions from the caller are checked: node ids out of range, non-finite or inverted regions
+// are refused (QA, session 19: e_rms, measure_quality, cut_plane_error and coarsen_cut read out of
+// bounds; a NaN focus centre refined the whole model).
+TEST(Cut, bad_node_ids_and_regions_are_refused)
+{
+    const Hierarchy& h = torus();
+    const Cut bad{-3, 1000000};
+    FocusRegion inside;
+    inside.radius = 0.5;
+    inside.tolerance = 0.001;
+    EXPECT_THROW(cut_plane_error(h, bad), InvalidInput);
+    EXPECT_THROW(coarsen_cut(h, bad, inside, 0.01), InvalidInput);
+    EXPECT_THROW(refine_cut(h, bad, 0.01, {inside}), InvalidInput);
+    EXPECT_THROW(check_node_ids(h, Cut{static_cast<std::int32_t>(h.nodes.size())}), InvalidInput);
+    EXPECT_NO_THROW(check_node_ids(h, cut_by_tolerance(h, 0.01)));
+    FocusRegion nan_centre = inside;
+    nan_centre.centre = {std::nan(""), 0, 0};
+    EXPECT_THROW(cut_by_regions(h, 0.01, {nan_centre}), InvalidInput);
+    FocusRegion inverted;
+    inverted.shape = FocusRegion::Shape::Box;
+    inverted.box = BoundingBox{{1, 1, 1}, {0, 0, 0}};
+    EXPECT_THROW(cut_by_regions(h, 0.01, {inverted}), InvalidInput);
+    inverted.box = BoundingBox{{0, 0, 0}, {1, std::nan(""), 1}};
+    EXPECT_THROW(refine_cut(h, cut_by_tolerance(h, 0.01), 0.01, {inverted}), InvalidInput);
+    EXPECT_THROW(coarsen_cut(h, cut_by_tolerance(h, 0.01), nan_centre, 0.01), InvalidInput);
+}
+
 TEST(Cut, predicate_cut)
 {
     const Hierarchy& h = torus();

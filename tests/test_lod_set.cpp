@@ -78,6 +78,10 @@ TEST(LodSet, levels_are_consistent)
     EXPECT_EQ(make_lod_set(torus(), explicit_levels).levels.size(), 3u);
     explicit_levels.tolerances = {0.001, 0.01};
     EXPECT_THROW(make_lod_set(torus(), explicit_levels), InvalidInput);
+    LodSetOptions no_levels; // automatic levels, at most none (was two, silently: QA, session 19)
+    no_levels.tileset = false;
+    no_levels.max_levels = 0;
+    EXPECT_THROW(make_lod_set(torus(), no_levels), InvalidInput);
 }
 
 // Unevenly sampled: a torus whose x < 0 half has a tenth of the points. Level 0 (a best-N cut) used to

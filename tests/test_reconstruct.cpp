@@ -565,6 +565,28 @@ TEST(Reconstruct, a_mesh_in_pieces_is_mended_along_its_cracks)
     EXPECT_EQ(mesh_cut(view, view_cut).cut, mesh_cut(view, view_cut, as_cut).cut);
 }
 
+// Options and cuts out of range are refused, not run for hours or read out of bounds (QA, session 19:
+// fit.rounds = 1,000,000 ran past a 300 s timeout; e_rms and measure_quality on a bad cut crashed).
+TEST(Reconstruct, options_and_cuts_out_of_range_are_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    MeshOptions many;
+    many.fit.rounds = kMaxFitRounds + 1;
+    EXPECT_THROW(mesh_cut(h, cut, many), InvalidInput);
+    for (int MeshOptions::*rounds : {&MeshOptions::small_object_rounds, &MeshOptions::gap_rounds,
+                                     &MeshOptions::dropped_rounds, &MeshOptions::piece_rounds}) {
+        MeshOptions o;
+        o.*rounds = -1;
+        EXPECT_THROW(mesh_cut(h, cut, o), InvalidInput);
+        o.*rounds = kMaxRefineRounds + 1;
+        EXPECT_THROW(mesh_cut(h, cut, o), InvalidInput);
+    }
+    const MeshResult r = mesh_cut(h, cut);
+    EXPECT_THROW(e_rms(h, Cut{-3, 1000000}), InvalidInput);
+    EXPECT_THROW(measure_quality(h, Cut{static_cast<std::int32_t>(h.nodes.size())}, r.mesh), InvalidInput);
+}
+
 TEST(Reconstruct, fan_refinement_lowers_the_deviation)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(20000));

@@ -174,6 +174,63 @@ TEST_F(Tilesets, draco_tiles_on_a_shared_grid_have_bit_identical_borders)
     EXPECT_EQ(border_a, border_b); // exact float equality
 }
 
+// Plain tiles are stored on one float offset too: two tiles of a terrain, meeting at x = 169.7 with
+// vertices 0.7 apart (no short binary fractions), store their shared border as the same
+// world positions, float + translation, bit for bit. With each tile's own centre as its offset, the
+// floats of the two sides rounded differently (QA, session 19: 749 of 992 shared vertices off by an ulp).
+TEST(WriteTilesets, plain_tiles_share_their_border_bit_for_bit)
+{
+    const fs::path dir = scratch_dir().string() + ".plain_borders";
+    fs::remove_all(dir);
+    const double step = 0.7, x0 = -40.3;
+    const int n = 300;
+    Mesh left = grid_mesh(n, 20, x0, 11.1, step, testing::wave);
+    // Starts where left ends, a third as wide: the border lies 105 from one tile's centre and 35 from
+    // the other's, where floats have different spacings.
+    Mesh right = grid_mesh(n / 3, 20, x0 + n * step, 11.1, step, testing::wave);
+    std::vector<TilesetTile> tiles(3);
+    tiles[1].mesh = &left;
+    tiles[1].box = BoundingBox{{x0, 11.1, -0.3}, {x0 + n * step, 11.1 + 20 * step, 0.3}};
+    tiles[2].mesh = &right;
+    tiles[2].box = BoundingBox{{x0 + n * step, 11.1, -0.3}, {x0 + (n + n / 3) * step, 11.1 + 20 * step, 0.3}};
+    tiles[0].box = BoundingBox{tiles[1].box.min, tiles[2].box.max};
+    tiles[0].geometric_error = 1.0;
+    tiles[0].children = {1, 2};
+    write_3d_tiles(tiles, kOrigin, dir, TilesetOptions{});
+    auto world_positions = [&](int tile) {
+        const std::string glb = read_bytes(dir / "tiles" / (std::to_string(tile) + ".glb"));
+        std::uint32_t length = 0;
+        std::memcpy(&length, glb.data() + 12, 4);
+        const json doc = json::parse(glb.substr(20, length));
+        const std::vector<double> t = doc["nodes"][0].value("translation", std::vector<double>{0, 0, 0});
+        const json& accessor = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<std::size_t>()];
+        const json& view = doc["bufferViews"][accessor["bufferView"].get<std::size_t>()];
+        const std::size_t start = 20 + length + 8 + view.value("byteOffset", std::size_t{0}) + accessor.value("byteOffset", std::size_t{0});
+        std::vector<std::array<double, 3>> out(accessor["count"].get<std::size_t>());
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            float p[3];
+            std::memcpy(p, glb.data() + start + 12 * i, 12);
+            out[i] = {p[0] + t[0], p[1] + t[1], p[2] + t[2]};
+        }
+        return out;
+    };
+    const auto a = world_positions(1), b = world_positions(2);
+    // glTF is y-up: the input's x stays x. The border: x within a few mm of x0 + n step.
+    const double border = x0 + n * step;
+    std::vector<std::array<double, 3>> side_a, side_b;
+    for (const auto& p : a)
+        if (std::fabs(p[0] - border) < 1e-3)
+            side_a.push_back(p);
+    for (const auto& p : b)
+        if (std::fabs(p[0] - border) < 1e-3)
+            side_b.push_back(p);
+    ASSERT_EQ(side_a.size(), 21u);
+    std::sort(side_a.begin(), side_a.end());
+    std::sort(side_b.begin(), side_b.end());
+    EXPECT_EQ(side_a, side_b); // exact equality
+    fs::remove_all(dir);
+}
+
 TEST_F(Tilesets, output_is_byte_deterministic)
 {
     const fs::path again = scratch_dir() / "draco_again";

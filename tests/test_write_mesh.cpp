@@ -5,7 +5,10 @@
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+#include "formats/draco_encode.h"
 #include "formats/read_points.h"
+#include "formats/write_3d_tiles.h"
+#include "formats/write_gltf.h"
 #include "formats/write_mesh.h"
 #include "libmrtile/errors.h"
 #include "tests/test_dir.h"
@@ -15,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -281,6 +285,17 @@ TEST(WriteMesh, failures_name_the_path_and_leave_nothing_behind)
     // A read-only file system (refuses even root).
     expect_error("/proc/mrtile_write_mesh_test.ply", false);
     EXPECT_FALSE(fs::exists("/proc/mrtile_write_mesh_test.ply"));
+    // A non-finite origin would make every vertex NaN (QA, session 19: written as such); glTF, Draco
+    // and 3D Tiles writers refuse it too.
+    const Vec3 nan{std::nan(""), 0, 0};
+    EXPECT_THROW(write_mesh(mesh, nan, dir / "nan.ply"), InvalidInput);
+    EXPECT_THROW(write_gltf(mesh, nan, dir / "nan.glb"), InvalidInput);
+    EXPECT_THROW(write_drc(mesh, nan, dir / "nan.drc"), InvalidInput);
+    std::vector<TilesetTile> tiles(1);
+    tiles[0].mesh = &mesh;
+    tiles[0].box = BoundingBox{{-1, -1, -1}, {1, 1, 1}};
+    EXPECT_THROW(write_3d_tiles(tiles, nan, dir / "nan_tiles", TilesetOptions{}), InvalidInput);
+    EXPECT_EQ(directory_listing(dir), std::vector<std::string>{"taken.obj"});
 }
 
 } // namespace

@@ -375,7 +375,7 @@ struct MeshArgs
             ->check(kNonNegative);
         cmd->add_option("--fit-rounds", fit_rounds,
                         "least-squares rounds fitting the vertices to the points (0 = interpolate, as the paper)")
-            ->check(CLI::Range(0, 100))
+            ->check(CLI::Range(0, kMaxFitRounds))
             ->capture_default_str();
         cmd->add_flag("--no-colors", no_colors, "leave the mesh uncoloured even when the points have colours");
         cmd->add_option("--close-holes", close_holes,
