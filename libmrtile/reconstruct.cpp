@@ -230,52 +230,78 @@ std::vector<Tile> refine_before_meshing(const Hierarchy& h, const MeshOptions& o
     return tiles;
 }
 
-// Tiles with a vertex on a boundary loop of the mesh (by the vertices' cluster property), as flags per
-// tile of `cut`.
-std::vector<bool> tiles_on_loops(const Cut& cut, const Mesh& mesh)
+// The tiles (indices into `cut`) on each boundary loop of the mesh, by the vertices' cluster property.
+std::vector<std::vector<std::size_t>> tiles_of_loops(const Cut& cut, const Mesh& mesh)
 {
+    std::vector<std::vector<std::size_t>> loops;
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!mesh.get_property_handle(cluster, kVertexCluster))
+        return loops;
     std::unordered_map<std::int32_t, std::size_t> index;
     for (std::size_t k = 0; k < cut.size(); ++k)
         index.emplace(cut[k], k);
-    std::vector<bool> marked(cut.size(), false);
-    OpenMesh::VPropHandleT<int> cluster;
-    if (!mesh.get_property_handle(cluster, kVertexCluster))
-        return marked;
-    for (const Mesh::VertexHandle v : mesh.vertices())
-        if (mesh.is_boundary(v))
-            if (const auto it = index.find(mesh.property(cluster, v)); it != index.end())
-                marked[it->second] = true;
-    return marked;
+    std::vector<bool> seen(mesh.n_halfedges(), false);
+    for (const Mesh::HalfedgeHandle start : mesh.halfedges()) {
+        if (!mesh.is_boundary(start) || seen[static_cast<std::size_t>(start.idx())])
+            continue;
+        std::vector<std::size_t> tiles;
+        Mesh::HalfedgeHandle he = start;
+        do {
+            seen[static_cast<std::size_t>(he.idx())] = true;
+            if (const auto it = index.find(mesh.property(cluster, mesh.to_vertex_handle(he))); it != index.end())
+                tiles.push_back(it->second);
+            he = mesh.next_halfedge_handle(he);
+        } while (he != start && !seen[static_cast<std::size_t>(he.idx())]);
+        std::sort(tiles.begin(), tiles.end());
+        tiles.erase(std::unique(tiles.begin(), tiles.end()), tiles.end());
+        loops.push_back(std::move(tiles));
+    }
+    return loops;
 }
 
-constexpr double kMinSurroundedShare = 0.9; // of the tiles on the loops, for refine_broken_pieces to try
+constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_broken_pieces to refine them
 
-// After the surface: a mesh in several pieces with open borders is, on a closed thin part at a coarse
-// cut, one surface broken where its tiles straddle the part (the rocker arm at tolerance 0.02: 11
-// pieces, 12 loops; fine cuts are closed). The tiles on the boundary loops are refined and the cut
-// meshed again, up to MeshOptions::piece_rounds times, kept only when it has fewer pieces and no more
-// loops (separate objects and a scan's own borders do not improve and are left as they were).
+// After the surface: boundary loops along tiles that their neighbours surround are cracks, not the
+// sample's borders (a scan's outline runs along tiles that face the empty outside: bun045, most of its
+// loop tiles). Two kinds are mended by refining those tiles and meshing the cut again, up to
+// MeshOptions::piece_rounds times:
+//  - a mesh in several pieces, a closed thin part at a coarse cut broken where its tiles straddle it
+//    (the rocker arm at tolerance 0.02: 11 pieces, 12 loops; fine cuts are closed), when at least 90%
+//    of the tiles on all its loops are surrounded; a round is kept when it has fewer pieces and no
+//    more loops;
+//  - a height field with loops inside its outline whose tiles are surrounded: slits where two tilted
+//    tiles overlap seen along the axis, so that no face between them looks up (a 3M-point terrain at
+//    tolerance 0.002: a 20-edge slit between two tiles); a round is kept when it has fewer loops and
+//    no more pieces.
+// Separate objects and a scan's own borders do not improve and are left as they were.
 void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface, MeshResult& result,
                           std::vector<Tile>& tiles)
 {
     for (int round = 0; round < options.piece_rounds; ++round) {
         const TopologyStats now = topology_stats(result.mesh);
-        if (now.components < 2 || now.boundary_loops == 0)
+        const bool pieces = now.components >= 2 && now.boundary_loops > 0;
+        const bool slits = result.surface.height_field_used && now.components == 1 && now.boundary_loops >= 2;
+        if (!pieces && !slits)
             return;
-        // Breaks run between tiles that their neighbours surround; a scan's outline runs along tiles
-        // that face the empty outside (bun045: most of its loop tiles), which refining does not mend.
-        std::vector<bool> marked = tiles_on_loops(result.cut, result.mesh);
         const std::vector<bool> surrounded = surrounded_tiles(tiles, surface);
+        std::vector<bool> marked(result.cut.size(), false);
         std::size_t on_loops = 0, inner = 0;
-        bool refinable = false;
-        for (std::size_t k = 0; k < marked.size(); ++k) {
-            if (!marked[k])
-                continue;
-            ++on_loops;
-            inner += surrounded[k] ? 1 : 0;
-            refinable = refinable || !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf();
+        for (const std::vector<std::size_t>& loop : tiles_of_loops(result.cut, result.mesh)) {
+            std::size_t loop_inner = 0;
+            for (std::size_t k : loop)
+                loop_inner += surrounded[k] ? 1 : 0;
+            on_loops += loop.size();
+            inner += loop_inner;
+            if (pieces || static_cast<double>(loop_inner) >= kMinSurroundedShare * static_cast<double>(loop.size()))
+                for (std::size_t k : loop)
+                    marked[k] = true;
         }
-        if (!refinable || static_cast<double>(inner) < kMinSurroundedShare * static_cast<double>(on_loops))
+        if (pieces && static_cast<double>(inner) < kMinSurroundedShare * static_cast<double>(on_loops))
+            return;
+        bool refinable = false;
+        for (std::size_t k = 0; k < marked.size(); ++k)
+            refinable = refinable || (marked[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
+        if (!refinable)
             return;
         const Cut cut = refine_marked(h, result.cut, marked);
         SurfaceOptions again_options;
@@ -284,7 +310,9 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         Mesh again;
         build_surface(h, again_tiles, again, again_options, &again_stats);
         const TopologyStats then = topology_stats(again);
-        if (!(then.components < now.components && then.boundary_loops <= now.boundary_loops))
+        const bool better = pieces ? then.components < now.components && then.boundary_loops <= now.boundary_loops
+                                   : then.boundary_loops < now.boundary_loops && then.components <= now.components;
+        if (!better)
             return;
         result.cut = cut;
         result.mesh = again;

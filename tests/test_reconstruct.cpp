@@ -587,6 +587,32 @@ TEST(Reconstruct, options_and_cuts_out_of_range_are_refused)
     EXPECT_THROW(measure_quality(h, Cut{static_cast<std::int32_t>(h.nodes.size())}, r.mesh), InvalidInput);
 }
 
+// A height field with a loop inside its outline: a slit where two tilted tiles overlap seen along the
+// axis, so no face between them looks up (a 3M-point terrain had 2-3 loops: QA, session 19). The
+// slit's tiles are surrounded by neighbours: refined, the terrain is one piece with only its outline.
+TEST(Reconstruct, a_slit_in_a_terrain_is_mended)
+{
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> along(0.0, 1000.0);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    PointCloud terrain;
+    for (int i = 0; i < 500000; ++i) {
+        const double x = along(rng), y = along(rng);
+        terrain.positions.push_back(
+            {x, y, 200 + 30 * std::sin(x / 80) * std::cos(y / 120) + 10 * std::sin(x / 17 + y / 23) + noise(rng)});
+    }
+    const Hierarchy h = build_hierarchy(terrain);
+    const Cut cut = cut_by_tolerance(h, 0.001);
+    MeshOptions as_cut;
+    as_cut.piece_rounds = 0;
+    const MeshResult slit = mesh_cut(h, cut, as_cut), mended = mesh_cut(h, cut);
+    ASSERT_TRUE(mended.surface.height_field_used);
+    EXPECT_EQ(topology_stats(slit.mesh).boundary_loops, 2u); // the case this guards
+    EXPECT_EQ(topology_stats(mended.mesh).boundary_loops, 1u);
+    EXPECT_EQ(topology_stats(mended.mesh).components, 1u);
+    EXPECT_GT(mended.cut.size(), cut.size());
+}
+
 TEST(Reconstruct, fan_refinement_lowers_the_deviation)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(20000));
