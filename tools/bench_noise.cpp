@@ -128,7 +128,7 @@ std::vector<Table> noise_tables(const BenchContext& context)
         "denoised: the default build, which finds the sample noisy and moves the points onto a quadric fitted to "
         "their 48 nearest neighbours before building again (denoise.h). `cut_by_tolerance` → `mesh_cut` on each.",
         "Loops / pieces: boundary loops and connected components of the mesh (the clean meshes: 0 / 1, the bunny "
-        "2 / 1 for its base, fandisk and the rocker arm 0 / 1). Mean to clean: the noise-free points' mean distance "
+        "2 / 1 for its base, fandisk 0 / 1, the rocker arm 1 / 1: a slit on a face sampled only along its outline). Mean to clean: the noise-free points' mean distance "
         "to the mesh, as a fraction of their bounding-box diagonal.",
         "The plate is 6.6 spacings thick: its two sides are 6.6 σ apart."};
     for (const std::string& file : missing)
