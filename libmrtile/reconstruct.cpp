@@ -284,6 +284,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         if (!pieces && !slits)
             return;
         const std::vector<bool> surrounded = surrounded_tiles(tiles, surface);
+        assert(surrounded.size() == result.cut.size()); // one tile per cut node, in order
         std::vector<bool> marked(result.cut.size(), false);
         std::size_t on_loops = 0, inner = 0;
         for (const std::vector<std::size_t>& loop : tiles_of_loops(result.cut, result.mesh)) {
@@ -308,7 +309,11 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         std::vector<Tile> again_tiles = tiles_for(h, cut, options, again_options);
         SurfaceStats again_stats;
         Mesh again;
-        build_surface(h, again_tiles, again, again_options, &again_stats);
+        try {
+            build_surface(h, again_tiles, again, again_options, &again_stats);
+        } catch (const InvalidInput&) {
+            return; // the refined cut cannot be meshed (no surface left): keep the mesh as it is
+        }
         const TopologyStats then = topology_stats(again);
         const bool better = pieces ? then.components < now.components && then.boundary_loops <= now.boundary_loops
                                    : then.boundary_loops < now.boundary_loops && then.components <= now.components;
