@@ -38,7 +38,7 @@ std::filesystem::path follow_links(const std::filesystem::path& path)
             return at;
         at = to.is_absolute() ? to : at.parent_path() / to;
     }
-    return at; // a loop: opening it fails and names the path
+    throw IoError(path.string() + ": too many levels of symbolic links (a loop?)");
 }
 
 std::filesystem::path temporary_name(const std::filesystem::path& path)

@@ -96,6 +96,12 @@ TEST(AtomicFile, a_symbolic_link_is_written_through)
     EXPECT_TRUE(fs::is_symlink(dir / "dangling.ply"));
     EXPECT_TRUE(fs::is_regular_file(dir / "data" / "later.ply"));
     EXPECT_EQ(entries(dir), 6u); // data, real.ply, later.ply and three links: no temporaries left
+    // A loop of links is an error naming the path, not a write onto whichever link the walk stopped at.
+    fs::create_symlink("loop_b.ply", dir / "loop_a.ply");
+    fs::create_symlink("loop_a.ply", dir / "loop_b.ply");
+    EXPECT_THROW(write_file_atomically(dir / "loop_a.ply", "x"), IoError);
+    EXPECT_TRUE(fs::is_symlink(dir / "loop_a.ply"));
+    EXPECT_TRUE(fs::is_symlink(dir / "loop_b.ply"));
 }
 
 // A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
