@@ -166,9 +166,6 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
     const TemporaryDirectory temporary(dir);
     const fs::path& built = temporary.path();
     ensure_directory(built / "tiles");
-    // Each tile is its own file, so they are encoded and written in parallel (Draco encoding is
-    // most of an export's time). A failure is reported for the lowest failing tile, as a serial
-    // loop would, whatever the thread count.
     // One float offset for every tile (unless a Draco grid sets one): a border vertex that two tiles
     // share is then stored as the same float in both. Per-file offsets (each tile's own centre) left
     // 749 of 992 shared vertices of two terrain tiles a float ulp apart (QA, session 19).
@@ -177,13 +174,16 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
         const Vec3 c = to_output_frame(tiles.front().box.centre(), gltf.up_axis);
         gltf.offset = Vec3{std::round(c.x), std::round(c.y), std::round(c.z)};
     }
+    // Each tile is its own file, so they are encoded and written in parallel (Draco encoding is
+    // most of an export's time). A failure is reported for the lowest failing tile, as a serial
+    // loop would, whatever the thread count.
     std::vector<std::exception_ptr> failures(tiles.size());
     run_parallel(tiles.size(), options.threads, [&](std::size_t t) {
         if (tiles[t].mesh == nullptr)
             return;
         try {
             // Origin 0: the positions stay relative to the tileset origin, which the root
-            // transform carries; the per-file offset keeps float precision inside the tile.
+            // transform carries; the shared offset keeps float precision.
             write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), gltf);
         } catch (const InvalidInput& e) {
             failures[t] = std::make_exception_ptr(

@@ -261,7 +261,7 @@ double screen_space_error(const Node& node, const Camera& camera)
     const double distance = distance_to_box(camera.position, node.box);
     if (distance <= 0)
         return std::numeric_limits<double>::infinity();
-    const double half_fov = camera.fov_y_degrees * 0.5 * 3.14159265358979323846 / 180.0;
+    const double half_fov = radians(0.5 * camera.fov_y_degrees);
     return node_error(node) * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
 }
 
@@ -278,8 +278,7 @@ bool in_view(const Node& node, const Camera& camera)
         return true;
     // The sphere is seen under asin(radius / far) around its centre's direction; it misses the cone
     // when the angle from the view axis exceeds the cone's half-angle by more than that.
-    const double pi = 3.14159265358979323846;
-    const double half_fov = camera.fov_y_degrees * 0.5 * pi / 180.0;
+    const double half_fov = radians(0.5 * camera.fov_y_degrees);
     const double half_cone = std::atan(std::tan(half_fov) * std::sqrt(1.0 + camera.aspect * camera.aspect));
     const double off_axis = std::acos(std::clamp(dot(to, camera.direction) / (far * length), -1.0, 1.0));
     return off_axis - std::asin(radius / far) <= half_cone;

@@ -486,9 +486,6 @@ using ExactPoint = Epick::Point_3;
 
 } // namespace
 
-// Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
-// intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
-// touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
 bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
 {
     const auto p = [](const Vec3& q) { return ExactPoint(q.x, q.y, q.z); };
@@ -496,6 +493,9 @@ bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
     return !ta.is_degenerate() && !tb.is_degenerate() && CGAL::do_intersect(ta, tb);
 }
 
+// Whether faces f and g meet other than in the corners and edges they share (CGAL's strict face
+// intersection): no shared corner, any contact; one shared corner, the edge opposite it in either face
+// touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
 {
     const auto a = face_vertices(mesh, f), b = face_vertices(mesh, g);

@@ -496,10 +496,9 @@ double e_rms(const Hierarchy& h, const Cut& cut)
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)
 {
-    check_node_ids(h, cut);
     QualityReport q;
+    q.e_rms = e_rms(h, cut); // first: it checks the cut's node ids
     q.topology = topology_stats(mesh);
-    q.e_rms = e_rms(h, cut);
     // A hierarchy just built from denoised points still has the points read: the distances are to them.
     const std::vector<Vec3>& points = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;
     if (mesh.n_faces() > 0 && h.bbox().diagonal() > 0) {

@@ -772,11 +772,7 @@ public:
             if (!s.alive(f))
                 continue;
             ++alive_;
-            const auto [lo, hi] = cells(box_of(s.faces()[f]));
-            for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                        cells_[key(x, y, z)].push_back(f);
+            for_each_cell(box_of(s.faces()[f]), [&](std::uint64_t k) { cells_[k].push_back(f); });
         }
     }
 
@@ -786,8 +782,10 @@ public:
         if (patch.empty())
             return false;
         BoundingBox box = box_of(patch.front());
-        for (const Tri& t : patch)
-            extend(box, box_of(t));
+        for (const Tri& t : patch) {
+            const BoundingBox bt = box_of(t);
+            box = {min(box.min, bt.min), max(box.max, bt.max)};
+        }
         std::vector<std::uint32_t> near;
         const auto [lo, hi] = cells(box);
         const double count = static_cast<double>(hi[0] - lo[0] + 1) * static_cast<double>(hi[1] - lo[1] + 1) *
@@ -797,11 +795,10 @@ public:
                 if (s_.alive(f))
                     near.push_back(f);
         } else {
-            for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                        if (const auto it = cells_.find(key(x, y, z)); it != cells_.end())
-                            near.insert(near.end(), it->second.begin(), it->second.end());
+            for_each_cell(box, [&](std::uint64_t k) {
+                if (const auto it = cells_.find(k); it != cells_.end())
+                    near.insert(near.end(), it->second.begin(), it->second.end());
+            });
             std::sort(near.begin(), near.end());
             near.erase(std::unique(near.begin(), near.end()), near.end());
         }
@@ -823,27 +820,27 @@ public:
     }
 
 private:
-    static void extend(BoundingBox& b, const BoundingBox& with)
-    {
-        b.min = {std::min(b.min.x, with.min.x), std::min(b.min.y, with.min.y), std::min(b.min.z, with.min.z)};
-        b.max = {std::max(b.max.x, with.max.x), std::max(b.max.y, with.max.y), std::max(b.max.z, with.max.z)};
-    }
     BoundingBox box_of(const Tri& t) const
     {
-        BoundingBox b{positions_[t[0]], positions_[t[0]]};
-        extend(b, {positions_[t[1]], positions_[t[1]]});
-        extend(b, {positions_[t[2]], positions_[t[2]]});
-        return b;
+        const Vec3 &a = positions_[t[0]], &b = positions_[t[1]], &c = positions_[t[2]];
+        return {min(min(a, b), c), max(max(a, b), c)};
     }
     std::pair<std::array<std::int64_t, 3>, std::array<std::int64_t, 3>> cells(const BoundingBox& b) const
     {
         const auto c = [&](double x) { return static_cast<std::int64_t>(std::floor(x / cell_)); };
         return {{c(b.min.x), c(b.min.y), c(b.min.z)}, {c(b.max.x), c(b.max.y), c(b.max.z)}};
     }
-    static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z)
+    // Calls visit(key) for every cell the box overlaps (keys of far cells may coincide: more candidates,
+    // never fewer, since every pair is tested exactly).
+    template <typename Visit>
+    void for_each_cell(const BoundingBox& b, Visit visit) const
     {
+        const auto [lo, hi] = cells(b);
         const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffu; };
-        return u(x) << 42 | u(y) << 21 | u(z);
+        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                    visit(u(x) << 42 | u(y) << 21 | u(z));
     }
 
     const Surface& s_;
