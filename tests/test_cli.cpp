@@ -1009,6 +1009,15 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     ASSERT_EQ(lods.code, 0) << lods.err;
     EXPECT_NE(lods.out.find("note: the points are noisy: the levels end at the noise floor"), std::string::npos) << lods.out;
 
+    // A clean CAD part with a few rough leaves at its sharp edges (fandisk at tolerance 0: 1 of 463
+    // tiles floored) is not called noisy, and denoising, which would round its edges, is not offered.
+    const Result cad = mrtile("reconstruct " + std::string(MRTILE_SHARED_DATA) + "/fandisk.obj -o " +
+                                  (dir / "fan.ply").string() + " --tolerance 0 --no-quality", dir);
+    ASSERT_EQ(cad.code, 0) << cad.err;
+    EXPECT_NE(cad.out.find("note: some points are rough (sharp edges or local noise): "), std::string::npos) << cad.out;
+    EXPECT_EQ(cad.out.find("noisy"), std::string::npos) << cad.out;
+    EXPECT_EQ(cad.out.find("--denoise on"), std::string::npos) << cad.out;
+
     // By default a sample this noisy is denoised first, and every output says so.
     const Result denoised = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "d.ply").string() +
                                        " --tolerance 0.002 --stats-json " + (dir / "d.json").string() + " --model " +
