@@ -87,6 +87,12 @@ TEST(Cli, version_help_and_usage_errors)
     r = mrtile("frobnicate", dir); // named, with the commands there are
     EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.err.find("unknown command 'frobnicate' (commands: build, info, mesh"), std::string::npos) << r.err;
+    r = mrtile("--bogus frobnicate", dir); // the unknown option is named, not the word after it
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("unknown option '--bogus'"), std::string::npos) << r.err;
+    r = mrtile("mesh --bogus x.mrt", dir); // not "--output is required"
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("unknown argument '--bogus'"), std::string::npos) << r.err;
     EXPECT_EQ(mrtile("build", dir).code, 2); // missing POINTS and -o
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 7", dir).code, 2); // leaves too small to mesh

@@ -1506,8 +1506,17 @@ int run(int argc, char** argv)
             ++i;
             continue;
         }
-        if (!arg.empty() && arg[0] == '-')
+        if (!arg.empty() && arg[0] == '-') {
+            // An option before the command: name it if it is not one of the program's own.
+            const std::string name = arg.substr(0, arg.find('='));
+            static const char* const own[] = {"-h", "--help", "--version", "-q", "--quiet", "--below-noise", "--threads"};
+            if (std::none_of(std::begin(own), std::end(own), [&](const char* o) { return name == o; })) {
+                std::fprintf(stderr, "mrtile: usage error: unknown option '%s' (options before the command: "
+                                     "--help, --version, --quiet, --below-noise, --threads; see --help)\n", name.c_str());
+                return 2;
+            }
             continue;
+        }
         const auto all = app.get_subcommands([](const CLI::App*) { return true; });
         std::string names;
         bool known = false;
@@ -1524,6 +1533,13 @@ int run(int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
+        // CLI11 checks required options before it complains of unknown ones, so `mesh --bogus x`
+        // would say "--output is required": the unknown argument is the likelier mistake, name it.
+        const std::vector<std::string> unknown = app.remaining(true);
+        if (e.get_exit_code() != 0 && !unknown.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
+            std::fprintf(stderr, "mrtile: usage error: unknown argument '%s' (see --help)\n", unknown.front().c_str());
+            return 2;
+        }
         const int code = app.exit(e);
         return code == 0 ? 0 : 2;
     }
