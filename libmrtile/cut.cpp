@@ -288,12 +288,15 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
 {
     if (!(camera.fov_y_degrees > 0 && camera.fov_y_degrees < 180) || !(camera.viewport_height > 0) ||
         !(camera.max_pixel_error > 0) || !is_finite(camera.position) || !is_finite(camera.direction) ||
-        !(camera.aspect > 0) || !std::isfinite(camera.aspect))
+        !(camera.aspect > 0) || !std::isfinite(camera.aspect) || !(camera.out_of_view_factor >= 1))
         throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height, pixel error and aspect, "
-                           "and a finite position and direction");
+                           "an out-of-view factor of at least 1, and a finite position and direction");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return screen_space_error(n, camera) > camera.max_pixel_error && rougher_than(n, 0.0) && in_view(n, camera);
+        const double error = screen_space_error(n, camera);
+        if (!(error > camera.max_pixel_error) || !rougher_than(n, 0.0))
+            return false;
+        return error > camera.max_pixel_error * camera.out_of_view_factor || in_view(n, camera);
     });
 }
 

@@ -102,9 +102,13 @@ struct Camera
     double viewport_height = 1080.0; //!< pixels
     double max_pixel_error = 16.0;   //!< CesiumJS's default maximumScreenSpaceError
     //! Where the camera looks (any length; zero = all around, every node counts as in view). Nodes
-    //! wholly outside the view cone are not refined: a viewer would cull them, and the mesh keeps them
-    //! coarse so that it stays closed.
+    //! wholly outside the view cone are refined against max_pixel_error × out_of_view_factor: a
+    //! viewer would cull them, and the mesh keeps them coarser but whole.
     Vec3 direction{0, 0, 0};
+    //! ≥ 1; infinity = nodes out of view are never refined. Not refining them at all left a camera
+    //! that looks away from a closed object with the root's tile alone, an open disc (QA, session 19);
+    //! refined 4× coarser than in view they still close the surface behind the camera.
+    double out_of_view_factor = 4.0;
     //! Viewport width / height: the view cone's half-angle is that of the viewport's corners,
     //! atan(tan(fov/2) × sqrt(1 + aspect²)).
     double aspect = 16.0 / 9.0;
@@ -122,8 +126,8 @@ double screen_space_error(const Node& node, const Camera& camera);
 //! (always true without a direction, or with the camera inside the sphere).
 bool in_view(const Node& node, const Camera& camera);
 
-//! Refines every node in view (in_view) whose screen-space error exceeds the camera's
-//! max_pixel_error (down to the noise floor).
+//! Refines every node whose screen-space error exceeds the camera's max_pixel_error, or that many
+//! times out_of_view_factor when it is out of view (in_view), down to the noise floor.
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
 
 //! Σ λ_min over the cut: the total squared distance of the points to their tile planes.
