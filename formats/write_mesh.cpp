@@ -70,7 +70,7 @@ OpenMesh::IO::Options io_options(MeshFormat format, const Mesh& mesh, const Writ
 // Float keeps 24 bits: beyond about 16 extents from the origin it loses more than a millionth of the
 // mesh's extent (a survey in UTM coordinates, 5,000 km north: half a metre). Such meshes are written with
 // double coordinates (PLY, OBJ, OFF; .om always keeps doubles, STL has only floats).
-bool needs_doubles(const Mesh& absolute)
+bool needs_doubles(const Mesh& absolute, double fraction = 1e-6)
 {
     double largest = 0.0;
     Mesh::Point lo(0, 0, 0), hi(0, 0, 0);
@@ -85,7 +85,7 @@ bool needs_doubles(const Mesh& absolute)
         first = false;
     }
     const double extent = (hi - lo).norm();
-    return largest * std::ldexp(1.0, -24) > 1e-6 * extent;
+    return largest * std::ldexp(1.0, -24) > fraction * extent;
 }
 
 // Little-endian bytes of a value, whatever the host.
@@ -199,6 +199,17 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
 
 } // namespace
 
+bool stl_is_relative(const Mesh& mesh, const Vec3& origin)
+{
+    Mesh absolute(mesh);
+    const Mesh::Point shift(origin.x, origin.y, origin.z);
+    for (const auto v : absolute.vertices())
+        absolute.set_point(v, absolute.point(v) + shift);
+    // A looser bound than for doubles in the text formats: STL readers expect absolute coordinates, so
+    // only where float steps would reach a ten-thousandth of the extent (edges a few dozen steps long).
+    return needs_doubles(absolute, 1e-4);
+}
+
 void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
                 const WriteMeshOptions& options)
 {
@@ -214,9 +225,12 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
         out.update_face_normals();
         out.update_vertex_normals();
     }
+    // STL has only floats: far from the origin it keeps the positions relative to it (stl_is_relative).
+    const bool relative = format == MeshFormat::stl && stl_is_relative(mesh, origin);
     const Mesh::Point shift(origin.x, origin.y, origin.z);
-    for (const auto v : out.vertices())
-        out.set_point(v, out.point(v) + shift);
+    if (!relative)
+        for (const auto v : out.vertices())
+            out.set_point(v, out.point(v) + shift);
 
     const bool colors = options.colors && out.has_vertex_colors() && format != MeshFormat::obj;
     if ((format == MeshFormat::ply || format == MeshFormat::obj || format == MeshFormat::off) && needs_doubles(out)) {

@@ -33,10 +33,17 @@ struct WriteMeshOptions
     bool colors = true;
 };
 
+//! Whether write_mesh writes an STL file of `mesh` relative to `origin` rather than in absolute
+//! coordinates: where float steps there exceed a ten-thousandth of the mesh's extent.
+bool stl_is_relative(const Mesh& mesh, const Vec3& origin);
+
 //! \brief Writes `mesh` (positions relative to `origin`) to `path`; the format follows the extension
 //! (.ply, .obj, .off, .stl, .om; case-insensitive).
 //! \details PLY, OBJ and OFF far from the origin (where float would lose more than a millionth of the
-//! mesh's extent, as georeferenced meshes do) are written with double coordinates. Atomic: the file is written next to the target under a temporary name and renamed, so a
+//! mesh's extent, as georeferenced meshes do) are written with double coordinates; STL, which has only
+//! floats, is written relative to `origin` where float steps would exceed a ten-thousandth of the extent
+//! (stl_is_relative; a bunny moved to UTM-sized
+//! coordinates had lost 1,244 of its 5,741 positions and got 194 degenerate triangles). Atomic: the file is written next to the target under a temporary name and renamed, so a
 //! failure leaves no partial file. Deleted elements are not written. Deterministic: the same mesh and
 //! options give byte-identical files.
 //! \throw InvalidInput for an unknown extension; IoError naming `path` if it cannot be written.

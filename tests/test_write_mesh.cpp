@@ -187,6 +187,31 @@ TEST(WriteMesh, om_keeps_doubles_far_from_origin)
     EXPECT_EQ(ply, rounded);
 }
 
+// STL has only floats: far out it is written relative to the origin (a georeferenced bunny had lost
+// a fifth of its positions), near the origin in absolute coordinates as before.
+TEST(WriteMesh, far_stl_is_written_relative_to_the_origin)
+{
+    const fs::path dir = test_dir();
+    Mesh mesh = octahedron();
+    for (const auto v : mesh.vertices())
+        mesh.set_point(v, mesh.point(v) * 0.123456789);
+    const Vec3 far{4999999.0, 4200001.0, 312.0}, near{100, -200, 3.5};
+    EXPECT_TRUE(stl_is_relative(mesh, far));
+    EXPECT_FALSE(stl_is_relative(mesh, near));
+    write_mesh(mesh, far, dir / "far.stl");
+    write_mesh(mesh, near, dir / "near.stl");
+    O options = O::Binary;
+    for (const auto& [name, shift] : {std::pair<const char*, Vec3>{"far.stl", Vec3{0, 0, 0}}, {"near.stl", near}}) {
+        const Mesh back = read_back(dir / name, options);
+        ASSERT_EQ(back.n_faces(), mesh.n_faces()) << name;
+        const auto expected = expected_points(mesh, shift), got = sorted_points(back);
+        ASSERT_EQ(got.size(), expected.size()) << name;
+        for (std::size_t i = 0; i < got.size(); ++i) // every corner where it was, to float precision
+            for (int a = 0; a < 3; ++a)
+                EXPECT_NEAR(got[i][a], expected[i][a], 1e-7 * (1.0 + std::abs(expected[i][a]))) << name << " " << i;
+    }
+}
+
 TEST(WriteMesh, colours_and_given_normals_are_written)
 {
     const fs::path dir = test_dir();

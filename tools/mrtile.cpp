@@ -469,6 +469,10 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
                         out.string().c_str(), origin.x, origin.y, origin.z);
     } else if (is_mesh_extension(ext)) { // OpenMesh's writers: .ply .obj .off .stl .om
         write_mesh(mesh, origin, out);
+        if (ext == ".stl" && stl_is_relative(mesh, origin))
+            std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g): STL has only 32-bit "
+                        "floats, which lose digits that far out (.ply, .obj and .off keep absolute double coordinates)\n",
+                        out.string().c_str(), origin.x, origin.y, origin.z);
     } else {
         throw UsageError(out.string() + ": " + kMeshExtensionHelp);
     }
