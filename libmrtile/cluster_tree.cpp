@@ -80,8 +80,10 @@ void erase_sorted(std::vector<std::uint32_t>& list, std::uint32_t value)
 class Builder
 {
 public:
-    Builder(const std::vector<Vec3>& positions, const BuildOptions& options, double threshold)
-        : pos_(positions), options_(options), threshold_(threshold)
+    Builder(const std::vector<Vec3>& positions, const BuildOptions& options, double threshold, double scale)
+        : pos_(positions), options_(options), threshold_(threshold),
+          min_separation_(std::max(kSeparationShare * scale,
+                                   8.0 * scale / std::sqrt(static_cast<double>(std::max<std::size_t>(1, positions.size())))))
     {
     }
 
@@ -107,6 +109,12 @@ private:
     const std::vector<Vec3>& pos_;
     const BuildOptions& options_;
     const double threshold_; // on λ_min (Tau) or on the RMS plane distance in model units (Tolerance)
+    // Two groups of a flat cluster this far apart are two objects (separation_gap): a tenth of the
+    // cloud's size, and 8 of its spacings at the least (size / sqrt(points): an upper bound). Far
+    // apart in the cloud's terms, since a cluster's own density cannot tell two far spheres from two
+    // clumps of near-equal points a spacing apart (ten copies of a sphere with noise of 1e-6).
+    static constexpr double kSeparationShare = 0.1;
+    const double min_separation_;
     std::deque<Cluster> clusters_; // a deque: growing never copies (and never doubles the peak)
     // Centres and liveness kept apart from the (large) Cluster records: the graph update reads them
     // for many clusters at random, and this keeps those reads in cache.
@@ -465,7 +473,8 @@ double Builder::gap_of(std::uint32_t id) const
         points.push_back(mb.p);
     const Eigen3x3 frame = eigen_decomposition(c.moments);
     const CoverageOptions options;
-    const double alone = coverage_gap(points, frame.vectors[2], frame.vectors[1], options);
+    const double alone = std::max(coverage_gap(points, frame.vectors[2], frame.vectors[1], options),
+                                  separation_gap(points, frame.vectors[2], frame.vectors[1], min_separation_, options));
     if (alone <= 0)
         return 0.0;
     const Vec3 normal = frame.vectors[0], centre = c.moments.mean;
@@ -478,7 +487,8 @@ double Builder::gap_of(std::uint32_t id) const
         for (const Member& mb : clusters_[n].members)
             if (std::abs(dot(mb.p - centre, normal)) <= thickness)
                 fill.push_back(mb.p);
-    return coverage_gap(points, frame.vectors[2], frame.vectors[1], options, fill);
+    return std::max(coverage_gap(points, frame.vectors[2], frame.vectors[1], options, fill),
+                    separation_gap(points, frame.vectors[2], frame.vectors[1], min_separation_, options, fill));
 }
 
 // Marks every flat, splittable cluster not judged since it last changed whose tile would cover a gap
@@ -725,7 +735,7 @@ Hierarchy build_once(PointCloud cloud, const BuildOptions& options)
     std::vector<std::uint32_t> leaf_of_point;
     {
         // The builder's per-cluster state is freed before the tree is assembled (peak memory).
-        Builder builder(cloud.positions, options, threshold);
+        Builder builder(cloud.positions, options, threshold, largest_side);
         builder.run();
         parent_of = std::move(builder.parent_of);
         leaf_of_point = std::move(builder.leaf_of_point);

@@ -502,6 +502,44 @@ bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
     return radius > 0.0f && radius >= min_radius;
 }
 
+double separation_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, double min_width,
+                      const CoverageOptions& options, const std::vector<Vec3>& fill)
+{
+    if (points.size() < 8 || !(min_width > 0))
+        return 0.0;
+    double widest = 0.0;
+    for (int axis = 0; axis < 2; ++axis) {
+        const Vec3& along = axis == 0 ? axis_u : axis_v;
+        const Vec3& across = axis == 0 ? axis_v : axis_u;
+        std::vector<double> values;
+        values.reserve(points.size());
+        double lo = dot(points[0], across), hi = lo;
+        for (const Vec3& p : points) {
+            values.push_back(dot(p, along));
+            lo = std::min(lo, dot(p, across));
+            hi = std::max(hi, dot(p, across));
+        }
+        std::sort(values.begin(), values.end());
+        double strip = 0.0, from = 0.0;
+        for (std::size_t i = 1; i < values.size(); ++i)
+            if (values[i] - values[i - 1] > strip) {
+                strip = values[i] - values[i - 1];
+                from = values[i - 1];
+            }
+        const double extent = values.back() - values.front();
+        if (!(strip > 0.25 * extent) || !(strip > min_width))
+            continue;
+        std::size_t inside = 0;
+        for (const Vec3& p : fill) {
+            const double a = dot(p, along), c = dot(p, across);
+            inside += a > from && a < from + strip && c >= lo && c <= hi ? 1 : 0;
+        }
+        if (static_cast<double>(inside) <= 2.0 + options.max_island_share * static_cast<double>(points.size()))
+            widest = std::max(widest, strip);
+    }
+    return 0.5 * widest;
+}
+
 std::size_t coverage_stride(std::size_t count, const CoverageOptions& options)
 {
     return options.max_points > 0 && count > options.max_points ? (count + options.max_points - 1) / options.max_points : 1;

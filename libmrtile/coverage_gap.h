@@ -66,6 +66,16 @@ struct CoverageOptions
 double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v,
                     const CoverageOptions& options = {}, const std::vector<Vec3>& fill = {});
 
+//! \brief Half the widest empty strip between two groups of `points` along axis_u or axis_v: two objects
+//! whose points lie within the tolerance of one plane through both (two small spheres far apart), whose
+//! hull spans the space between them. coverage_gap misses it where the hull is narrower than a few grid
+//! cells. Counted when the strip is wider than a quarter of the points' extent along that axis and than
+//! `min_width` (from the caller: a cluster's own density cannot tell two far objects from two clumps of
+//! near-equal points one spacing apart), and at most 2 + max_island_share × the points of `fill` (other
+//! clusters' points) lie in it; else 0. A connected patch projects onto an interval without such a strip.
+double separation_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, double min_width,
+                      const CoverageOptions& options = {}, const std::vector<Vec3>& fill = {});
+
 //! \brief The empty regions that count (coverage_gap), kept to ask where they are: whether a fill
 //! between tiles would cover a hole of the sample (surface stage). The hull is that of all `points`.
 class CoverageMap

@@ -398,6 +398,7 @@ DistanceStats summarize(const std::vector<double>& squared_distances, double dia
         sum += d;
         sum_squares += d2;
         max = std::max(max, d);
+        stats.far += d > kFarFraction * diagonal ? 1 : 0;
     }
     const double n = static_cast<double>(squared_distances.size());
     stats.mean = sum / n / diagonal;

@@ -67,7 +67,12 @@ struct DistanceStats
     double median = 0.0;    //!< separates a uniformly loose fit from a few far-off points (holes, bridges)
     double p99 = 0.0;       //!< 99th percentile
     double diagonal = 0.0;  //!< absolute, in the units of the positions
+    //! Points farther than kFarFraction of the diagonal: points the mesh leaves out (a far piece too
+    //! small to mesh, strays), which also widen the diagonal the fractions are of.
+    std::size_t far = 0;
 };
+
+constexpr double kFarFraction = 0.05; //!< DistanceStats::far: of the diagonal
 
 //! \brief Distance from each point to the closest point of the mesh surface (exact: closest point on the
 //! triangles, not on the vertices). Deterministic; on the default number of threads (parallel.h).

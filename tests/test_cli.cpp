@@ -233,6 +233,28 @@ TEST(Cli, outputs_are_checked_before_any_work)
     EXPECT_NE(r.out.find("--quantize 2 snaps positions to steps of"), std::string::npos) << r.out;
 }
 
+// Points the mesh leaves out far from it (two strays 1,000 radii out) are counted in the JSON and noted:
+// they set the maximum distance and widen the diagonal the fractions are of.
+TEST(Cli, far_points_left_out_are_noted)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string text;
+    for (const auto& [x, y, z] : sphere_points(3000))
+        text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+    const fs::path clean = dir / "clean.xyz", strays = dir / "strays.xyz";
+    write_text(clean, text);
+    write_text(strays, text + "1000 0 0\n-1000 0.5 0\n");
+    Result r = mrtile("reconstruct " + clean.string() + " -o " + (dir / "c.ply").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.find("from the mesh"), std::string::npos) << r.out;
+    r = mrtile("reconstruct " + strays.string() + " -o " + (dir / "s.ply").string() + " --stats-json " + (dir / "s.json").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("note: 2 input points lie more than 5% of the diagonal from the mesh"), std::string::npos) << r.out;
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir / "s.json"));
+    EXPECT_EQ(j["far_points"].get<std::size_t>(), 2u);
+    EXPECT_NEAR(j["diagonal"].get<double>(), 2000.0, 1.0);
+}
+
 // --tolerance 0 is the finest cut (not the default); --no-quality keeps the topology keys and writes
 // null for the distances it skips; a triangle target no cut reaches is said so.
 TEST(Cli, tolerance_zero_no_quality_and_unreachable_triangles)

@@ -159,6 +159,56 @@ TEST(CoverageGap, a_notch_is_a_gap)
     EXPECT_GT(coverage_gap(l.positions, kU, kV), 0.1);
 }
 
+// Two groups apart along a line (two small objects far apart): half the empty stretch between them,
+// along either axis, when wider than the caller's minimum; the same stretch filled by another
+// cluster's points, or a strip with no break, has none. coverage_gap's grid misses it: the hull is
+// narrower than its cells.
+TEST(CoverageGap, two_groups_far_apart_are_a_separation)
+{
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const double apart : {100.0, 1000.0, 10000.0}) {
+        std::vector<Vec3> points, between;
+        for (int i = 0; i < 2000; ++i) {
+            points.push_back({unit(rng), unit(rng), 0.0});
+            points.push_back({apart + unit(rng), unit(rng), 0.0});
+        }
+        if (apart >= 1000.0) { // the grid sees it only at 100
+            EXPECT_EQ(coverage_gap(points, kU, kV), 0.0) << apart;
+        }
+        EXPECT_NEAR(separation_gap(points, kU, kV, 10.0), 0.5 * (apart - 2.0), 0.01 * apart) << apart;
+        EXPECT_NEAR(separation_gap(points, kV, kU, 10.0), 0.5 * (apart - 2.0), 0.01 * apart) << apart; // either axis
+        EXPECT_EQ(separation_gap(points, kU, kV, apart), 0.0) << apart; // narrower than the minimum
+        for (int i = 0; i < 4000; ++i)
+            between.push_back({apart * 0.5 * (1.0 + unit(rng)), unit(rng), 0.0});
+        EXPECT_EQ(separation_gap(points, kU, kV, 10.0, {}, between), 0.0) << apart;
+        EXPECT_EQ(separation_gap(between, kU, kV, 10.0), 0.0) << apart; // one long strip: no break
+    }
+}
+
+// Two unit spheres 10,000 apart lie within the default tolerance of one plane: the build splits them
+// apart (it had kept the cloud as one leaf, one tile bridging them), and no face joins them.
+TEST(CoverageGap, two_small_objects_far_apart_are_not_bridged)
+{
+    PointCloud two = shapes::sphere(10000, 1.0, 3);
+    const PointCloud other = shapes::sphere(10000, 1.0, 4);
+    for (const Vec3& p : other.positions)
+        two.positions.push_back(p + Vec3{10000.0, 0.0, 0.0});
+    const Hierarchy h = build_hierarchy(two);
+    ASSERT_GT(h.nodes.size(), 1u);
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.0));
+    ASSERT_GT(r.mesh.n_faces(), 0u);
+    for (const auto f : r.mesh.faces()) {
+        double lo = 1e300, hi = -1e300;
+        for (const auto v : r.mesh.fv_range(f)) {
+            lo = std::min(lo, r.mesh.point(v)[0] + h.cloud.origin.x);
+            hi = std::max(hi, r.mesh.point(v)[0] + h.cloud.origin.x);
+        }
+        EXPECT_LT(hi - lo, 10.0) << "a face spans the space between the spheres";
+    }
+    EXPECT_EQ(topology_stats(r.mesh).components, 2u);
+}
+
 // A flat plate with a hole: the paper's flatness test alone leaves one tile over it; the build splits
 // until no leaf covers it, and every node's gap is at least its children's.
 TEST(CoverageGap, the_build_splits_clusters_whose_tiles_cover_a_hole)

@@ -562,6 +562,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["p99_distance"] = q->point_to_mesh.p99;
         j["mesh_to_points_mean"] = q->mesh_to_points.mean;
         j["mesh_to_points_max"] = q->mesh_to_points.max;
+        j["far_points"] = q->point_to_mesh.far;
+        j["diagonal"] = q->point_to_mesh.diagonal; // model units: what the distance fractions are of
     } else {
         // --no-quality skips the distances (null), not the topology, which is cheap and documented.
         const TopologyStats t = topology_stats(r.mesh);
@@ -573,7 +575,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["consistently_oriented"] = t.consistently_oriented;
         j["caps"] = count_caps(r.mesh); // cheap, like the topology
         for (const char* key : {"e_rms", "mean_distance", "max_distance", "median_distance", "p99_distance",
-                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections"})
+                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections", "far_points", "diagonal"})
             j[key] = nullptr;
     }
     j["seconds"] = seconds;
@@ -597,6 +599,14 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     if (j.contains("genus") && !j["e_rms"].is_null() && j.value("distances_to", "") == "denoised points")
         std::printf(" (to the denoised points)");
     std::printf(" (%.2f s)\n", j["seconds"].get<double>());
+    // Points the mesh leaves out, far from it, set the maximum and widen the diagonal the fractions
+    // are of (a 50-point blob 5,000 radii from a sphere: left out without a word, and every fraction
+    // 2,500 times smaller than the sphere's own; QA, session 20).
+    if (j.contains("far_points") && j["far_points"].is_number() && j["far_points"].get<std::size_t>() > 0)
+        std::printf("note: %zu input points lie more than %.0f%% of the diagonal from the mesh: pieces too small to mesh "
+                    "or strays, left out (--remove-outliers drops strays); they widen the diagonal (%.6g) that the "
+                    "fractions above are of\n",
+                    j["far_points"].get<std::size_t>(), 100.0 * kFarFraction, j.value("diagonal", 0.0));
 }
 
 // A further file for the same mesh (the demo writes its mesh as .ply and as Draco .glb).
