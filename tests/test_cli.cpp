@@ -332,6 +332,24 @@ TEST(Cli, error_in_model_units)
               stats("mesh " + model + " -o " + (dir / "z.ply").string() + " --tolerance 0")["tiles"]);
 }
 
+// --close-holes says which loops it left and why, and the counts add up to the loops printed: a
+// single range scan's outline and base holes, whose caps would cut through the surface.
+TEST(Cli, close_holes_accounts_for_every_loop_left)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const std::string scan = (fs::path(MRTILE_SHARED_DATA) / "bun000.ply").string();
+    const Result r = mrtile("reconstruct " + scan + " --close-holes 2000 -o " + (dir / "c.ply").string() +
+                            " --stats-json " + (dir / "c.json").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir / "c.json"));
+    const auto loops = j["boundary_loops"].get<std::size_t>(), refused = j["closings_refused"].get<std::size_t>();
+    ASSERT_GT(loops, 0u);
+    const std::string note = "note: --close-holes 2000: " + std::to_string(loops) + " boundary loops left open: " +
+                             std::to_string(std::min(loops, refused)) + " whose cap would cut through the surface";
+    EXPECT_NE(r.out.find(note), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(std::to_string(loops - std::min(loops, refused)) + " longer than 2000 edges"), std::string::npos) << r.out;
+}
+
 // The scans a list names are inputs too: writing over one (or over a listed scan that is missing,
 // which the next run would read as a scan) is a usage error, and the scans stay as they were. It
 // replaced bun000.ply by the mesh.
