@@ -479,6 +479,81 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
     return out;
 }
 
+namespace {
+
+// Whether a mesh is in pieces where its sample is not: two pieces hold tiles that are neighbours on
+// the surface (Tile::neighbours: the sampled surface runs from one to the other). Separate objects and
+// a scan's separate fragments have no such tiles, and cost nothing more. mesh_at_tolerance's test.
+bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptions& options)
+{
+    const TopologyStats t = topology_stats(r.mesh);
+    if (t.components < 2 || t.boundary_loops == 0)
+        return false;
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!r.mesh.get_property_handle(cluster, kVertexCluster))
+        return false;
+    // The piece of every vertex (breadth-first over faces), then of every tile with a vertex.
+    std::vector<int> piece(r.mesh.n_vertices(), -1);
+    int pieces = 0;
+    for (const Mesh::VertexHandle seed : r.mesh.vertices()) {
+        if (piece[static_cast<std::size_t>(seed.idx())] >= 0 || r.mesh.is_isolated(seed))
+            continue;
+        std::vector<Mesh::VertexHandle> stack{seed};
+        piece[static_cast<std::size_t>(seed.idx())] = pieces;
+        while (!stack.empty()) {
+            const Mesh::VertexHandle v = stack.back();
+            stack.pop_back();
+            for (const Mesh::VertexHandle w : r.mesh.vv_range(v))
+                if (piece[static_cast<std::size_t>(w.idx())] < 0) {
+                    piece[static_cast<std::size_t>(w.idx())] = pieces;
+                    stack.push_back(w);
+                }
+        }
+        ++pieces;
+    }
+    std::unordered_map<std::int32_t, std::size_t> index;
+    for (std::size_t k = 0; k < r.cut.size(); ++k)
+        index.emplace(r.cut[k], k);
+    std::vector<int> tile_piece(r.cut.size(), -1);
+    for (const Mesh::VertexHandle v : r.mesh.vertices())
+        if (const auto it = index.find(r.mesh.property(cluster, v)); it != index.end() && piece[static_cast<std::size_t>(v.idx())] >= 0)
+            tile_piece[it->second] = piece[static_cast<std::size_t>(v.idx())];
+    const std::vector<Tile> tiles = make_tiles(h, r.cut, options.tiles);
+    for (std::size_t k = 0; k < tiles.size(); ++k)
+        for (const std::uint32_t n : tiles[k].neighbours)
+            if (tile_piece[k] >= 0 && tile_piece[n] >= 0 && tile_piece[k] != tile_piece[n])
+                return true;
+    return false;
+}
+
+} // namespace
+
+ToleranceMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const MeshOptions& options, int mend_steps)
+{
+    if (mend_steps < 0 || mend_steps > 8)
+        throw InvalidInput("mesh_at_tolerance: mend_steps must be in [0, 8]");
+    ToleranceMeshResult out;
+    out.tolerance = tolerance;
+    out.result = mesh_cut(h, cut_by_tolerance(h, tolerance), options);
+    out.asked = topology_stats(out.result.mesh);
+    double next = tolerance;
+    for (int step = 0; step < mend_steps && tolerance > 0 && broken_into_pieces(h, out.result, options); ++step) {
+        next /= std::sqrt(2.0);
+        const Cut finer = cut_by_tolerance(h, next);
+        if (finer.size() <= out.result.cut.size()) // at the leaves, or at a noise floor: nothing finer
+            break;
+        MeshResult candidate = mesh_cut(h, finer, options);
+        const TopologyStats now = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
+        const bool better = then.components < now.components && then.boundary_loops <= now.boundary_loops;
+        if (!better)
+            break;
+        out.result = std::move(candidate);
+        out.tolerance = next;
+        out.steps = step + 1;
+    }
+    return out;
+}
+
 double e_rms(const Hierarchy& h, const Cut& cut)
 {
     check_node_ids(h, cut);

@@ -1106,5 +1106,36 @@ TEST(Reconstruct, e_rms_matches_brute_force)
     EXPECT_THROW(mesh_cut(h, Cut{1, 2}), InvalidInput);
 }
 
+// A coarse tolerance cut of the bunny meshes with its ear tips loose; mesh_at_tolerance meshes a finer
+// tolerance cut instead, in one piece (it meets the tolerance too). Separate objects are not pieces the
+// sample joins: two spheres apart are meshed at the tolerance asked, without a finer meshing.
+TEST(Reconstruct, tolerance_cuts_in_pieces_the_sample_joins_are_mended)
+{
+    const Hierarchy bunny = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const MeshResult plain = mesh_cut(bunny, cut_by_tolerance(bunny, 0.025));
+    ASSERT_GE(topology_stats(plain.mesh).components, 2u);
+    const ToleranceMeshResult mended = mesh_at_tolerance(bunny, 0.025);
+    EXPECT_EQ(mended.asked.components, topology_stats(plain.mesh).components);
+    EXPECT_GE(mended.steps, 1);
+    EXPECT_LT(mended.tolerance, 0.025);
+    const TopologyStats t = topology_stats(mended.result.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_LE(t.boundary_loops, topology_stats(plain.mesh).boundary_loops);
+    EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+    EXPECT_EQ(mesh_at_tolerance(bunny, 0.025, {}, 0).steps, 0); // mending off: the cut asked
+
+    PointCloud two = shapes::sphere(4000, 1.0, 5);
+    for (const Vec3& p : shapes::sphere(4000, 1.0, 6).positions)
+        two.positions.push_back(p + Vec3{3.0, 0.0, 0.0});
+    const Hierarchy h = build_hierarchy(two);
+    for (const double tolerance : {0.01, 0.002}) {
+        const ToleranceMeshResult r = mesh_at_tolerance(h, tolerance);
+        EXPECT_EQ(r.steps, 0) << tolerance;
+        EXPECT_EQ(r.tolerance, tolerance);
+        EXPECT_EQ(topology_stats(r.result.mesh).components, 2u) << tolerance;
+    }
+    EXPECT_THROW(mesh_at_tolerance(h, 0.01, {}, 9), InvalidInput);
+}
+
 } // namespace
 } // namespace mrt

@@ -665,10 +665,22 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                         cut_args.triangles);
         return write_meshed(h, t.result, mesh_args, out_args, out, also, start);
     }
-    const Cut cut = cut_args.cut(h);
-    const MeshResult r = mesh_cut(h, cut, mesh_args.options());
-    // Tiles of a plain tolerance cut that only their noise floor kept from refining.
+    // A plain tolerance cut is mended where it meshes broken (mesh_at_tolerance): any finer cut meets
+    // the tolerance too. The other cuts are meshed as they are.
     const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
+    ToleranceMeshResult mended;
+    if (plain) {
+        mended = mesh_at_tolerance(h, cut_args.base_tolerance(h), mesh_args.options());
+        if (mended.steps > 0)
+            std::printf("note: the cut at tolerance %.4g meshed in %zu pieces that the sample joins; meshed at %.4g "
+                        "instead (it meets the tolerance too)\n",
+                        cut_args.base_tolerance(h), mended.asked.components, mended.tolerance);
+    } else {
+        mended.result = mesh_cut(h, cut_args.cut(h), mesh_args.options());
+    }
+    const MeshResult& r = mended.result;
+    const Cut& cut = r.cut;
+    // Tiles of a plain tolerance cut that only their noise floor kept from refining.
     const double limit = cut_args.base_tolerance(h) * h.scale;
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
