@@ -386,8 +386,10 @@ std::vector<std::size_t> morton_order(const std::vector<Vec3>& points)
 }
 
 // Sums in index order so that the result does not depend on how the distances were computed.
-DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal)
+DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal, double far_beyond = 0.0)
 {
+    if (!(far_beyond > 0))
+        far_beyond = kFarFraction * diagonal;
     DistanceStats stats;
     stats.diagonal = diagonal;
     if (squared_distances.empty())
@@ -398,7 +400,7 @@ DistanceStats summarize(const std::vector<double>& squared_distances, double dia
         sum += d;
         sum_squares += d2;
         max = std::max(max, d);
-        stats.far += d > kFarFraction * diagonal ? 1 : 0;
+        stats.far += d > far_beyond ? 1 : 0;
     }
     const double n = static_cast<double>(squared_distances.size());
     stats.mean = sum / n / diagonal;
@@ -465,7 +467,7 @@ std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vecto
 
 } // namespace
 
-DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh)
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, double far_beyond)
 {
     if (points.empty())
         return {};
@@ -477,7 +479,7 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     std::vector<double> squared(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         squared[i] = squared_norm(points[i] - closest[i].second);
-    return summarize(squared, diagonal);
+    return summarize(squared, diagonal, far_beyond);
 }
 
 namespace {

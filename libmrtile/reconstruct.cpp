@@ -528,30 +528,31 @@ bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptio
 
 } // namespace
 
-ToleranceMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const MeshOptions& options, int mend_steps)
+MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& cut_at, const MeshOptions& options, int mend_steps)
 {
     if (mend_steps < 0 || mend_steps > 8)
-        throw InvalidInput("mesh_at_tolerance: mend_steps must be in [0, 8]");
-    ToleranceMeshResult out;
-    out.tolerance = tolerance;
-    out.result = mesh_cut(h, cut_by_tolerance(h, tolerance), options);
+        throw InvalidInput("mesh_mended: mend_steps must be in [0, 8]");
+    MendedMeshResult out;
+    out.result = mesh_cut(h, cut_at(0), options);
     out.asked = topology_stats(out.result.mesh);
-    double next = tolerance;
-    for (int step = 0; step < mend_steps && tolerance > 0 && broken_into_pieces(h, out.result, options); ++step) {
-        next /= std::sqrt(2.0);
-        const Cut finer = cut_by_tolerance(h, next);
+    for (int step = 1; step <= mend_steps && broken_into_pieces(h, out.result, options); ++step) {
+        const Cut finer = cut_at(step);
         if (finer.size() <= out.result.cut.size()) // at the leaves, or at a noise floor: nothing finer
             break;
         MeshResult candidate = mesh_cut(h, finer, options);
         const TopologyStats now = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
-        const bool better = then.components < now.components && then.boundary_loops <= now.boundary_loops;
-        if (!better)
+        if (!(then.components < now.components && then.boundary_loops <= now.boundary_loops))
             break;
         out.result = std::move(candidate);
-        out.tolerance = next;
-        out.steps = step + 1;
+        out.steps = step;
     }
     return out;
+}
+
+MendedMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const MeshOptions& options, int mend_steps)
+{
+    return mesh_mended(h, [&](int step) { return cut_by_tolerance(h, tolerance * std::pow(0.5, 0.5 * step)); }, options,
+                       mend_steps);
 }
 
 double e_rms(const Hierarchy& h, const Cut& cut)
@@ -577,7 +578,13 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     // A hierarchy just built from denoised points still has the points read: the distances are to them.
     const std::vector<Vec3>& points = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;
     if (mesh.n_faces() > 0 && h.bbox().diagonal() > 0) {
-        q.point_to_mesh = point_to_mesh_distance(points, mesh);
+        // Far: beyond 5% of the diagonal and twice the cut's largest tile error, so that a coarse cut's
+        // own approximation (a 10-tile bunny) is not taken for points left out.
+        double coarsest = 0.0;
+        for (const std::int32_t id : cut)
+            coarsest = std::max(coarsest, node_error(h.nodes[static_cast<std::size_t>(id)]));
+        const double diagonal = bounding_box(points).diagonal();
+        q.point_to_mesh = point_to_mesh_distance(points, mesh, std::max(kFarFraction * diagonal, 2.0 * coarsest));
         q.mesh_to_points = mesh_to_point_distance(mesh, points);
     }
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)

@@ -20,6 +20,8 @@
 #include "libmrtile/tiles.h"
 #include "libmrtile/untangle.h"
 
+#include <functional>
+
 namespace mrt {
 
 //! The most rounds of each of MeshOptions' refinements (small objects, gaps, dropped tiles, pieces):
@@ -105,26 +107,31 @@ struct TriangleCountResult
 TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options = {},
                                            std::size_t max_meshings = 10);
 
-struct ToleranceMeshResult
+struct MendedMeshResult
 {
-    MeshResult result;      //!< the mesh kept
-    double tolerance = 0.0; //!< the tolerance of its cut: the one asked, or finer where mended
-    int steps = 0;          //!< finer cuts kept (0: the cut asked was not broken, or no finer one was better)
-    TopologyStats asked;    //!< the topology of the mesh of the cut asked
+    MeshResult result;   //!< the mesh kept
+    int steps = 0;       //!< finer cuts kept (0: the cut asked was not in pieces, or no finer one was better)
+    TopologyStats asked; //!< the topology of the mesh of the cut asked
 };
 
-//! \brief Meshes cut_by_tolerance(h, tolerance), and a finer tolerance cut where that mesh is in pieces
-//! that its sample is not (beyond the paper).
-//! \details A coarse cut can mesh in pieces at thin or sharply curved parts (the bunny at 0.025: both
-//! ear tips loose; the rocker arm at 0.017: 4 pieces). mesh_cut mends what refining the tiles on their
-//! loops mends (MeshOptions::piece_rounds); where pieces are left that hold tiles that are neighbours on
-//! the surface (Tile::neighbours: the sample runs from one to the other), the cut at tolerance / √2 is
-//! meshed, up to `mend_steps` times, each kept while it has fewer pieces and no more boundary loops.
-//! Every cut tried meets the tolerance asked (a finer cut does), so the result does too. Separate
-//! objects and a scan's separate fragments are no such pieces and cost nothing more.
-//! \throw InvalidInput as cut_by_tolerance and mesh_cut, or mend_steps outside [0, 8].
-ToleranceMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const MeshOptions& options = {},
-                                      int mend_steps = 3);
+//! \brief Meshes cut_at(0), and where its mesh is in pieces that its sample is not, the finer cuts
+//! cut_at(1), cut_at(2), ... (beyond the paper).
+//! \details A coarse cut can mesh in pieces at thin or sharply curved parts (the bunny at tolerance
+//! 0.025: both ear tips loose; the rocker arm at 0.017: 4 pieces). mesh_cut mends what refining the
+//! tiles on their loops mends (MeshOptions::piece_rounds); where pieces are left that hold tiles that
+//! are neighbours on the surface (Tile::neighbours: the sample runs from one to the other), cut_at(k)
+//! is meshed for k = 1 .. mend_steps, each kept while it has fewer pieces and no more boundary loops.
+//! cut_at(k) should be finer with k and meet whatever cut_at(0) was asked to meet (a tolerance / √2^k,
+//! a camera's pixel error / √2^k). Separate objects and a scan's separate fragments are no such pieces
+//! and cost nothing more. \throw InvalidInput as mesh_cut, or mend_steps outside [0, 8].
+MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& cut_at, const MeshOptions& options = {},
+                             int mend_steps = 3);
+
+//! mesh_mended over cut_by_tolerance(h, tolerance / √2^k): the tolerance cut kept has tolerance
+//! tolerance / √2^steps, which meets the tolerance asked too. \throw InvalidInput as mesh_mended and
+//! cut_by_tolerance.
+MendedMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const MeshOptions& options = {},
+                                   int mend_steps = 3);
 
 struct QualityReport
 {
@@ -135,6 +142,7 @@ struct QualityReport
     //! Distances from every input point to the mesh, as fractions of the bounding-box diagonal (the
     //! points read: Hierarchy::raw_positions after a denoised build; a loaded denoised model has only
     //! its moved points, and the distances are to them).
+    //! Its `far`: points farther than 5% of the diagonal and twice the cut's largest node_error.
     DistanceStats point_to_mesh;
     //! The other way: from the mesh (its vertices and face centroids) to the closest input point, as
     //! fractions of the same diagonal. The point-to-mesh distance cannot see a spike or a flap that

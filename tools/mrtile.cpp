@@ -317,32 +317,39 @@ struct CutArgs
         return tolerance >= 0 ? tolerance : kDefaultTolerance;
     }
 
-    Cut cut(const Hierarchy& h) const
+    // The cut asked (step 0), or for mesh_mended a finer one that still meets every bound asked: each
+    // tolerance and the camera's pixel error / √2^step, τ / 2^step. A tile budget is a count, not a
+    // bound: it is not made finer.
+    Cut cut(const Hierarchy& h, int step = 0) const
     {
+        const double finer = std::pow(0.5, 0.5 * step);
         const Vec3 origin = h.cloud.origin;
         if (!camera.empty()) {
             Camera cam = parsed_camera();
             cam.position = cam.position - origin;
+            cam.max_pixel_error *= finer;
             return cut_for_camera(h, cam);
         }
         if (tiles > 0)
             return cut_by_budget(h, tiles);
         if (tau > 0)
-            return cut_by_tau(h, tau);
+            return cut_by_tau(h, tau * finer * finer);
         if (focus.empty())
-            return cut_by_tolerance(h, base_tolerance(h));
+            return cut_by_tolerance(h, base_tolerance(h) * finer);
         std::vector<FocusRegion> regions = parsed_focus();
         for (std::size_t k = 0; k < regions.size(); ++k) {
             regions[k].centre = regions[k].centre - origin;
+            if (regions[k].tolerance >= 0)
+                regions[k].tolerance *= finer;
             // Coordinates in another frame (local ones for a georeferenced model, say) miss the model.
-            if (!intersects(h.nodes.front(), regions[k]))
+            if (step == 0 && !intersects(h.nodes.front(), regions[k]))
                 std::printf("note: --focus %s: the sphere does not meet the model's points (bounding box %.9g,%.9g,%.9g "
                             "to %.9g,%.9g,%.9g); it refines nothing\n",
                             focus[k].c_str(), h.nodes.front().box.min.x + origin.x, h.nodes.front().box.min.y + origin.y,
                             h.nodes.front().box.min.z + origin.z, h.nodes.front().box.max.x + origin.x,
                             h.nodes.front().box.max.y + origin.y, h.nodes.front().box.max.z + origin.z);
         }
-        return cut_by_regions(h, base_tolerance(h), regions);
+        return cut_by_regions(h, base_tolerance(h) * finer, regions);
     }
 };
 
@@ -603,9 +610,9 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     // are of (a 50-point blob 5,000 radii from a sphere: left out without a word, and every fraction
     // 2,500 times smaller than the sphere's own; QA, session 20).
     if (j.contains("far_points") && j["far_points"].is_number() && j["far_points"].get<std::size_t>() > 0)
-        std::printf("note: %zu input points lie more than %.0f%% of the diagonal from the mesh: pieces too small to mesh "
-                    "or strays, left out (--remove-outliers drops strays); they widen the diagonal (%.6g) that the "
-                    "fractions above are of\n",
+        std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
+                    "tile's error): pieces too small to mesh or strays, left out (--remove-outliers drops strays); they "
+                    "widen the diagonal (%.6g) that the fractions above are of\n",
                     j["far_points"].get<std::size_t>(), 100.0 * kFarFraction, j.value("diagonal", 0.0));
 }
 
@@ -665,18 +672,24 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                         cut_args.triangles);
         return write_meshed(h, t.result, mesh_args, out_args, out, also, start);
     }
-    // A plain tolerance cut is mended where it meshes broken (mesh_at_tolerance): any finer cut meets
-    // the tolerance too. The other cuts are meshed as they are.
+    // A cut in pieces that the sample joins is meshed finer (mesh_mended): a finer cut meets the
+    // bounds asked too. A tile budget is meshed as it is.
     const bool plain = cut_args.tiles == 0 && cut_args.tau == 0 && cut_args.camera.empty() && cut_args.focus.empty();
-    ToleranceMeshResult mended;
-    if (plain) {
-        mended = mesh_at_tolerance(h, cut_args.base_tolerance(h), mesh_args.options());
-        if (mended.steps > 0)
-            std::printf("note: the cut at tolerance %.4g meshed in %zu pieces that the sample joins; meshed at %.4g "
-                        "instead (it meets the tolerance too)\n",
-                        cut_args.base_tolerance(h), mended.asked.components, mended.tolerance);
-    } else {
-        mended.result = mesh_cut(h, cut_args.cut(h), mesh_args.options());
+    const MendedMeshResult mended = mesh_mended(h, [&](int step) { return cut_args.cut(h, step); }, mesh_args.options(),
+                                                cut_args.tiles > 0 ? 0 : 3);
+    if (mended.steps > 0) {
+        const double finer = std::pow(0.5, 0.5 * mended.steps);
+        char what[96];
+        if (!cut_args.camera.empty())
+            std::snprintf(what, sizeof what, "at a pixel error of %.4g", cut_args.parsed_camera().max_pixel_error * finer);
+        else if (cut_args.tau > 0)
+            std::snprintf(what, sizeof what, "at tau %.4g", cut_args.tau * finer * finer);
+        else
+            std::snprintf(what, sizeof what, "at tolerance %.4g%s", cut_args.base_tolerance(h) * finer,
+                          cut_args.focus.empty() ? "" : " (and each --focus tolerance as much finer)");
+        std::printf("note: the cut meshed in %zu pieces that the sample joins; meshed %s instead (a finer cut, it meets "
+                    "what was asked too)\n",
+                    mended.asked.components, what);
     }
     const MeshResult& r = mended.result;
     const Cut& cut = r.cut;
