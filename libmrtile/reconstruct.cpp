@@ -533,18 +533,23 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     if (mend_steps < 0 || mend_steps > 8)
         throw InvalidInput("mesh_mended: mend_steps must be in [0, 8]");
     MendedMeshResult out;
-    out.result = mesh_cut(h, cut_at(0), options);
+    const Cut asked = cut_at(0);
+    std::size_t cut_size = asked.size(); // of the cut kept, as cut_at gave it (mesh_cut may refine it)
+    out.result = mesh_cut(h, asked, options);
     out.asked = topology_stats(out.result.mesh);
     for (int step = 1; step <= mend_steps && broken_into_pieces(h, out.result, options); ++step) {
         const Cut finer = cut_at(step);
-        if (finer.size() <= out.result.cut.size()) // at the leaves, or at a noise floor: nothing finer
+        if (finer.size() <= cut_size) // at the leaves, or at a noise floor: nothing finer
             break;
+        cut_size = finer.size();
+        // A finer cut can break elsewhere (the rotated bunny at 0.03: 2 pieces, at 0.021 4, at 0.015 1):
+        // the steps go on while the best so far is in pieces.
         MeshResult candidate = mesh_cut(h, finer, options);
-        const TopologyStats now = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
-        if (!(then.components < now.components && then.boundary_loops <= now.boundary_loops))
-            break;
-        out.result = std::move(candidate);
-        out.steps = step;
+        const TopologyStats best = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
+        if (then.components < best.components && then.boundary_loops <= best.boundary_loops) {
+            out.result = std::move(candidate);
+            out.steps = step;
+        }
     }
     return out;
 }
