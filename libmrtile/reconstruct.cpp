@@ -483,7 +483,7 @@ namespace {
 
 // Whether a mesh is in pieces where its sample is not: two pieces hold tiles that are neighbours on
 // the surface (Tile::neighbours: the sampled surface runs from one to the other). Separate objects and
-// a scan's separate fragments have no such tiles, and cost nothing more. mesh_at_tolerance's test.
+// a scan's separate fragments have no such tiles, and cost nothing more. mesh_mended's test.
 bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptions& options)
 {
     const TopologyStats t = topology_stats(r.mesh);
@@ -492,7 +492,7 @@ bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptio
     OpenMesh::VPropHandleT<int> cluster;
     if (!r.mesh.get_property_handle(cluster, kVertexCluster))
         return false;
-    // The piece of every vertex (breadth-first over faces), then of every tile with a vertex.
+    // The piece of every vertex (a flood over the edges), then of every tile with a vertex.
     std::vector<int> piece(r.mesh.n_vertices(), -1);
     int pieces = 0;
     for (const Mesh::VertexHandle seed : r.mesh.vertices()) {
