@@ -537,7 +537,8 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     std::size_t cut_size = asked.size(); // of the cut kept, as cut_at gave it (mesh_cut may refine it)
     out.result = mesh_cut(h, asked, options);
     out.asked = topology_stats(out.result.mesh);
-    for (int step = 1; step <= mend_steps && broken_into_pieces(h, out.result, options); ++step) {
+    out.in_pieces = broken_into_pieces(h, out.result, options);
+    for (int step = 1; step <= mend_steps && out.in_pieces; ++step) {
         const Cut finer = cut_at(step);
         if (finer.size() <= cut_size) // at the leaves, or at a noise floor: nothing finer
             break;
@@ -549,6 +550,7 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
         if (then.components < best.components && then.boundary_loops <= best.boundary_loops) {
             out.result = std::move(candidate);
             out.steps = step;
+            out.in_pieces = broken_into_pieces(h, out.result, options);
         }
     }
     return out;

@@ -112,6 +112,7 @@ struct MendedMeshResult
     MeshResult result;   //!< the mesh kept
     int steps = 0;       //!< finer cuts kept (0: the cut asked was not in pieces, or no finer one was better)
     TopologyStats asked; //!< the topology of the mesh of the cut asked
+    bool in_pieces = false; //!< whether the mesh kept is still in pieces that the sample joins
 };
 
 //! \brief Meshes cut_at(0), and where its mesh is in pieces that its sample is not, the finer cuts

@@ -348,7 +348,8 @@ TEST(Cli, cuts_in_pieces_are_meshed_finer)
     const Result budget = mrtile("mesh " + model + " --tiles 20 -o " + (dir / "t.ply").string() + " --stats-json " +
                                  (dir / "t.json").string(), dir);
     ASSERT_EQ(budget.code, 0) << budget.err;
-    EXPECT_EQ(budget.out.find("pieces that the sample joins"), std::string::npos) << budget.out;
+    EXPECT_EQ(budget.out.find("pieces that the sample joins; meshed"), std::string::npos) << budget.out;
+    EXPECT_NE(budget.out.find("a larger --tiles budget may join them"), std::string::npos) << budget.out;
     const nlohmann::json t = nlohmann::json::parse(slurp(dir / "t.json"));
     EXPECT_EQ(t["tiles"].get<std::size_t>(), 20u);
     EXPECT_GE(t["components"].get<std::size_t>(), 2u); // in pieces, but 20 tiles were asked

@@ -1121,7 +1121,10 @@ TEST(Reconstruct, tolerance_cuts_in_pieces_the_sample_joins_are_mended)
     EXPECT_EQ(t.components, 1u);
     EXPECT_LE(t.boundary_loops, topology_stats(plain.mesh).boundary_loops);
     EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
-    EXPECT_EQ(mesh_at_tolerance(bunny, 0.025, {}, 0).steps, 0); // mending off: the cut asked
+    EXPECT_FALSE(mended.in_pieces);
+    const MendedMeshResult off = mesh_at_tolerance(bunny, 0.025, {}, 0); // mending off: the cut asked
+    EXPECT_EQ(off.steps, 0);
+    EXPECT_TRUE(off.in_pieces);
 
     PointCloud two = shapes::sphere(4000, 1.0, 5);
     for (const Vec3& p : shapes::sphere(4000, 1.0, 6).positions)
@@ -1130,6 +1133,7 @@ TEST(Reconstruct, tolerance_cuts_in_pieces_the_sample_joins_are_mended)
     for (const double tolerance : {0.01, 0.002}) {
         const MendedMeshResult r = mesh_at_tolerance(h, tolerance);
         EXPECT_EQ(r.steps, 0) << tolerance;
+        EXPECT_FALSE(r.in_pieces) << tolerance;
         EXPECT_EQ(r.result.cut.size(), mesh_cut(h, cut_by_tolerance(h, tolerance)).cut.size()) << tolerance;
         EXPECT_EQ(topology_stats(r.result.mesh).components, 2u) << tolerance;
     }

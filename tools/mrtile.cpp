@@ -692,6 +692,10 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                     mended.asked.components, what);
     }
     const MeshResult& r = mended.result;
+    if (mended.in_pieces && cut_args.tiles > 0)
+        std::printf("note: the mesh is in %zu pieces that the sample joins; a larger --tiles budget may join them "
+                    "(tolerance, camera and region cuts are meshed finer where so)\n",
+                    mended.asked.components);
     const Cut& cut = r.cut;
     // Tiles of a plain tolerance cut that only their noise floor kept from refining.
     const double limit = cut_args.base_tolerance(h) * h.scale;
