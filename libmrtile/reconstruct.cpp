@@ -481,6 +481,10 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
 
 namespace {
 
+constexpr double kJoinSpacings = 3.0; // of their point spacings: two tiles' outlines this close are joined
+constexpr std::size_t kCheapMendTiles = 1000; // mesh_mended goes past a finer cut no better up to this size
+constexpr std::size_t kJoinSample = 256; // points of a node compared by broken_into_pieces
+
 // Whether a mesh is in pieces where its sample is not: two pieces hold tiles that are neighbours on
 // the surface (Tile::neighbours: the sampled surface runs from one to the other). Separate objects and
 // a scan's separate fragments have no such tiles, and cost nothing more. mesh_mended's test.
@@ -518,11 +522,29 @@ bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptio
     for (const Mesh::VertexHandle v : r.mesh.vertices())
         if (const auto it = index.find(r.mesh.property(cluster, v)); it != index.end() && piece[static_cast<std::size_t>(v.idx())] >= 0)
             tile_piece[it->second] = piece[static_cast<std::size_t>(v.idx())];
+    // Neighbours in two pieces whose points come within kJoinSpacings point spacings: the sample is
+    // continuous there. Neighbours are judged by the bisector plane, which a scan's fragment across a
+    // gap in the sample can also come near (bun000 at 0.001: three finer meshings, none joined). At
+    // most kJoinSample points of each node are compared (every k-th: their spacing grows by sqrt(k)).
     const std::vector<Tile> tiles = make_tiles(h, r.cut, options.tiles);
+    const auto& p = h.cloud.positions;
+    const auto stride = [&](std::size_t k) {
+        return std::max<std::size_t>(1, (h.nodes[static_cast<std::size_t>(r.cut[k])].count() + kJoinSample - 1) / kJoinSample);
+    };
     for (std::size_t k = 0; k < tiles.size(); ++k)
-        for (const std::uint32_t n : tiles[k].neighbours)
-            if (tile_piece[k] >= 0 && tile_piece[n] >= 0 && tile_piece[k] != tile_piece[n])
-                return true;
+        for (const std::uint32_t n : tiles[k].neighbours) {
+            if (tile_piece[k] < 0 || tile_piece[n] < 0 || tile_piece[k] == tile_piece[n] || n < k)
+                continue;
+            const Node& a = h.nodes[static_cast<std::size_t>(r.cut[k])];
+            const Node& b = h.nodes[static_cast<std::size_t>(r.cut[n])];
+            const std::size_t sa = stride(k), sb = stride(n);
+            const double reach = kJoinSpacings * std::max(tiles[k].spacing() * std::sqrt(static_cast<double>(sa)),
+                                                          tiles[n].spacing() * std::sqrt(static_cast<double>(sb)));
+            for (std::uint32_t i = a.begin; i < a.end; i += static_cast<std::uint32_t>(sa))
+                for (std::uint32_t j = b.begin; j < b.end; j += static_cast<std::uint32_t>(sb))
+                    if (squared_norm(p[i] - p[j]) <= reach * reach)
+                        return true;
+        }
     return false;
 }
 
@@ -544,13 +566,17 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
             break;
         cut_size = finer.size();
         // A finer cut can break elsewhere (the rotated bunny at 0.03: 2 pieces, at 0.021 4, at 0.015 1):
-        // the steps go on while the best so far is in pieces.
+        // the steps go on while the best so far is in pieces, past one that is no better only while
+        // the cuts are small enough to mesh in a fraction of a second (the cost stays bounded where
+        // the pieces do not join: at most one finer meshing of a large cut).
         MeshResult candidate = mesh_cut(h, finer, options);
         const TopologyStats best = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
         if (then.components < best.components && then.boundary_loops <= best.boundary_loops) {
             out.result = std::move(candidate);
             out.steps = step;
             out.in_pieces = broken_into_pieces(h, out.result, options);
+        } else if (finer.size() > kCheapMendTiles) {
+            break;
         }
     }
     return out;

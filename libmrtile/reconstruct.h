@@ -121,8 +121,9 @@ struct MendedMeshResult
 //! 0.025: both ear tips loose; the rocker arm at 0.017: 4 pieces). mesh_cut mends what refining the
 //! tiles on their loops mends (MeshOptions::piece_rounds); where pieces are left that hold tiles that
 //! are neighbours on the surface (Tile::neighbours: the sample runs from one to the other), cut_at(k)
-//! is meshed for k = 1 .. mend_steps while the best so far is in pieces, and kept when it has fewer
-//! pieces and no more boundary loops than that best.
+//! is meshed for k = 1 .. mend_steps while the best so far is in pieces (past one that is no better
+//! only while the cuts have at most 1,000 tiles), and kept when it has fewer pieces and no more boundary
+//! loops than that best. Tiles are joined when their points come within 3 point spacings.
 //! cut_at(k) should be finer with k and meet whatever cut_at(0) was asked to meet (a tolerance / √2^k,
 //! a camera's pixel error / √2^k). Separate objects and a scan's separate fragments are no such pieces
 //! and cost nothing more. \throw InvalidInput as mesh_cut, or mend_steps outside [0, 8].
