@@ -548,6 +548,27 @@ bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptio
     return false;
 }
 
+// The points of the tiles that have a vertex in the mesh: a finer cut that joins pieces by leaving one
+// out (a subsampled rocker arm: a 31-vertex piece gone; a subsampled bunny: its ear tips cut off; QA,
+// session 20) has fewer.
+std::size_t kept_points(const Hierarchy& h, const MeshResult& r)
+{
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!r.mesh.get_property_handle(cluster, kVertexCluster))
+        return 0;
+    std::vector<std::int32_t> nodes;
+    for (const Mesh::VertexHandle v : r.mesh.vertices())
+        if (!r.mesh.is_isolated(v))
+            nodes.push_back(r.mesh.property(cluster, v));
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    std::size_t points = 0;
+    for (const std::int32_t id : nodes)
+        if (id >= 0 && static_cast<std::size_t>(id) < h.nodes.size())
+            points += h.nodes[static_cast<std::size_t>(id)].count();
+    return points;
+}
+
 } // namespace
 
 MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& cut_at, const MeshOptions& options, int mend_steps)
@@ -571,7 +592,8 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
         // the pieces do not join: at most one finer meshing of a large cut).
         MeshResult candidate = mesh_cut(h, finer, options);
         const TopologyStats best = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
-        if (then.components < best.components && then.boundary_loops <= best.boundary_loops) {
+        if (then.components < best.components && then.boundary_loops <= best.boundary_loops &&
+            kept_points(h, candidate) >= kept_points(h, out.result)) {
             out.result = std::move(candidate);
             out.steps = step;
             out.in_pieces = broken_into_pieces(h, out.result, options);

@@ -123,7 +123,7 @@ struct MendedMeshResult
 //! are neighbours on the surface (Tile::neighbours: the sample runs from one to the other), cut_at(k)
 //! is meshed for k = 1 .. mend_steps while the best so far is in pieces (past one that is no better
 //! only while the cuts have at most 1,000 tiles), and kept when it has fewer pieces and no more boundary
-//! loops than that best. Tiles are joined when their points come within 3 point spacings.
+//! loops than that best, and leaves out no more points (those of tiles without a vertex in the mesh). Tiles are joined when their points come within 3 point spacings.
 //! cut_at(k) should be finer with k and meet whatever cut_at(0) was asked to meet (a tolerance / √2^k,
 //! a camera's pixel error / √2^k). Separate objects and a scan's separate fragments are no such pieces
 //! and cost nothing more. \throw InvalidInput as mesh_cut, or mend_steps outside [0, 8].

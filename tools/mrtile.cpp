@@ -688,17 +688,19 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
             std::snprintf(what, sizeof what, "at tolerance %.4g%s", cut_args.base_tolerance(h) * finer,
                           cut_args.focus.empty() ? "" : " (and each --focus tolerance as much finer)");
         std::printf("note: the cut meshed in %zu pieces that the sample joins; meshed %s instead (a finer cut, it meets "
-                    "what was asked too)\n",
-                    mended.asked.components, what);
+                    "what was asked too)%s\n",
+                    mended.asked.components, what, mended.in_pieces ? "; still in pieces there" : "");
     }
     const MeshResult& r = mended.result;
-    if (mended.in_pieces && cut_args.tiles > 0)
-        std::printf("note: the mesh is in %zu pieces that the sample joins; a larger --tiles budget may join them "
-                    "(tolerance, camera and region cuts are meshed finer where so)\n",
-                    mended.asked.components);
-    const Cut& cut = r.cut;
-    // Tiles of a plain tolerance cut that only their noise floor kept from refining.
-    const double limit = cut_args.base_tolerance(h) * h.scale;
+    if (mended.in_pieces && mended.steps == 0)
+        std::printf("note: the mesh is in %zu pieces that the sample joins; %s\n", mended.asked.components,
+                    cut_args.tiles > 0 ? "a larger --tiles budget may join them (bounds, such as --tolerance, are meshed "
+                                         "finer where so)"
+                                       : "no finer cut tried joined them");
+    // Tiles of a plain tolerance cut that only their noise floor kept from refining: of the cut as
+    // made, not as mesh_cut refined it (refined children can be rougher than their parent's bound).
+    const Cut cut = cut_args.cut(h, mended.steps);
+    const double limit = cut_args.base_tolerance(h) * std::pow(0.5, 0.5 * mended.steps) * h.scale;
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
