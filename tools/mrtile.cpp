@@ -571,6 +571,14 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["mesh_to_points_max"] = q->mesh_to_points.max;
         j["far_points"] = q->point_to_mesh.far;
         j["diagonal"] = q->point_to_mesh.diagonal; // model units: what the distance fractions are of
+        if (r.mesh.n_vertices() > 0) {
+            Mesh::Point lo = r.mesh.point(*r.mesh.vertices_begin()), hi = lo;
+            for (const auto v : r.mesh.vertices()) {
+                lo.minimize(r.mesh.point(v));
+                hi.maximize(r.mesh.point(v));
+            }
+            j["mesh_diagonal"] = (hi - lo).norm();
+        }
     } else {
         // --no-quality skips the distances (null), not the topology, which is cheap and documented.
         const TopologyStats t = topology_stats(r.mesh);
@@ -582,7 +590,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["consistently_oriented"] = t.consistently_oriented;
         j["caps"] = count_caps(r.mesh); // cheap, like the topology
         for (const char* key : {"e_rms", "mean_distance", "max_distance", "median_distance", "p99_distance",
-                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections", "far_points", "diagonal"})
+                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections", "far_points", "diagonal",
+                                "mesh_diagonal"})
             j[key] = nullptr;
     }
     j["seconds"] = seconds;
@@ -609,11 +618,20 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     // Points the mesh leaves out, far from it, set the maximum and widen the diagonal the fractions
     // are of (a 50-point blob 5,000 radii from a sphere: left out without a word, and every fraction
     // 2,500 times smaller than the sphere's own; QA, session 20).
-    if (j.contains("far_points") && j["far_points"].is_number() && j["far_points"].get<std::size_t>() > 0)
-        std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
-                    "tile's error): pieces too small to mesh or strays, left out (--remove-outliers drops strays); they "
-                    "widen the diagonal (%.6g) that the fractions above are of\n",
-                    j["far_points"].get<std::size_t>(), 100.0 * kFarFraction, j.value("diagonal", 0.0));
+    // Inside the mesh's own extent they are sampled surface the mesh leaves out, not strays (QA round 5).
+    if (j.contains("far_points") && j["far_points"].is_number() && j["far_points"].get<std::size_t>() > 0) {
+        const double diagonal = j.value("diagonal", 0.0);
+        if (j.value("mesh_diagonal", 0.0) < 0.9 * diagonal)
+            std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
+                        "tile's error): pieces too small to mesh or strays, left out (--remove-outliers drops strays); "
+                        "they widen the diagonal (%.6g) that the fractions above are of\n",
+                        j["far_points"].get<std::size_t>(), 100.0 * kFarFraction, diagonal);
+        else
+            std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
+                        "tile's error), within its extent: sampled surface the mesh leaves out (a hole over sparse "
+                        "points, or a piece too small to mesh)\n",
+                        j["far_points"].get<std::size_t>(), 100.0 * kFarFraction);
+    }
 }
 
 // A further file for the same mesh (the demo writes its mesh as .ply and as Draco .glb).
