@@ -69,14 +69,15 @@ OpenMesh::IO::Options io_options(MeshFormat format, const Mesh& mesh, const Writ
 
 // Float keeps 24 bits: beyond about 16 extents from the origin it loses more than a millionth of the
 // mesh's extent (a survey in UTM coordinates, 5,000 km north: half a metre). Such meshes are written with
-// double coordinates (PLY, OBJ, OFF; .om always keeps doubles, STL has only floats).
-bool needs_doubles(const Mesh& absolute, double fraction = 1e-6)
+// double coordinates (PLY, OBJ, OFF; .om always keeps doubles, STL has only floats). `shift` is added
+// to every position first (the origin of a mesh stored relative to it), `fraction` is of the extent.
+bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, double fraction = 1e-6)
 {
     double largest = 0.0;
     Mesh::Point lo(0, 0, 0), hi(0, 0, 0);
     bool first = true;
-    for (const auto v : absolute.vertices()) {
-        const Mesh::Point& p = absolute.point(v);
+    for (const auto v : mesh.vertices()) {
+        const Mesh::Point p = mesh.point(v) + shift;
         for (int a = 0; a < 3; ++a) {
             largest = std::max(largest, std::abs(p[a]));
             lo[a] = first ? p[a] : std::min(lo[a], p[a]);
@@ -201,13 +202,9 @@ std::string double_precision_file(const Mesh& m, MeshFormat format, bool binary,
 
 bool stl_is_relative(const Mesh& mesh, const Vec3& origin)
 {
-    Mesh absolute(mesh);
-    const Mesh::Point shift(origin.x, origin.y, origin.z);
-    for (const auto v : absolute.vertices())
-        absolute.set_point(v, absolute.point(v) + shift);
     // A looser bound than for doubles in the text formats: STL readers expect absolute coordinates, so
     // only where float steps would reach a ten-thousandth of the extent (edges a few dozen steps long).
-    return needs_doubles(absolute, 1e-4);
+    return needs_doubles(mesh, Mesh::Point(origin.x, origin.y, origin.z), 1e-4);
 }
 
 void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
