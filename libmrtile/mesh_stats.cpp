@@ -388,8 +388,7 @@ std::vector<std::size_t> morton_order(const std::vector<Vec3>& points)
 // Sums in index order so that the result does not depend on how the distances were computed.
 DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal, double far_beyond = 0.0)
 {
-    if (!(far_beyond > 0))
-        far_beyond = kFarFraction * diagonal;
+    far_beyond = std::max(far_beyond, kFarFraction * diagonal);
     DistanceStats stats;
     stats.diagonal = diagonal;
     if (squared_distances.empty())

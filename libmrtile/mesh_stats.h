@@ -67,18 +67,19 @@ struct DistanceStats
     double median = 0.0;    //!< separates a uniformly loose fit from a few far-off points (holes, bridges)
     double p99 = 0.0;       //!< 99th percentile
     double diagonal = 0.0;  //!< absolute, in the units of the positions
-    //! Points farther than `far_beyond` (point_to_mesh_distance): points the mesh leaves out (a far
-    //! piece too small to mesh, strays), which also widen the diagonal the fractions are of.
+    //! Points farther than kFarFraction of the diagonal and than `far_beyond` (point_to_mesh_distance):
+    //! points the mesh leaves out (a far piece too small to mesh, strays), which also widen the diagonal
+    //! the fractions are of.
     std::size_t far = 0;
 };
 
-constexpr double kFarFraction = 0.05; //!< point_to_mesh_distance's default `far_beyond`: of the diagonal
+constexpr double kFarFraction = 0.05; //!< DistanceStats::far: of the diagonal at the least
 
 //! \brief Distance from each point to the closest point of the mesh surface (exact: closest point on the
 //! triangles, not on the vertices). Deterministic; on the default number of threads (parallel.h).
 //! \throw InvalidInput if points are given but the mesh has no face, if a point is not finite, or if the
 //! points' bounding box has a zero diagonal (the fractions would be undefined). No points gives zeros.
-//! `far_beyond` (model units; 0 = kFarFraction of the diagonal) sets DistanceStats::far.
+//! `far_beyond` (model units) raises DistanceStats::far's bound above kFarFraction of the diagonal.
 DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, double far_beyond = 0.0);
 
 //! \brief The other one-sided distance: from the mesh (sampled at its vertices and face centroids) to

@@ -638,8 +638,7 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
         double coarsest = 0.0;
         for (const std::int32_t id : cut)
             coarsest = std::max(coarsest, node_error(h.nodes[static_cast<std::size_t>(id)]));
-        const double diagonal = bounding_box(points).diagonal();
-        q.point_to_mesh = point_to_mesh_distance(points, mesh, std::max(kFarFraction * diagonal, 2.0 * coarsest));
+        q.point_to_mesh = point_to_mesh_distance(points, mesh, 2.0 * coarsest);
         q.mesh_to_points = mesh_to_point_distance(mesh, points);
     }
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
