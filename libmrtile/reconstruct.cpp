@@ -230,6 +230,15 @@ std::vector<Tile> refine_before_meshing(const Hierarchy& h, const MeshOptions& o
     return tiles;
 }
 
+// Each node of `cut` to its index in it (the mesh's vertices name their tile by its node).
+std::unordered_map<std::int32_t, std::size_t> positions_in(const Cut& cut)
+{
+    std::unordered_map<std::int32_t, std::size_t> index;
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        index.emplace(cut[k], k);
+    return index;
+}
+
 // The tiles (indices into `cut`) on each boundary loop of the mesh, by the vertices' cluster property.
 std::vector<std::vector<std::size_t>> tiles_of_loops(const Cut& cut, const Mesh& mesh)
 {
@@ -237,9 +246,7 @@ std::vector<std::vector<std::size_t>> tiles_of_loops(const Cut& cut, const Mesh&
     OpenMesh::VPropHandleT<int> cluster;
     if (!mesh.get_property_handle(cluster, kVertexCluster))
         return loops;
-    std::unordered_map<std::int32_t, std::size_t> index;
-    for (std::size_t k = 0; k < cut.size(); ++k)
-        index.emplace(cut[k], k);
+    const std::unordered_map<std::int32_t, std::size_t> index = positions_in(cut);
     std::vector<bool> seen(mesh.n_halfedges(), false);
     for (const Mesh::HalfedgeHandle start : mesh.halfedges()) {
         if (!mesh.is_boundary(start) || seen[static_cast<std::size_t>(start.idx())])
@@ -481,16 +488,15 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
 
 namespace {
 
-constexpr double kJoinSpacings = 3.0; // of their point spacings: two tiles' outlines this close are joined
+constexpr double kJoinSpacings = 3.0; // of their point spacings: two tiles' points this close are joined
 constexpr std::size_t kCheapMendTiles = 1000; // mesh_mended goes past a finer cut no better up to this size
 constexpr std::size_t kJoinSample = 256; // points of a node compared by broken_into_pieces
 
 // Whether a mesh is in pieces where its sample is not: two pieces hold tiles that are neighbours on
 // the surface (Tile::neighbours: the sampled surface runs from one to the other). Separate objects and
 // a scan's separate fragments have no such tiles, and cost nothing more. mesh_mended's test.
-bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptions& options)
+bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const TopologyStats& t, const MeshOptions& options)
 {
-    const TopologyStats t = topology_stats(r.mesh);
     if (t.components < 2 || t.boundary_loops == 0)
         return false;
     OpenMesh::VPropHandleT<int> cluster;
@@ -515,9 +521,7 @@ bool broken_into_pieces(const Hierarchy& h, const MeshResult& r, const MeshOptio
         }
         ++pieces;
     }
-    std::unordered_map<std::int32_t, std::size_t> index;
-    for (std::size_t k = 0; k < r.cut.size(); ++k)
-        index.emplace(r.cut[k], k);
+    const std::unordered_map<std::int32_t, std::size_t> index = positions_in(r.cut);
     std::vector<int> tile_piece(r.cut.size(), -1);
     for (const Mesh::VertexHandle v : r.mesh.vertices())
         if (const auto it = index.find(r.mesh.property(cluster, v)); it != index.end() && piece[static_cast<std::size_t>(v.idx())] >= 0)
@@ -580,7 +584,9 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     std::size_t cut_size = asked.size(); // of the cut kept, as cut_at gave it (mesh_cut may refine it)
     out.result = mesh_cut(h, asked, options);
     out.asked = topology_stats(out.result.mesh);
-    out.in_pieces = broken_into_pieces(h, out.result, options);
+    out.in_pieces = broken_into_pieces(h, out.result, out.asked, options);
+    TopologyStats best = out.asked; // of out.result, and the points it keeps
+    std::size_t best_kept = out.in_pieces ? kept_points(h, out.result) : 0;
     for (int step = 1; step <= mend_steps && out.in_pieces; ++step) {
         const Cut finer = cut_at(step);
         if (finer.size() <= cut_size) // at the leaves, or at a noise floor: nothing finer
@@ -591,12 +597,15 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
         // the cuts are small enough to mesh in a fraction of a second (the cost stays bounded where
         // the pieces do not join: at most one finer meshing of a large cut).
         MeshResult candidate = mesh_cut(h, finer, options);
-        const TopologyStats best = topology_stats(out.result.mesh), then = topology_stats(candidate.mesh);
-        if (then.components < best.components && then.boundary_loops <= best.boundary_loops &&
-            kept_points(h, candidate) >= kept_points(h, out.result)) {
+        const TopologyStats then = topology_stats(candidate.mesh);
+        const bool fewer = then.components < best.components && then.boundary_loops <= best.boundary_loops;
+        const std::size_t kept = fewer ? kept_points(h, candidate) : 0;
+        if (fewer && kept >= best_kept) {
             out.result = std::move(candidate);
             out.steps = step;
-            out.in_pieces = broken_into_pieces(h, out.result, options);
+            best = then;
+            best_kept = kept;
+            out.in_pieces = broken_into_pieces(h, out.result, best, options);
         } else if (finer.size() > kCheapMendTiles) {
             break;
         }
