@@ -339,8 +339,7 @@ struct CutArgs
         std::vector<FocusRegion> regions = parsed_focus();
         for (std::size_t k = 0; k < regions.size(); ++k) {
             regions[k].centre = regions[k].centre - origin;
-            if (regions[k].tolerance >= 0)
-                regions[k].tolerance *= finer;
+            regions[k].tolerance *= finer;
             // Coordinates in another frame (local ones for a georeferenced model, say) miss the model.
             if (step == 0 && !intersects(h.nodes.front(), regions[k]))
                 std::printf("note: --focus %s: the sphere does not meet the model's points (bounding box %.9g,%.9g,%.9g "
@@ -462,20 +461,28 @@ bool is_mesh_extension(const std::string& ext)
 // is a sizeable part of an edge, vertices merge and faces collapse in the decoded mesh, which the
 // printed statistics (of the mesh before quantization) do not show: `--quantize 1` kept 8 of the
 // bunny's 5,741 positions without a word (QA, session 20). Say so.
-void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out)
+// The sides of the mesh's bounding box (0 without vertices).
+Mesh::Point mesh_extent(const Mesh& mesh)
 {
-    if (mesh.n_edges() == 0)
-        return;
+    if (mesh.n_vertices() == 0)
+        return {0, 0, 0};
     Mesh::Point lo = mesh.point(*mesh.vertices_begin()), hi = lo;
     for (const auto v : mesh.vertices()) {
         lo.minimize(mesh.point(v));
         hi.maximize(mesh.point(v));
     }
+    return hi - lo;
+}
+
+void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out)
+{
+    if (mesh.n_edges() == 0)
+        return;
     double length = 0.0;
     for (const auto e : mesh.edges())
         length += mesh.calc_edge_length(e);
     const double mean_edge = length / static_cast<double>(mesh.n_edges());
-    const double step = (hi - lo).max() / (std::ldexp(1.0, bits) - 1.0);
+    const double step = mesh_extent(mesh).max() / (std::ldexp(1.0, bits) - 1.0);
     if (step > 0.25 * mean_edge)
         std::printf("note: %s: --quantize %d snaps positions to steps of %.3g, %.0f%% of the mean edge length: "
                     "vertices merge and faces collapse when decoded (the statistics are of the mesh before "
@@ -571,14 +578,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["mesh_to_points_max"] = q->mesh_to_points.max;
         j["far_points"] = q->point_to_mesh.far;
         j["diagonal"] = q->point_to_mesh.diagonal; // model units: what the distance fractions are of
-        if (r.mesh.n_vertices() > 0) {
-            Mesh::Point lo = r.mesh.point(*r.mesh.vertices_begin()), hi = lo;
-            for (const auto v : r.mesh.vertices()) {
-                lo.minimize(r.mesh.point(v));
-                hi.maximize(r.mesh.point(v));
-            }
-            j["mesh_diagonal"] = (hi - lo).norm();
-        }
+        j["mesh_diagonal"] = mesh_extent(r.mesh).norm();
     } else {
         // --no-quality skips the distances (null), not the topology, which is cheap and documented.
         const TopologyStats t = topology_stats(r.mesh);
@@ -717,12 +717,12 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                                        : "no finer cut tried joined them");
     // Tiles of a plain tolerance cut that only their noise floor kept from refining: of the cut as
     // made, not as mesh_cut refined it (refined children can be rougher than their parent's bound).
-    const Cut cut = cut_args.cut(h, mended.steps);
+    const Cut cut = plain ? cut_args.cut(h, mended.steps) : Cut{};
     const double limit = cut_args.base_tolerance(h) * std::pow(0.5, 0.5 * mended.steps) * h.scale;
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
-        stopped += plain && !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
+        stopped += !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
     }
     if (stopped > 0) {
         char what[160];
