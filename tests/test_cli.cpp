@@ -250,9 +250,24 @@ TEST(Cli, far_points_left_out_are_noted)
     r = mrtile("reconstruct " + strays.string() + " -o " + (dir / "s.ply").string() + " --stats-json " + (dir / "s.json").string(), dir);
     EXPECT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("note: 2 input points lie far from the mesh (beyond 5% of the diagonal"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("they widen the diagonal"), std::string::npos) << r.out; // outside the mesh's extent
     const nlohmann::json j = nlohmann::json::parse(slurp(dir / "s.json"));
     EXPECT_EQ(j["far_points"].get<std::size_t>(), 2u);
     EXPECT_NEAR(j["diagonal"].get<double>(), 2000.0, 1.0);
+    EXPECT_LT(j["mesh_diagonal"].get<double>(), 4.0);
+    // A blob of 20 points at the sphere's centre: far from the mesh, but inside its extent, so no stray
+    // that widens the diagonal.
+    std::string blob;
+    for (int i = 0; i < 20; ++i)
+        blob += std::to_string(0.01 * std::cos(i)) + " " + std::to_string(0.01 * std::sin(2.0 * i)) + " " +
+                std::to_string(0.01 * std::sin(i)) + "\n";
+    const fs::path inner = dir / "inner.xyz";
+    write_text(inner, text + blob);
+    r = mrtile("reconstruct " + inner.string() + " -o " + (dir / "i.ply").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("lie far from the mesh"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("within its extent: sampled surface the mesh leaves out"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("widen the diagonal"), std::string::npos) << r.out;
 }
 
 // --tolerance 0 is the finest cut (not the default); --no-quality keeps the topology keys and writes
