@@ -437,55 +437,6 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& optio
     return result;
 }
 
-TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options,
-                                           std::size_t max_meshings)
-{
-    if (triangles == 0 || max_meshings == 0)
-        throw InvalidInput("mesh_to_triangle_count: the triangle target and max_meshings must be at least 1");
-    const std::size_t leaves = std::max<std::size_t>(1, h.leaf_count());
-    TriangleCountResult best;  // largest N that fits so far
-    TriangleCountResult over;  // smallest N that does not fit so far (kept in case nothing fits)
-    std::size_t fits = 0, fails = leaves + 1; // bracket on N
-    auto try_tiles = [&](std::size_t n) {
-        TriangleCountResult r;
-        r.cut = cut_by_budget(h, n);
-        r.result = mesh_cut(h, r.cut, options);
-        const std::size_t faces = r.result.mesh.n_faces();
-        if (faces <= triangles) {
-            if (n > fits) {
-                fits = n;
-                best = std::move(r);
-            }
-        } else if (n < fails) {
-            fails = n;
-            over = std::move(r);
-        }
-        return faces;
-    };
-    // First guess: about 16 faces per tile (a fine cut's fan and gap faces after collapsing).
-    std::size_t n = std::clamp<std::size_t>(triangles / 16, 1, leaves);
-    std::size_t meshings = 0;
-    while (meshings < max_meshings) {
-        const std::size_t faces = try_tiles(n);
-        ++meshings;
-        if (fits + 1 >= fails) // converged (this also covers the leaves fitting and one tile not fitting)
-            break;
-        // Next: scale N by the target over the faces seen (faces per tile is nearly constant locally),
-        // kept strictly inside the bracket; bisect when the guess falls outside it.
-        const double scaled = static_cast<double>(n) * static_cast<double>(triangles) / std::max<double>(1.0, static_cast<double>(faces));
-        std::size_t next = static_cast<std::size_t>(scaled);
-        if (next <= fits || next >= fails)
-            next = fits + (fails - fits) / 2;
-        next = std::clamp<std::size_t>(next, 1, leaves);
-        if (next == n)
-            break;
-        n = next;
-    }
-    TriangleCountResult out = fits > 0 ? std::move(best) : std::move(over);
-    out.meshings = meshings;
-    return out;
-}
-
 namespace {
 
 constexpr double kJoinSpacings = 3.0; // of their point spacings: two tiles' points this close are joined
@@ -618,6 +569,94 @@ MendedMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const M
     return mesh_mended(h, [&](int step) { return cut_by_tolerance(h, tolerance * std::pow(0.5, 0.5 * step)); }, options,
                        mend_steps);
 }
+
+TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options,
+                                           std::size_t max_meshings)
+{
+    if (triangles == 0 || max_meshings == 0)
+        throw InvalidInput("mesh_to_triangle_count: the triangle target and max_meshings must be at least 1");
+    const std::size_t leaves = std::max<std::size_t>(1, h.leaf_count());
+    TriangleCountResult best;  // largest N that fits so far
+    TriangleCountResult over;  // smallest N that does not fit so far (kept in case nothing fits)
+    std::size_t fits = 0, fails = leaves + 1; // bracket on N
+    auto try_tiles = [&](std::size_t n) {
+        TriangleCountResult r;
+        r.cut = cut_by_budget(h, n);
+        r.result = mesh_cut(h, r.cut, options);
+        const std::size_t faces = r.result.mesh.n_faces();
+        if (faces <= triangles) {
+            if (n > fits) {
+                fits = n;
+                best = std::move(r);
+            }
+        } else if (n < fails) {
+            fails = n;
+            over = std::move(r);
+        }
+        return faces;
+    };
+    // First guess: about 16 faces per tile (a fine cut's fan and gap faces after collapsing).
+    std::size_t n = std::clamp<std::size_t>(triangles / 16, 1, leaves);
+    std::size_t meshings = 0;
+    while (meshings < max_meshings) {
+        const std::size_t faces = try_tiles(n);
+        ++meshings;
+        if (fits + 1 >= fails) // converged (this also covers the leaves fitting and one tile not fitting)
+            break;
+        // Next: scale N by the target over the faces seen (faces per tile is nearly constant locally),
+        // kept strictly inside the bracket; bisect when the guess falls outside it.
+        const double scaled = static_cast<double>(n) * static_cast<double>(triangles) / std::max<double>(1.0, static_cast<double>(faces));
+        std::size_t next = static_cast<std::size_t>(scaled);
+        if (next <= fits || next >= fails)
+            next = fits + (fails - fits) / 2;
+        next = std::clamp<std::size_t>(next, 1, leaves);
+        if (next == n)
+            break;
+        n = next;
+    }
+    TriangleCountResult out = fits > 0 ? std::move(best) : std::move(over);
+    out.meshings = meshings;
+    if (fits == 0)
+        return out;
+    // The face count of coarse cuts of thin parts is not monotone in N, nor is their topology: the
+    // bunny's best 500-face cut (29 tiles) is in 2 pieces, 28 tiles are whole. Where the cut found is in
+    // pieces that its sample joins, a few smaller budgets are meshed too, and one is kept on
+    // mesh_mended's terms (fewer pieces, no more loops, no points left out that the first kept).
+    out.asked = topology_stats(out.result.mesh);
+    out.in_pieces = broken_into_pieces(h, out.result, out.asked, options);
+    TopologyStats kept_topology = out.asked;
+    std::size_t kept = out.in_pieces ? kept_points(h, out.result) : 0;
+    std::size_t last = fits;
+    for (const double fraction : {0.95, 0.9, 0.85, 0.8}) {
+        if (!out.in_pieces)
+            break;
+        const auto smaller = static_cast<std::size_t>(static_cast<double>(fits) * fraction);
+        if (smaller < 1 || smaller >= last)
+            continue;
+        last = smaller;
+        TriangleCountResult r;
+        r.cut = cut_by_budget(h, smaller);
+        r.result = mesh_cut(h, r.cut, options);
+        ++out.meshings;
+        const TopologyStats then = topology_stats(r.result.mesh);
+        const bool better = r.result.mesh.n_faces() <= triangles && then.components < kept_topology.components &&
+                            then.boundary_loops <= kept_topology.boundary_loops;
+        const std::size_t points = better ? kept_points(h, r.result) : 0;
+        if (better && points >= kept) {
+            r.meshings = out.meshings;
+            r.asked = out.asked;
+            r.smaller_budget = true;
+            kept_topology = then;
+            kept = points;
+            r.in_pieces = broken_into_pieces(h, r.result, then, options);
+            out = std::move(r);
+        } else if (r.cut.size() > kCheapMendTiles) {
+            break; // a large cut costs at most one more meshing
+        }
+    }
+    return out;
+}
+
 
 double e_rms(const Hierarchy& h, const Cut& cut)
 {

@@ -95,6 +95,9 @@ struct TriangleCountResult
     Cut cut;            //!< a best-N cut (cut_by_budget)
     MeshResult result;  //!< its mesh
     std::size_t meshings = 0; //!< candidate cuts meshed to find it
+    TopologyStats asked;         //!< the topology of the best fitting cut's mesh (when one fits)
+    bool smaller_budget = false; //!< a smaller budget was kept: the best fitting cut was in pieces
+    bool in_pieces = false;      //!< whether the mesh kept is in pieces that its sample joins
 };
 
 //! \brief The finest best-N cut (cut_by_budget) whose mesh has at most `triangles` faces, and its mesh.
@@ -103,6 +106,9 @@ struct TriangleCountResult
 //! the largest N known to fit and the smallest known not to, up to `max_meshings` (default 10). The
 //! face count grows with N almost always, not strictly; the result is the best fitting cut found. When
 //! even one tile has more faces, that one-tile mesh is returned; when the leaves fit, the leaves'.
+//! Where the best fitting cut's mesh is in pieces that its sample joins (see mesh_mended), the budgets
+//! 0.95, 0.9, 0.85 and 0.8 × N are meshed too (one of them only, past one no better, for cuts over 1,000
+//! tiles), and one is kept on mesh_mended's terms: fewer pieces, no more loops, no fewer points kept.
 //! \throw InvalidInput if triangles == 0 or max_meshings == 0.
 TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options = {},
                                            std::size_t max_meshings = 10);

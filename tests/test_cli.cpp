@@ -621,6 +621,22 @@ TEST(Cli, mesh_to_a_triangle_count)
     EXPECT_EQ(zero.code, 2);
     EXPECT_NE(zero.err.find("--triangles: '0' is not a whole number from 1"), std::string::npos) << zero.err;
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
+    EXPECT_EQ(r.out.find("note: the largest tile budget"), std::string::npos) << r.out; // whole at once
+
+    // The bunny's best 500-face cut is in pieces: a smaller budget is meshed instead, and said.
+    const std::string bunny = (dir / "bun.mrt").string();
+    ASSERT_EQ(mrtile("build -q " + std::string(MRTILE_SHARED_DATA) + "/bun_zipper.ply -o " + bunny, dir).code, 0);
+    const Result b = mrtile("mesh " + bunny + " -o " + (dir / "b.ply").string() + " --triangles 500 --stats-json " +
+                                (dir / "b.json").string(),
+                            dir);
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_NE(b.out.find("note: the largest tile budget that fits meshed in 2 pieces that the sample joins; meshed a "
+                         "budget of"),
+              std::string::npos)
+        << b.out;
+    const auto bs = nlohmann::json::parse(slurp(dir / "b.json"));
+    EXPECT_EQ(bs["components"].get<std::size_t>(), 1u);
+    EXPECT_LE(bs["faces"].get<std::size_t>(), 500u);
 }
 
 // `--fit-rounds`: 0 interpolates as the paper does, the default fits; both report it, the fit is closer

@@ -653,6 +653,8 @@ TEST(Reconstruct, triangle_count_target_is_met_from_below)
         EXPECT_GT(r.cut.size(), previous_tiles);
         previous_tiles = r.cut.size();
         expect_closed(r.result.mesh, 1);
+        EXPECT_FALSE(r.smaller_budget); // whole at once: no smaller budget meshed
+        EXPECT_FALSE(r.in_pieces);
     }
     EXPECT_EQ(mesh_to_triangle_count(h, 10'000'000).cut.size(), h.leaf_count());
     EXPECT_EQ(mesh_to_triangle_count(h, 1).cut.size(), 1u); // nothing fits: the one-tile mesh
@@ -1138,6 +1140,32 @@ TEST(Reconstruct, tolerance_cuts_in_pieces_the_sample_joins_are_mended)
         EXPECT_EQ(topology_stats(r.result.mesh).components, 2u) << tolerance;
     }
     EXPECT_THROW(mesh_at_tolerance(h, 0.01, {}, 9), InvalidInput);
+}
+
+// A triangle target whose best fitting cut is in pieces (the bunny at 500 faces: 29 tiles, its ear
+// tips loose) is met by a smaller budget that is whole.
+TEST(Reconstruct, triangle_count_in_pieces_takes_a_smaller_budget)
+{
+    const Hierarchy bunny = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const TriangleCountResult r = mesh_to_triangle_count(bunny, 500);
+    ASSERT_GE(r.asked.components, 2u);
+    EXPECT_TRUE(r.smaller_budget);
+    EXPECT_FALSE(r.in_pieces);
+    const TopologyStats t = topology_stats(r.result.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_LE(t.boundary_loops, r.asked.boundary_loops);
+    EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+    EXPECT_LE(r.result.mesh.n_faces(), 500u);
+    EXPECT_GE(r.result.mesh.n_faces(), 350u); // measured 413
+    EXPECT_EQ(r.cut, cut_by_budget(bunny, r.cut.size()));
+    // The first fitting cut, meshed as it is, is the one in pieces.
+    const std::size_t largest = r.cut.size();
+    bool found_pieces = false;
+    for (std::size_t n = largest + 1; n <= largest * 100 / 79 + 1 && !found_pieces; ++n) {
+        const MeshResult m = mesh_cut(bunny, cut_by_budget(bunny, n));
+        found_pieces = m.mesh.n_faces() <= 500 && topology_stats(m.mesh).components >= 2;
+    }
+    EXPECT_TRUE(found_pieces);
 }
 
 } // namespace

@@ -688,6 +688,13 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
         if (t.result.mesh.n_faces() > cut_args.triangles)
             std::printf("note: no cut meshes to %zu triangles or fewer; this is the coarsest one found\n",
                         cut_args.triangles);
+        if (t.smaller_budget)
+            std::printf("note: the largest tile budget that fits meshed in %zu pieces that the sample joins; meshed a "
+                        "budget of %zu tiles instead%s\n",
+                        t.asked.components, t.cut.size(), t.in_pieces ? "; still in pieces there" : "");
+        else if (t.in_pieces)
+            std::printf("note: the mesh is in %zu pieces that the sample joins; no smaller budget tried joined them\n",
+                        t.asked.components);
         return write_meshed(h, t.result, mesh_args, out_args, out, also, start);
     }
     // A cut in pieces that the sample joins is meshed finer (mesh_mended): a finer cut meets the
