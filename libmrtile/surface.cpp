@@ -368,8 +368,9 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     std::size_t islands = 0, restored_islands = 0;
     std::vector<bool> restored_tiles(tiles.size(), false); // fans of islands put back (kept in step 5)
     const std::vector<bool> interior = options.fill_holes ? interior_tiles(tiles, options.interior_gap_degrees) : std::vector<bool>{};
+    FillCache fill_cache;
     auto fill = [&](FillMode mode) {
-        const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, mode);
+        const FillResult more = fill_holes(h, surface, layout, positions, projection, interior, options, mode, &fill_cache);
         filled.holes += more.holes;
         filled.crossing += more.crossing;
         filled.faces += more.faces;

@@ -863,7 +863,7 @@ private:
 // than a handle closes around, are filled then.
 FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
                       const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
-                      FillMode mode)
+                      FillMode mode, FillCache* cache)
 {
     const bool before_handles = mode == FillMode::BeforeHandles;
     const bool closing = mode == FillMode::Close;
@@ -914,7 +914,20 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             if (!closing && (loop_tiles.size() < 2 ||
                              (perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges)))))
                 continue;
-            const std::vector<Tri> patch = fill_triangulation(s, positions, loop, projection);
+            std::vector<Tri> around;
+            if (cache)
+                for (const std::uint32_t v : loop) {
+                    for (const std::uint32_t f : s.faces_at(v))
+                        around.push_back(s.faces()[f]);
+                    around.push_back({kNone, kNone, kNone}); // ends the vertex's faces
+                }
+            FillCache::Entry* known = nullptr;
+            if (cache)
+                if (const auto it = cache->by_loop.find(loop); it != cache->by_loop.end() && it->second.around == around)
+                    known = &it->second;
+            const std::vector<Tri> patch = known ? known->patch : fill_triangulation(s, positions, loop, projection);
+            if (cache && !known)
+                cache->by_loop[loop] = FillCache::Entry{std::move(around), patch};
             // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
             // point spacing wide, and a hole much wider than that (mean width 2 area / perimeter) is a
             // hole in the sample itself (the bunny's base), which stays open.

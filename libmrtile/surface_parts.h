@@ -26,6 +26,7 @@
 #include <memory>
 #include <queue>
 #include <utility>
+#include <map>
 #include <vector>
 
 namespace mrt::surface_detail {
@@ -732,8 +733,21 @@ enum class FillMode
     Close,         //!< every hole of at most SurfaceOptions::close_holes edges, the sample's own too
 };
 
+// Patches fill_triangulation made, by loop, with the faces around the loop's vertices they were made
+// among: fill_holes meets most loops again in its later passes and modes unchanged (a coarse cut's
+// 300-edge gaps cost an O(n³) triangulation each time), and a patch depends on nothing else.
+struct FillCache
+{
+    struct Entry
+    {
+        std::vector<Tri> around; // the faces at each loop vertex in the surface's order, vertex by vertex
+        std::vector<Tri> patch;
+    };
+    std::map<std::vector<std::uint32_t>, Entry> by_loop;
+};
+
 FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, const std::vector<Vec3>& positions,
                       const Projection& projection, const std::vector<bool>& interior, const SurfaceOptions& options,
-                      FillMode mode);
+                      FillMode mode, FillCache* cache = nullptr);
 
 } // namespace mrt::surface_detail
