@@ -500,7 +500,11 @@ bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
 // touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
 {
-    const auto a = face_vertices(mesh, f), b = face_vertices(mesh, g);
+    return corners_intersect(mesh, face_vertices(mesh, f), face_vertices(mesh, g));
+}
+
+bool corners_intersect(const Mesh& mesh, const std::array<Mesh::VertexHandle, 3>& a, const std::array<Mesh::VertexHandle, 3>& b)
+{
     int shared = 0;
     std::array<int, 3> in_b{-1, -1, -1}; // for each corner of f, its position in g (-1: none)
     for (int i = 0; i < 3; ++i)

@@ -100,6 +100,10 @@ std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const
 //! two faces folded onto each other. Faces without area never intersect.
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g);
 
+//! The same test for two triangles given by their corners, which need not be faces of the mesh yet (an
+//! edit judged before it is made: untangle's edge collapses).
+bool corners_intersect(const Mesh& mesh, const std::array<Mesh::VertexHandle, 3>& a, const std::array<Mesh::VertexHandle, 3>& b);
+
 //! Whether two triangles that share no corner meet at all (CGAL's exact predicates); triangles without
 //! area never do. For faces not yet in a mesh (the surface stage's hole fills).
 bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);

@@ -179,6 +179,22 @@ PointCloud box_surface(const Vec3& size, double density, double dense_face_facto
     return c;
 }
 
+PointCloud cone(std::size_t count, double radius, double height, std::uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    const double lateral = M_PI * radius * std::hypot(radius, height), base = M_PI * radius * radius;
+    PointCloud c;
+    c.positions.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const bool on_slope = uniform(rng) * (lateral + base) < lateral;
+        // Both parts' area grows with the square of the distance t from their centre: sqrt of a uniform.
+        const double t = std::sqrt(uniform(rng)), angle = 2.0 * M_PI * uniform(rng);
+        const double z = on_slope ? height * (1.0 - t) : 0.0;
+        c.positions.push_back({t * radius * std::cos(angle), t * radius * std::sin(angle), z});
+    }
+    return c;
+}
+
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed)
 {
     std::mt19937 rng(seed);

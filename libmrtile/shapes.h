@@ -30,6 +30,9 @@ PointCloud box_surface(const Vec3& size, double density, double dense_face_facto
 //! `count` uniform samples of the flat plate z = 0 over [0,1]^2 where keep(x, y) holds (holes, windows,
 //! notches: whatever keep leaves out is unsampled).
 PointCloud flat_plate(std::size_t count, const std::function<bool(double, double)>& keep, std::uint32_t seed = 9);
+//! Uniform (by area) samples on a closed cone: apex (0, 0, height), base disk of the given radius at
+//! z = 0 (a sharp rim where the slope meets the base at a steep angle, and a point at the apex).
+PointCloud cone(std::size_t count, double radius = 0.5, double height = 1.0, std::uint32_t seed = 10);
 //! Adds Gaussian noise of the given standard deviation along each axis.
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed = 7);
 //! Translates every position by `offset` (to test far-from-origin precision), keeping origin at zero.

@@ -23,9 +23,12 @@ namespace {
 
 // Repairs tried per face over all rounds.
 constexpr std::uint8_t kMaxTries = 2;
-// The work bound's floor (UntangleOptions::tests_per_face), about a twentieth of a second: a small
+// The work bound's floor (UntangleOptions::tests_per_face), about a tenth of a second: a small
 // mesh's crossings get the same chance as a large one's.
-constexpr std::size_t kMinTests = 100000;
+constexpr std::size_t kMinTests = 400000;
+
+// A face an edge collapse removed (untangle keeps the handles until its garbage collection).
+bool is_deleted(const Mesh& mesh, Mesh::FaceHandle f) { return mesh.has_face_status() && mesh.status(f).deleted(); }
 
 struct Box
 {
@@ -39,15 +42,17 @@ struct Box
     }
 };
 
-Box face_box(const Mesh& mesh, Mesh::FaceHandle f)
+Box corners_box(const Mesh& mesh, const std::array<Mesh::VertexHandle, 3>& corners)
 {
     Box b{OpenMesh::Vec3d(std::numeric_limits<double>::max()), OpenMesh::Vec3d(std::numeric_limits<double>::lowest())};
-    for (const auto v : mesh.fv_range(f)) {
+    for (const auto v : corners) {
         b.min.minimize(mesh.point(v));
         b.max.maximize(mesh.point(v));
     }
     return b;
 }
+
+Box face_box(const Mesh& mesh, Mesh::FaceHandle f) { return corners_box(mesh, face_vertices(mesh, f)); }
 
 // Faces by the grid cells their boxes overlap. Faces are added again when an edit moves them; stale
 // entries are harmless, since every candidate's current box is tested.
@@ -80,7 +85,7 @@ public:
             if (it == cells_.end())
                 return;
             for (const int f : it->second)
-                if (stamp_[static_cast<std::size_t>(f)] != round_) {
+                if (stamp_[static_cast<std::size_t>(f)] != round_ && !is_deleted(mesh_, Mesh::FaceHandle(f))) {
                     stamp_[static_cast<std::size_t>(f)] = round_;
                     if (face_box(mesh_, Mesh::FaceHandle(f)).overlaps(b))
                         out.push_back(f);
@@ -140,13 +145,16 @@ public:
                 out.push_back(p);
         std::sort(changed_.begin(), changed_.end());
         changed_.erase(std::unique(changed_.begin(), changed_.end()), changed_.end());
-        for (const auto c : changed_)
+        for (const auto c : changed_) {
+            if (is_deleted(mesh_, c))
+                continue; // collapsed away: its pairs went with it
             for (const int g : grid_.near(face_box(mesh_, c))) {
                 if (g == c.idx() || (changed[static_cast<std::size_t>(g)] && g < c.idx()))
                     continue; // itself, or a pair of two changed faces seen from the other one
                 if (faces_intersect(mesh_, c, Mesh::FaceHandle(g)))
                     out.push_back({std::min(c.idx(), g), std::max(c.idx(), g)});
             }
+        }
         changed_.clear();
         std::sort(out.begin(), out.end());
         out.erase(std::unique(out.begin(), out.end()), out.end());
@@ -157,7 +165,7 @@ public:
     void repair(Mesh::FaceHandle f, UntangleStats& stats, std::size_t budget)
     {
         // A face tried twice without success hinges on something no edit here changes: skip it.
-        if (tests_ >= budget || tries_[static_cast<std::size_t>(f.idx())] >= kMaxTries || hits({f}) == 0)
+        if (tests_ >= budget || is_deleted(mesh_, f) || tries_[static_cast<std::size_t>(f.idx())] >= kMaxTries || hits({f}) == 0)
             return; // out of budget, given up, or an earlier edit fixed it
         ++tries_[static_cast<std::size_t>(f.idx())];
         // The edges first: a flip tried and undone renumbers the face's half-edges under a circulator.
@@ -191,7 +199,22 @@ public:
                         ++stats.moves;
                         return;
                     }
+        // Last, an edge of the face collapsed either way: a tip folded over itself around one vertex
+        // (a gap face at a sharp rim, turned under its neighbours) has no position that unfolds it,
+        // but without that vertex the fold is gone.
+        std::vector<Mesh::HalfedgeHandle> halfedges;
+        for (const auto he : mesh_.fh_range(f)) {
+            halfedges.push_back(he);
+            halfedges.push_back(mesh_.opposite_halfedge_handle(he));
+        }
+        for (const auto he : halfedges)
+            if (tests_ < budget && try_collapse(he)) {
+                ++stats.collapses;
+                return;
+            }
     }
+
+    bool collapsed() const { return collapsed_; }
 
 private:
     static double grid_cell(const Mesh& mesh)
@@ -249,9 +272,9 @@ private:
     // Area above a millionth of the longest edge squared: an edit never makes a needle or a cap that
     // is nearly a segment (mesh_stats counts such faces as degenerate; their normals are noise). Far
     // stricter than vec3.h's has_area, which only tells area from rounding noise.
-    bool has_area(Mesh::FaceHandle f) const
+    bool has_area(Mesh::FaceHandle f) const { return has_area(face_vertices(mesh_, f)); }
+    bool has_area(const std::array<Mesh::VertexHandle, 3>& c) const
     {
-        const auto c = face_vertices(mesh_, f);
         const OpenMesh::Vec3d a = mesh_.point(c[0]), b = mesh_.point(c[1]), d = mesh_.point(c[2]);
         const double longest = std::max({(b - a).sqrnorm(), (d - b).sqrnorm(), (a - d).sqrnorm()});
         return OpenMesh::cross(b - a, d - a).norm() > 2e-6 * longest;
@@ -377,6 +400,84 @@ private:
         return false;
     }
 
+    // Collapses the half-edge's start into its end (OpenMesh's collapse, where is_collapse_ok allows
+    // it: the topology stays) when the faces around the start, with the end in its place, cross fewer
+    // faces than they did, within the turn and area limits of the other edits. Judged on the corners
+    // before the collapse, which cannot be undone. Border vertices stay.
+    bool try_collapse(Mesh::HalfedgeHandle he)
+    {
+        const auto from = mesh_.from_vertex_handle(he), to = mesh_.to_vertex_handle(he);
+        if (mesh_.is_boundary(from) || mesh_.is_boundary(mesh_.edge_handle(he)))
+            return false;
+        if (!mesh_.has_face_status()) { // statuses mark what a collapse removes
+            mesh_.request_vertex_status();
+            mesh_.request_edge_status();
+            mesh_.request_halfedge_status();
+            mesh_.request_face_status();
+        }
+        if (!mesh_.is_collapse_ok(he))
+            return false;
+        const auto gone0 = mesh_.face_handle(he), gone1 = mesh_.face_handle(mesh_.opposite_halfedge_handle(he));
+        std::vector<Mesh::FaceHandle> around;
+        for (const auto f : mesh_.vf_range(from))
+            around.push_back(f);
+        std::sort(around.begin(), around.end());
+        std::vector<Mesh::FaceHandle> kept;
+        std::vector<std::array<Mesh::VertexHandle, 3>> corners;
+        for (const auto f : around) {
+            if (f == gone0 || f == gone1)
+                continue;
+            auto c = face_vertices(mesh_, f);
+            for (auto& v : c)
+                if (v == from)
+                    v = to;
+            if (!has_area(c))
+                return false;
+            const OpenMesh::Vec3d n = OpenMesh::cross(mesh_.point(c[1]) - mesh_.point(c[0]), mesh_.point(c[2]) - mesh_.point(c[0])).normalized();
+            if (OpenMesh::dot(n, mesh_.calc_face_normal(f)) <= min_cos_ || !faces_up(n))
+                return false;
+            kept.push_back(f);
+            corners.push_back(c);
+        }
+        const std::size_t before = hits(around);
+        if (before == 0)
+            return false;
+        std::size_t after = 0;
+        for (std::size_t i = 0; i < corners.size() && after < before; ++i) {
+            for (const int g : grid_.near(corners_box(mesh_, corners[i]))) {
+                if (std::binary_search(around.begin(), around.end(), Mesh::FaceHandle(g)))
+                    continue; // replaced by `corners`, or removed
+                ++tests_;
+                if (corners_intersect(mesh_, corners[i], face_vertices(mesh_, Mesh::FaceHandle(g))))
+                    ++after;
+            }
+            for (std::size_t j = 0; j < i; ++j) {
+                ++tests_;
+                if (corners_intersect(mesh_, corners[i], corners[j]))
+                    ++after;
+            }
+        }
+        if (after >= before)
+            return false;
+        OpenMesh::VPropHandleT<int> cluster;
+        const bool clusters = mesh_.get_property_handle(cluster, kVertexCluster);
+        mesh_.collapse(he);
+        for (const auto f : kept) {
+            // A fan face that now has a corner of another tile is a gap face, as after a flip.
+            if (clusters && tile_.is_valid() && mesh_.property(tile_, f) >= 0 && mesh_.property(cluster, to) != mesh_.property(tile_, f)) {
+                mesh_.property(tile_, f) = -1;
+                if (gap_.is_valid())
+                    mesh_.property(gap_, f) = true;
+            }
+            grid_.insert(f);
+            changed_.push_back(f);
+        }
+        changed_.push_back(gone0);
+        changed_.push_back(gone1);
+        collapsed_ = true;
+        return true;
+    }
+
     Mesh& mesh_;
     const UntangleOptions& options_;
     double min_cos_;
@@ -384,6 +485,7 @@ private:
     OpenMesh::FPropHandleT<int> tile_;
     OpenMesh::FPropHandleT<bool> gap_;
     std::size_t tests_ = 0;
+    bool collapsed_ = false;
     std::vector<Mesh::FaceHandle> changed_; // faces an edit changed since the last update_pairs
     std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
 };
@@ -468,18 +570,22 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<s
         }
         std::sort(faces.begin(), faces.end());
         faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-        const std::size_t edits = stats.flips + stats.moves;
+        const std::size_t edits = stats.flips + stats.moves + stats.collapses;
         for (const int f : faces)
             untangler.repair(Mesh::FaceHandle(f), stats, budget);
         pairs = untangler.update_pairs(pairs);
-        if (stats.flips + stats.moves == edits || untangler.tests() >= budget)
+        if (stats.flips + stats.moves + stats.collapses == edits || untangler.tests() >= budget)
             break; // nothing more this way, or out of budget
     }
     stats.tests = untangler.tests();
+    // Face indices stay as they are up to here (remove_border_folds works on them), then the collapsed
+    // faces and vertices go.
     if (options.remove_border_folds && !pairs.empty())
         stats.removed_faces = remove_border_folds(mesh, pairs);
+    if (untangler.collapsed())
+        mesh.garbage_collection();
     stats.pairs_after = pairs.size();
-    if (stats.flips + stats.moves + stats.removed_faces > 0)
+    if (stats.flips + stats.moves + stats.collapses + stats.removed_faces > 0)
         mesh.update_normals();
     return stats;
 }

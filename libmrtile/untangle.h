@@ -6,13 +6,14 @@
 //! face chosen on one side can pass through a fan on the other: a few faces in ten thousand, invisible
 //! in a viewer, fatal for a 3D printer, a boolean or a volume. Each face of an intersecting pair is
 //! offered, in turn, a flip of each of its edges, then moves of its corners and then of their
-//! neighbours (toward the centre of their neighbours, or across the surface); the first edit that
+//! neighbours (toward the centre of their neighbours, or across the surface), then a collapse of
+//! each of its edges either way (OpenMesh's is_collapse_ok: no change of topology); the first edit that
 //! lowers the number of intersections of the faces it changes, without turning a face by more than
 //! max_turn_degrees or moving a vertex by more than `max_move` of its shortest edge, is kept. Topology
-//! does not change (flips are OpenMesh's is_flip_ok ones), except that a gap face on the border still
+//! does not change (flips and collapses are OpenMesh's is_flip_ok and is_collapse_ok ones), except that a gap face on the border still
 //! overlapping another face at the end is removed (UntangleOptions::remove_border_folds). A tip folded
-//! over itself around one vertex can stay (no flip or move unfolds it): pairs_after says how many pairs
-//! are left.
+//! over itself around one vertex, which no flip or move unfolds, is collapsed; what is left
+//! (out of budget or tries) pairs_after counts.
 
 #include "libmrtile/mesh.h"
 
@@ -31,7 +32,7 @@ struct UntangleOptions
     //! Largest turn of a face's normal an edit may cause (a flip: of either new face against the old pair).
     double max_turn_degrees = 60.0;
     //! Work bound: at most this many triangle-pair tests per face of the mesh, in all, but at least
-    //! 100,000 (and each face is tried at most twice). A clean surface's few crossings take far less (the bunny: under 2 per face);
+    //! 400,000 (and each face is tried at most twice). A clean surface's few crossings take far less (the bunny: under 2 per face);
     //! a crumpled one (noise meshed below its floor, thousands of crossings) stops here instead of
     //! taking a minute.
     double tests_per_face = 10.0;
@@ -51,6 +52,7 @@ struct UntangleStats
     std::size_t pairs_after = 0;  //!< left at the end (0 on success)
     std::size_t flips = 0;
     std::size_t moves = 0;
+    std::size_t collapses = 0; //!< edges collapsed (a fold around one vertex), the vertex removed
     std::size_t tests = 0; //!< triangle pairs tested (see UntangleOptions::tests_per_face)
     std::size_t removed_faces = 0; //!< border gap faces removed (UntangleOptions::remove_border_folds)
 };

@@ -148,6 +148,50 @@ TEST(Untangle, real_scans_lose_their_self_intersections)
     }
 }
 
+// A closed cone's rim, where the slope meets the base at 63 degrees: gap faces there fold under
+// their neighbours around one vertex, and no flip or move unfolds them; collapsing an edge of the fold
+// does. The cone keeps its genus and gains no loop, the vertex and tile ids follow the garbage collection, and
+// pairs_after counts what is left.
+TEST(Untangle, a_fold_at_a_cone_rim_is_collapsed)
+{
+    const Hierarchy h = build_hierarchy(shapes::cone(60000));
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    MeshOptions off;
+    off.untangle.max_rounds = 0;
+    const MeshResult tangled = mesh_cut(h, cut, off);
+    MeshResult r = mesh_cut(h, cut);
+    const std::size_t pairs = self_intersecting_faces(tangled.mesh).size();
+    ASSERT_GT(pairs, 0u);
+    EXPECT_GT(r.untangle.collapses, 0u);
+    EXPECT_LT(r.untangle.pairs_after, pairs / 4);
+    EXPECT_EQ(self_intersecting_faces(r.mesh).size(), r.untangle.pairs_after);
+    // Each collapse removes one vertex (and its two faces); nothing else is deleted but border folds.
+    EXPECT_EQ(r.mesh.n_vertices(), tangled.mesh.n_vertices() - r.untangle.collapses);
+    EXPECT_EQ(r.mesh.n_faces(), tangled.mesh.n_faces() - 2 * r.untangle.collapses - r.untangle.removed_faces);
+    const TopologyStats a = topology_stats(r.mesh), b = topology_stats(tangled.mesh);
+    EXPECT_EQ(a.genus, b.genus);
+    EXPECT_EQ(a.nonmanifold_edges + a.nonmanifold_vertices, 0u);
+    EXPECT_LE(a.boundary_loops, b.boundary_loops + r.untangle.removed_faces);
+    // The ids live on: every vertex has a cluster of the cut, and the faces without a corner of their
+    // own tile (a rim vertex merged across a gap names one of its tiles) are no more than before.
+    auto misnamed = [](Mesh& mesh) {
+        auto cluster = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(mesh, kVertexCluster);
+        auto tile = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
+        std::size_t count = 0;
+        for (const auto v : mesh.vertices())
+            EXPECT_GE(cluster[v], 0) << v.idx();
+        for (const auto f : mesh.faces()) {
+            bool own = tile[f] < 0;
+            for (const auto v : mesh.fv_range(f))
+                own = own || cluster[v] == tile[f];
+            count += own ? 0 : 1;
+        }
+        return count;
+    };
+    MeshResult tangled_copy = tangled;
+    EXPECT_LE(misnamed(r.mesh), misnamed(tangled_copy.mesh));
+}
+
 // A noisy sphere whose cut at 0.0005 lies below its noise floor: meshed without the pass, a crumpled
 // surface with a hundred or more crossings, for the bookkeeping tests below.
 Hierarchy noisy_sphere()
