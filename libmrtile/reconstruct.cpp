@@ -10,6 +10,7 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/pca.h"
 #include "libmrtile/union_find.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
@@ -673,6 +674,41 @@ double e_rms(const Hierarchy& h, const Cut& cut)
     return diameter > 0 && count > 0 ? sum / (count * diameter) : 0.0;
 }
 
+namespace {
+
+// Whether most of a tile's points have neighbours along a line only. A whole tile of an arc of a
+// curve is planar and spreads both ways (a helix's leaves are arcs a tenth as wide as long), so the
+// test is local: the kNeighbours nearest points of kSamples points of the tile, among at most
+// kCandidates of its points (both taken at even strides: deterministic, and bounded per tile).
+bool is_line_tile(const Hierarchy& h, const Node& node)
+{
+    constexpr std::size_t kNeighbours = 8, kSamples = 16, kCandidates = 4096;
+    const std::size_t n = node.end - node.begin;
+    if (n <= kNeighbours)
+        return false;
+    const Vec3* points = h.cloud.positions.data() + node.begin;
+    const std::size_t stride = (n + kCandidates - 1) / kCandidates;
+    std::size_t lines = 0;
+    std::vector<std::pair<double, std::size_t>> near;
+    for (std::size_t s = 0; s < kSamples; ++s) {
+        const Vec3& p = points[s * n / kSamples];
+        near.clear();
+        for (std::size_t i = 0; i < n; i += stride)
+            near.push_back({squared_norm(points[i] - p), i});
+        const std::size_t k = std::min(kNeighbours + 1, near.size()); // the sample itself among them
+        std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(k), near.end());
+        Moments m;
+        for (std::size_t j = 0; j < k; ++j)
+            m.add(points[near[j].second]);
+        const auto values = eigen_decomposition(m).values;
+        if (values[2] > 0.0 && values[1] < kLineWidthRatio * kLineWidthRatio * values[2])
+            ++lines;
+    }
+    return 2 * lines > kSamples;
+}
+
+} // namespace
+
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)
 {
     QualityReport q;
@@ -692,6 +728,13 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();
     q.caps = count_caps(mesh);
+    q.points = 0;
+    for (const std::int32_t id : cut) {
+        const Node& node = h.nodes[static_cast<std::size_t>(id)];
+        q.points += node.end - node.begin;
+        if (is_line_tile(h, node))
+            q.line_points += node.end - node.begin;
+    }
     return q;
 }
 

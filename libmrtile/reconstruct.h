@@ -161,7 +161,16 @@ struct QualityReport
     std::size_t self_intersections = 0;
     //! Faces with an angle above 150 degrees (count_caps): their normals are noise, which shading shows.
     std::size_t caps = 0;
+    //! Points in tiles of the cut that lie along curves, not over surface: most of the tile's points
+    //! see their 8 nearest neighbours spread along a line (width, the root of the middle eigenvalue,
+    //! under kLineWidthRatio of length). Such tiles mesh as ribbons along the curve the points
+    //! follow (a wire, single scan lines): no cut meshes a surface there.
+    std::size_t line_points = 0;
+    std::size_t points = 0; //!< in the tiles of the cut (every point of the model: a cut covers them all)
 };
+
+//! See QualityReport::line_points.
+inline constexpr double kLineWidthRatio = 0.1;
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);
 

@@ -233,6 +233,34 @@ TEST(Cli, outputs_are_checked_before_any_work)
     EXPECT_NE(r.out.find("--quantize 2 snaps positions to steps of"), std::string::npos) << r.out;
 }
 
+// Points along a curve (a helix: 5,000 points on a wire) are noted: the mesh is ribbons along it; the
+// sphere above it gets no such note. Both counts are in the JSON.
+TEST(Cli, points_along_a_curve_are_noted)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string helix, sphere;
+    for (int i = 0; i < 5000; ++i) {
+        const double t = 10.0 * M_PI * i / 5000.0;
+        helix += std::to_string(std::cos(t)) + " " + std::to_string(std::sin(t)) + " " + std::to_string(0.1 * t) + "\n";
+    }
+    for (const auto& [x, y, z] : sphere_points(3000))
+        sphere += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+    write_text(dir / "helix.xyz", helix);
+    write_text(dir / "sphere.xyz", sphere);
+    Result r = mrtile("reconstruct " + (dir / "helix.xyz").string() + " -o " + (dir / "h.ply").string() + " --stats-json " +
+                          (dir / "h.json").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("of the points lie in tiles that are lines, not patches"), std::string::npos) << r.out;
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir / "h.json"));
+    EXPECT_EQ(j["points"].get<std::size_t>(), 5000u);
+    EXPECT_GE(10 * j["line_points"].get<std::size_t>(), 9 * 5000u);
+    r = mrtile("reconstruct " + (dir / "sphere.xyz").string() + " -o " + (dir / "s.ply").string() + " --stats-json " +
+                   (dir / "s.json").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.find("lines, not patches"), std::string::npos) << r.out;
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "s.json"))["line_points"].get<std::size_t>(), 0u);
+}
+
 // Points the mesh leaves out far from it (two strays 1,000 radii out) are counted in the JSON and noted:
 // they set the maximum distance and widen the diagonal the fractions are of.
 TEST(Cli, far_points_left_out_are_noted)

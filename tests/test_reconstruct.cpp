@@ -1108,6 +1108,34 @@ TEST(Reconstruct, e_rms_matches_brute_force)
     EXPECT_THROW(mesh_cut(h, Cut{1, 2}), InvalidInput);
 }
 
+// Points on a curve (a helix) mesh as ribbons: measure_quality counts the points of tiles that are
+// lines, nearly all of the helix's (its tiles are arcs, planar and a tenth as wide as long), and none
+// of a sphere's, a torus's or the bunny's, whatever the cut.
+TEST(Reconstruct, points_along_a_curve_are_counted_as_lines)
+{
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> turn(0.0, 10.0 * M_PI);
+    PointCloud helix;
+    for (int i = 0; i < 20000; ++i) {
+        const double t = turn(rng);
+        helix.positions.push_back({std::cos(t), std::sin(t), 0.1 * t});
+    }
+    const auto check = [](const Hierarchy& h, double tolerance) {
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        const QualityReport q = measure_quality(h, r.cut, r.mesh);
+        EXPECT_EQ(q.points, h.cloud.size());
+        return static_cast<double>(q.line_points) / static_cast<double>(q.points);
+    };
+    const Hierarchy curve = build_hierarchy(helix);
+    for (const double tolerance : {0.05, 0.005})
+        EXPECT_GT(check(curve, tolerance), 0.9) << tolerance;
+    for (const double tolerance : {0.05, 0.001}) {
+        EXPECT_EQ(check(build_hierarchy(shapes::sphere(20000)), tolerance), 0.0);
+        EXPECT_EQ(check(build_hierarchy(shapes::torus(20000)), tolerance), 0.0);
+        EXPECT_EQ(check(build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply")), tolerance), 0.0);
+    }
+}
+
 // A coarse tolerance cut of the bunny meshes with its ear tips loose; mesh_at_tolerance meshes a finer
 // tolerance cut instead, in one piece (it meets the tolerance too). Separate objects are not pieces the
 // sample joins: two spheres apart are meshed at the tolerance asked, without a finer meshing.

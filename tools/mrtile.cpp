@@ -577,6 +577,8 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["mesh_to_points_mean"] = q->mesh_to_points.mean;
         j["mesh_to_points_max"] = q->mesh_to_points.max;
         j["far_points"] = q->point_to_mesh.far;
+        j["line_points"] = q->line_points;
+        j["points"] = q->points;
         j["diagonal"] = q->point_to_mesh.diagonal; // model units: what the distance fractions are of
         j["mesh_diagonal"] = mesh_extent(r.mesh).norm();
     } else {
@@ -590,7 +592,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
         j["consistently_oriented"] = t.consistently_oriented;
         j["caps"] = count_caps(r.mesh); // cheap, like the topology
         for (const char* key : {"e_rms", "mean_distance", "max_distance", "median_distance", "p99_distance",
-                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections", "far_points", "diagonal",
+                                "mesh_to_points_mean", "mesh_to_points_max", "self_intersections", "far_points", "line_points", "points", "diagonal",
                                 "mesh_diagonal"})
             j[key] = nullptr;
     }
@@ -631,6 +633,15 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
                         "tile's error), within its extent: sampled surface the mesh leaves out (a hole over sparse "
                         "points, or a piece too small to mesh)\n",
                         j["far_points"].get<std::size_t>(), 100.0 * kFarFraction);
+    }
+    // Points along a curve (a helix of 20,000 points made 49 ribbons without a word; QA round 6).
+    if (j.contains("line_points") && j["line_points"].is_number() && j["points"].is_number()) {
+        const auto lines = j["line_points"].get<std::size_t>(), points = j["points"].get<std::size_t>();
+        if (points > 0 && lines * 10 >= points)
+            std::printf("note: %.0f%% of the points lie in tiles that are lines, not patches (under %.0f%% as wide as "
+                        "long): the input follows curves there (a wire, single scan lines), and the mesh is ribbons "
+                        "along them\n",
+                        100.0 * static_cast<double>(lines) / static_cast<double>(points), 100.0 * kLineWidthRatio);
     }
 }
 
