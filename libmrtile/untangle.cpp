@@ -215,6 +215,7 @@ public:
     }
 
     bool collapsed() const { return collapsed_; }
+    bool requested_status() const { return requested_status_; }
 
 private:
     static double grid_cell(const Mesh& mesh)
@@ -409,11 +410,12 @@ private:
         const auto from = mesh_.from_vertex_handle(he), to = mesh_.to_vertex_handle(he);
         if (mesh_.is_boundary(from) || mesh_.is_boundary(mesh_.edge_handle(he)))
             return false;
-        if (!mesh_.has_face_status()) { // statuses mark what a collapse removes
+        if (!requested_status_) { // statuses mark what a collapse removes (OpenMesh counts requests)
             mesh_.request_vertex_status();
             mesh_.request_edge_status();
             mesh_.request_halfedge_status();
             mesh_.request_face_status();
+            requested_status_ = true;
         }
         if (!mesh_.is_collapse_ok(he))
             return false;
@@ -486,6 +488,7 @@ private:
     OpenMesh::FPropHandleT<bool> gap_;
     std::size_t tests_ = 0;
     bool collapsed_ = false;
+    bool requested_status_ = false; // by try_collapse: released again at the end
     std::vector<Mesh::FaceHandle> changed_; // faces an edit changed since the last update_pairs
     std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
 };
@@ -584,6 +587,12 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<s
         stats.removed_faces = remove_border_folds(mesh, pairs);
     if (untangler.collapsed())
         mesh.garbage_collection();
+    if (untangler.requested_status()) { // the mesh leaves with the status bits it came with
+        mesh.release_vertex_status();
+        mesh.release_edge_status();
+        mesh.release_halfedge_status();
+        mesh.release_face_status();
+    }
     stats.pairs_after = pairs.size();
     if (stats.flips + stats.moves + stats.collapses + stats.removed_faces > 0)
         mesh.update_normals();
