@@ -676,15 +676,18 @@ double e_rms(const Hierarchy& h, const Cut& cut)
 
 namespace {
 
-// Whether most of a tile's points have neighbours along a line only. A whole tile of an arc of a
-// curve is planar and spreads both ways (a helix's leaves are arcs a tenth as wide as long), so the
-// test is local: the kNeighbours nearest points of kSamples points of the tile, among at most
+// Whether a tile is long and thin and most of its points have neighbours along a line only. A whole
+// tile of an arc of a curve is planar and spreads both ways a little, so the main test is local: the kNeighbours nearest points of kSamples points of the tile, among at most
 // kCandidates of its points (both taken at even strides: deterministic, and bounded per tile).
 bool is_line_tile(const Hierarchy& h, const Node& node)
 {
     constexpr std::size_t kNeighbours = 8, kSamples = 16, kCandidates = 4096;
     const std::size_t n = node.end - node.begin;
-    if (n <= kNeighbours)
+    // An arc of a curve is long and thin as a whole too (a helix's: a tenth as wide as long); a patch
+    // of surface sampled in scan lines, each point's neighbours along its line, is not.
+    constexpr double kMaxTileWidthRatio = 0.3;
+    const auto& spread = node.frame.values;
+    if (n <= kNeighbours || !(spread[1] < kMaxTileWidthRatio * kMaxTileWidthRatio * spread[2]))
         return false;
     const Vec3* points = h.cloud.positions.data() + node.begin;
     const std::size_t stride = (n + kCandidates - 1) / kCandidates;
@@ -728,11 +731,26 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();
     q.caps = count_caps(mesh);
+    // Vertices of each tile in the mesh, and how many of them on its border. A line tile joined to
+    // its neighbours (a sphere sampled as latitude rings: every tile a stretch of one ring) is inside
+    // the surface; one of a ribbon, or left out, is not.
+    std::unordered_map<int, std::pair<std::size_t, std::size_t>> tile_vertices; // tile -> (all, on the border)
+    OpenMesh::VPropHandleT<int> cluster;
+    if (mesh.get_property_handle(cluster, kVertexCluster))
+        for (const auto v : mesh.vertices()) {
+            auto& [all, border] = tile_vertices[mesh.property(cluster, v)];
+            ++all;
+            border += mesh.is_boundary(v) ? 1 : 0;
+        }
     q.points = 0;
     for (const std::int32_t id : cut) {
         const Node& node = h.nodes[static_cast<std::size_t>(id)];
         q.points += node.end - node.begin;
-        if (is_line_tile(h, node))
+        const auto found = tile_vertices.find(id);
+        // A tile without a vertex can be one the surface passes over (a stretch of scan line between
+        // its neighbours' faces): not counted.
+        const bool apart = found != tile_vertices.end() && 4 * found->second.second >= 3 * found->second.first;
+        if (apart && is_line_tile(h, node))
             q.line_points += node.end - node.begin;
     }
     return q;

@@ -161,10 +161,12 @@ struct QualityReport
     std::size_t self_intersections = 0;
     //! Faces with an angle above 150 degrees (count_caps): their normals are noise, which shading shows.
     std::size_t caps = 0;
-    //! Points in tiles of the cut that lie along curves, not over surface: most of the tile's points
-    //! see their 8 nearest neighbours spread along a line (width, the root of the middle eigenvalue,
-    //! under kLineWidthRatio of length). Such tiles mesh as ribbons along the curve the points
-    //! follow (a wire, single scan lines): no cut meshes a surface there.
+    //! Points in tiles of the cut that lie along curves, not over surface, and that the mesh does not
+    //! join into one: most of the tile's points see their 8 nearest neighbours spread along a line
+    //! (width, the root of the middle eigenvalue, under kLineWidthRatio of length), and three quarters
+    //! or more of the tile's vertices in the mesh lie on its border. Such tiles are ribbons along the
+    //! curve the points follow (a wire, a single scan line). Stretches of scan lines joined side by
+    //! side (a sphere sampled as latitude rings) are surface and do not count.
     std::size_t line_points = 0;
     std::size_t points = 0; //!< in the tiles of the cut (every point of the model: a cut covers them all)
 };
