@@ -677,8 +677,9 @@ double e_rms(const Hierarchy& h, const Cut& cut)
 namespace {
 
 // Whether a tile is long and thin and most of its points have neighbours along a line only. A whole
-// tile of an arc of a curve is planar and spreads both ways a little, so the main test is local: the kNeighbours nearest points of kSamples points of the tile, among at most
-// kCandidates of its points (both taken at even strides: deterministic, and bounded per tile).
+// tile of an arc of a curve is planar and spreads both ways a little, so the main test is local: the
+// kNeighbours nearest points of kSamples points of the tile, among at most kCandidates of its points
+// (both taken at even strides: deterministic, and bounded per tile).
 bool is_line_tile(const Hierarchy& h, const Node& node)
 {
     constexpr std::size_t kNeighbours = 8, kSamples = 16, kCandidates = 4096;
@@ -742,7 +743,6 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
             ++all;
             border += mesh.is_boundary(v) ? 1 : 0;
         }
-    q.points = 0;
     for (const std::int32_t id : cut) {
         const Node& node = h.nodes[static_cast<std::size_t>(id)];
         q.points += node.end - node.begin;

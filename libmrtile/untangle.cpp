@@ -214,7 +214,6 @@ public:
             }
     }
 
-    bool collapsed() const { return collapsed_; }
     bool requested_status() const { return requested_status_; }
 
 private:
@@ -476,7 +475,6 @@ private:
         }
         changed_.push_back(gone0);
         changed_.push_back(gone1);
-        collapsed_ = true;
         return true;
     }
 
@@ -487,7 +485,6 @@ private:
     OpenMesh::FPropHandleT<int> tile_;
     OpenMesh::FPropHandleT<bool> gap_;
     std::size_t tests_ = 0;
-    bool collapsed_ = false;
     bool requested_status_ = false; // by try_collapse: released again at the end
     std::vector<Mesh::FaceHandle> changed_; // faces an edit changed since the last update_pairs
     std::vector<std::uint8_t> tries_ = std::vector<std::uint8_t>(mesh_.n_faces(), 0);
@@ -585,7 +582,7 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<s
     // faces and vertices go.
     if (options.remove_border_folds && !pairs.empty())
         stats.removed_faces = remove_border_folds(mesh, pairs);
-    if (untangler.collapsed())
+    if (stats.collapses > 0)
         mesh.garbage_collection();
     if (untangler.requested_status()) { // the mesh leaves with the status bits it came with
         mesh.release_vertex_status();
