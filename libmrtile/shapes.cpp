@@ -3,6 +3,7 @@
 // transforms, so results are identical on every standard library.
 #include "libmrtile/shapes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -191,6 +192,33 @@ PointCloud cone(std::size_t count, double radius, double height, std::uint32_t s
         const double t = std::sqrt(uniform(rng)), angle = 2.0 * M_PI * uniform(rng);
         const double z = on_slope ? height * (1.0 - t) : 0.0;
         c.positions.push_back({t * radius * std::cos(angle), t * radius * std::sin(angle), z});
+    }
+    return c;
+}
+
+PointCloud mesh_surface(const std::vector<Vec3>& vertices, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                        std::size_t count, std::uint32_t seed)
+{
+    // A triangle is picked with probability in proportion to its area (binary search in the running
+    // sums), then a point in it by the square-root map of two uniforms.
+    std::vector<double> running;
+    double total = 0.0;
+    for (const auto& t : triangles) {
+        total += 0.5 * norm(cross(vertices.at(t[1]) - vertices.at(t[0]), vertices.at(t[2]) - vertices.at(t[0])));
+        running.push_back(total);
+    }
+    std::mt19937 rng(seed);
+    PointCloud c;
+    if (!(total > 0.0))
+        return c;
+    c.positions.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const double pick = uniform(rng) * total;
+        const std::size_t k = std::min<std::size_t>(
+            static_cast<std::size_t>(std::upper_bound(running.begin(), running.end(), pick) - running.begin()), triangles.size() - 1);
+        const double r = std::sqrt(uniform(rng)), s = uniform(rng);
+        const Vec3 &a = vertices[triangles[k][0]], &b = vertices[triangles[k][1]], &d = vertices[triangles[k][2]];
+        c.positions.push_back(a * (1.0 - r) + b * (r * (1.0 - s)) + d * (r * s));
     }
     return c;
 }

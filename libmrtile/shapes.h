@@ -3,8 +3,10 @@
 // torus, a genus-3 solid, height fields). Used by the demo, the tests and the benchmarks.
 #include "libmrtile/point_cloud.h"
 
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace mrt::shapes {
 
@@ -33,6 +35,10 @@ PointCloud flat_plate(std::size_t count, const std::function<bool(double, double
 //! Uniform (by area) samples on a closed cone: apex (0, 0, height), base disk of the given radius at
 //! z = 0 (a sharp rim where the slope meets the base at a steep angle, and a point at the apex).
 PointCloud cone(std::size_t count, double radius = 0.5, double height = 1.0, std::uint32_t seed = 10);
+//! Uniform (by area) samples on the surface of a triangle mesh (corners into `vertices`): polyhedra
+//! with edges of any angle, a solid with a hole, whatever a test needs whose right answer is its mesh.
+PointCloud mesh_surface(const std::vector<Vec3>& vertices, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                        std::size_t count, std::uint32_t seed = 11);
 //! Adds Gaussian noise of the given standard deviation along each axis.
 void add_noise(PointCloud& cloud, double sigma, std::uint32_t seed = 7);
 //! Translates every position by `offset` (to test far-from-origin precision), keeping origin at zero.
