@@ -145,12 +145,43 @@ std::vector<Vec3> move_directions(const Mesh& mesh, bool vertical, const Vec3& a
     return d;
 }
 
+// The points whose closest face is one face: a stretch of PointsByFace::ids.
+struct IdRange
+{
+    const std::uint32_t* first = nullptr;
+    const std::uint32_t* last = nullptr;
+    const std::uint32_t* begin() const { return first; }
+    const std::uint32_t* end() const { return last; }
+    std::size_t size() const { return static_cast<std::size_t>(last - first); }
+    bool empty() const { return first == last; }
+};
+
+// The points on each face, in increasing order, as compressed rows (one allocation, not one per face:
+// the fit asks for them every round).
+struct PointsByFace
+{
+    std::vector<std::size_t> start; // face f: ids[start[f] .. start[f + 1]]
+    std::vector<std::uint32_t> ids;
+
+    PointsByFace(std::size_t faces, const std::vector<ClosestPoint>& closest) : start(faces + 1, 0), ids(closest.size())
+    {
+        for (const ClosestPoint& c : closest)
+            ++start[static_cast<std::size_t>(c.face) + 1];
+        for (std::size_t f = 0; f < faces; ++f)
+            start[f + 1] += start[f];
+        std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+        for (std::size_t i = 0; i < closest.size(); ++i)
+            ids[fill[static_cast<std::size_t>(closest[i].face)]++] = static_cast<std::uint32_t>(i);
+    }
+    IdRange on(std::size_t f) const { return {ids.data() + start[f], ids.data() + start[f + 1]}; }
+};
+
 // Sum over the points of both lists of the squared distance to the nearer of two triangles.
-double squared_error(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids0,
-                     const std::vector<std::uint32_t>& ids1, const std::array<Vec3, 3>& t0, const std::array<Vec3, 3>& t1)
+double squared_error(const std::vector<Vec3>& points, const IdRange& ids0, const IdRange& ids1,
+                     const std::array<Vec3, 3>& t0, const std::array<Vec3, 3>& t1)
 {
     double sum = 0.0;
-    for (const std::vector<std::uint32_t>* ids : {&ids0, &ids1})
+    for (const IdRange* ids : {&ids0, &ids1})
         for (std::uint32_t i : *ids) {
             const Vec3& p = points[i];
             sum += std::min(squared_distance(p, closest_point_on_triangle(p, t0[0], t0[1], t0[2])),
@@ -172,9 +203,7 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
     OpenMesh::FPropHandleT<int> tile;
     OpenMesh::FPropHandleT<bool> gap;
     const bool has_tiles = mesh.get_property_handle(tile, kFaceTile) && mesh.get_property_handle(gap, kFaceGap);
-    std::vector<std::vector<std::uint32_t>> on_face(mesh.n_faces());
-    for (std::size_t i = 0; i < closest.size(); ++i)
-        on_face[static_cast<std::size_t>(closest[i].face)].push_back(static_cast<std::uint32_t>(i));
+    const PointsByFace on_face(mesh.n_faces(), closest);
     std::vector<bool> done(mesh.n_faces(), false);
     const double min_cos = 0.5;
     std::size_t flips = 0;
@@ -185,8 +214,8 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
         const auto f0 = mesh.face_handle(h0), f1 = mesh.face_handle(h1);
         if (done[static_cast<std::size_t>(f0.idx())] || done[static_cast<std::size_t>(f1.idx())])
             continue;
-        const std::vector<std::uint32_t>& ids0 = on_face[static_cast<std::size_t>(f0.idx())];
-        const std::vector<std::uint32_t>& ids1 = on_face[static_cast<std::size_t>(f1.idx())];
+        const IdRange ids0 = on_face.on(static_cast<std::size_t>(f0.idx()));
+        const IdRange ids1 = on_face.on(static_cast<std::size_t>(f1.idx()));
         if (ids0.empty() && ids1.empty())
             continue;
         // h0 = a -> b in f0 = (a, b, c); h1 = b -> a in f1 = (b, a, d); flipped: (c, a, d) and (d, b, c).
@@ -210,8 +239,9 @@ std::size_t flip_edges(Mesh& mesh, const std::vector<Vec3>& points, const std::v
             continue; // a height field stays a graph
         // No flip makes a cap (a face with an angle near 180 degrees) that was not there: its normal
         // is noise, and a cap fits a ridge of points only as a crease that shading shows.
-        if (std::max(largest_angle(c, a, d), largest_angle(d, b, c)) >
-            std::max({max_angle, largest_angle(a, b, c), largest_angle(b, a, d)}))
+        // (The old faces' angles matter only when the new ones pass max_angle: most flips stop there.)
+        const double new_angle = std::max(largest_angle(c, a, d), largest_angle(d, b, c));
+        if (new_angle > max_angle && new_angle > std::max(largest_angle(a, b, c), largest_angle(b, a, d)))
             continue;
         const double before = squared_error(points, ids0, ids1, old0, old1);
         const double after = squared_error(points, ids0, ids1, new0, new1);
@@ -251,9 +281,12 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
             Mesh::FaceHandle best(previous[i].face);
             Vec3 at = closest_on(best);
             double d = squared_distance(p, at);
+            Mesh::FaceHandle came_from; // the face of the step before: farther than `best`, not asked again
             for (int step = 0; step < kMaxSteps; ++step) {
                 Mesh::FaceHandle next = best;
                 for (const auto g : mesh.ff_range(best)) {
+                    if (g == came_from)
+                        continue;
                     const Vec3 q = closest_on(g);
                     const double e = squared_distance(p, q);
                     if (e < d) {
@@ -264,6 +297,7 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
                 }
                 if (next == best)
                     break;
+                came_from = best;
                 best = next;
             }
             out[i] = {best.idx(), at};
