@@ -432,6 +432,22 @@ TopologyStats topology_stats(const std::vector<Vec3>& positions, const std::vect
 
 namespace {
 
+// The boxes of a vector of triangles by iterator (AABB_traits' BboxMap: a readable property map).
+struct TriangleBoxes
+{
+    using key_type = std::vector<CgalTriangle>::const_iterator;
+    using value_type = CGAL::Bbox_3;
+    using reference = const CGAL::Bbox_3&;
+    using category = boost::readable_property_map_tag;
+    key_type first;
+    const std::vector<CGAL::Bbox_3>* boxes = nullptr;
+
+    friend reference get(const TriangleBoxes& map, key_type at)
+    {
+        return (*map.boxes)[static_cast<std::size_t>(at - map.first)];
+    }
+};
+
 // The closest point of `soup` to every point, with the soup index of its triangle. Queries run in Morton
 // order in fixed chunks, each chunk on one thread: the hint chain (and so the choice among exactly tied
 // faces) depends on the chunks only, never on the number of threads.
@@ -439,13 +455,20 @@ std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vecto
                                                                 std::size_t threads)
 {
     using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
-    using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+    using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive, TriangleBoxes>>;
     std::vector<CgalTriangle> triangles;
     triangles.reserve(soup.triangles.size());
     for (const Triangle& t : soup.triangles)
         triangles.emplace_back(to_cgal(soup.positions[t[0]]), to_cgal(soup.positions[t[1]]),
                                to_cgal(soup.positions[t[2]]));
-    Tree tree(triangles.begin(), triangles.end());
+    // Each triangle's box once: the build otherwise recomputes it on every level of the tree (the same
+    // boxes, so the same tree).
+    std::vector<CGAL::Bbox_3> boxes;
+    boxes.reserve(triangles.size());
+    for (const CgalTriangle& t : triangles)
+        boxes.push_back(t.bbox());
+    Tree tree(CGAL::AABB_traits<Kernel, Primitive, TriangleBoxes>(TriangleBoxes{triangles.cbegin(), &boxes}));
+    tree.insert(triangles.cbegin(), triangles.cend());
     // The closest point of the previous query is the hint of the next one: in Morton order the two are
     // close, so the search sphere starts small. This replaces CGAL's kd-tree of hints (a third faster).
     tree.do_not_accelerate_distance_queries();

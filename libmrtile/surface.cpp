@@ -150,6 +150,7 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
     std::size_t removed = 0;
     const std::size_t n = mesh.n_vertices();
     std::vector<bool> touched(n, false);
+    std::vector<Mesh::HalfedgeHandle> outgoing; // v's, refilled per vertex (one allocation per pass)
     for (std::size_t i = 0; i < n; ++i) {
         const Mesh::VertexHandle v(static_cast<int>(i));
         if (!(slack[i] >= 0.0) || touched[i] || mesh.status(v).deleted())
@@ -157,7 +158,7 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
         const Vec3 at = point(v);
         Vec3 around; // the surface normal at v, computed when a first edge qualifies
         bool have_around = false;
-        std::vector<Mesh::HalfedgeHandle> outgoing;
+        outgoing.clear();
         for (const Mesh::HalfedgeHandle h : mesh.voh_range(v))
             outgoing.push_back(h);
         if (across_strips)
