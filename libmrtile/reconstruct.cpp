@@ -713,6 +713,60 @@ bool is_line_tile(const Hierarchy& h, const Node& node)
 
 } // namespace
 
+std::size_t count_sharp_loops(const Mesh& mesh, double degrees)
+{
+    // Judged locally: a long loop around a curved part (a scan's outline, the bunny's base) has faces
+    // that turn a lot along it, but only a slit along an acute edge has, within a few edge lengths of
+    // a loop vertex, loop vertices whose faces face away from its own (the other side of the slit).
+    // The loop is sharp when four fifths of its vertices are (slits along acute edges of generated
+    // solids: 90-100%; the bunny's base holes and a single scan's outline: 0-61%).
+    const double min_dot = std::cos(radians(degrees));
+    constexpr double kReachEdges = 3.0;
+    constexpr std::size_t kMaxVertices = 1024; // a longer loop is judged on this many, spread along it
+    std::vector<bool> seen(mesh.n_halfedges(), false);
+    std::size_t sharp = 0;
+    for (const auto start : mesh.halfedges()) {
+        if (!mesh.is_boundary(start) || seen[static_cast<std::size_t>(start.idx())])
+            continue;
+        std::vector<Mesh::VertexHandle> loop;
+        double length = 0.0;
+        for (auto h = start; !seen[static_cast<std::size_t>(h.idx())]; h = mesh.next_halfedge_handle(h)) {
+            seen[static_cast<std::size_t>(h.idx())] = true;
+            loop.push_back(mesh.to_vertex_handle(h));
+            length += mesh.calc_edge_length(h);
+        }
+        const double reach = kReachEdges * length / static_cast<double>(loop.size());
+        const std::size_t stride = (loop.size() + kMaxVertices - 1) / kMaxVertices;
+        std::vector<Vec3> at;                      // the judged vertices' positions
+        std::vector<std::vector<Vec3>> normals;    // and the normals of their faces
+        for (std::size_t i = 0; i < loop.size(); i += stride) {
+            const auto p = mesh.point(loop[i]);
+            at.push_back(Vec3{p[0], p[1], p[2]});
+            normals.emplace_back();
+            for (const auto f : mesh.vf_range(loop[i])) {
+                const auto n = mesh.calc_face_normal(f);
+                normals.back().push_back(Vec3{n[0], n[1], n[2]});
+            }
+        }
+        const auto turn = [&](std::size_t a, std::size_t b) {
+            for (const Vec3& m : normals[a])
+                for (const Vec3& n : normals[b])
+                    if (dot(m, n) < min_dot)
+                        return true;
+            return false;
+        };
+        std::size_t sharp_vertices = 0;
+        for (std::size_t a = 0; a < at.size(); ++a)
+            for (std::size_t b = 0; b < at.size(); ++b)
+                if (distance(at[a], at[b]) <= reach && turn(a, b)) {
+                    ++sharp_vertices;
+                    break;
+                }
+        sharp += 5 * sharp_vertices >= 4 * at.size() ? 1 : 0;
+    }
+    return sharp;
+}
+
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)
 {
     QualityReport q;
@@ -732,6 +786,7 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();
     q.caps = count_caps(mesh);
+    q.sharp_loops = count_sharp_loops(mesh);
     // Vertices of each tile in the mesh, and how many of them on its border. A line tile joined to
     // its neighbours (a sphere sampled as latitude rings: every tile a stretch of one ring) is inside
     // the surface; one of a ribbon, or left out, is not.

@@ -1228,6 +1228,46 @@ TEST(Reconstruct, e_rms_matches_brute_force)
 // the border): a third or more of the helix's, and none of a sphere's, a torus's or the bunny's, nor
 // of a sphere sampled as latitude rings ten times farther apart than the points on a ring, whose
 // tiles the surface joins side by side (QA round 7: it had been counted as all lines).
+// A slit along an acute edge counts as a sharp loop; the same slit in a gentle fold, and the sheet's
+// own outline, do not. The sheets are grids over [-2, 2] × [0, 4] folded along x = 0 (z = k |x|),
+// the slit the cells beside the fold for 1 < y < 3.
+TEST(Reconstruct, loops_along_acute_edges_are_counted_as_sharp)
+{
+    const auto slit_fold = [](double slope) {
+        const double step = 0.1;
+        Mesh mesh = testing::grid_mesh(40, 40, -2.0, 0.0, step, [&](double x, double) { return slope * std::abs(x); });
+        mesh.request_face_status();
+        mesh.request_edge_status();
+        mesh.request_vertex_status();
+        for (const auto f : mesh.faces()) {
+            const auto c = mesh.calc_face_centroid(f);
+            if (std::abs(c[0]) < step && c[1] > 1.0 && c[1] < 3.0)
+                mesh.delete_face(f, true);
+        }
+        mesh.garbage_collection();
+        return mesh;
+    };
+    const Mesh acute = slit_fold(4.0);  // the two sides 28° apart inside: normals 152° apart
+    const Mesh gentle = slit_fold(0.3); // 147° inside: normals 33° apart
+    ASSERT_EQ(topology_stats(acute).boundary_loops, 2u);
+    ASSERT_EQ(topology_stats(gentle).boundary_loops, 2u);
+    EXPECT_EQ(count_sharp_loops(acute), 1u);
+    EXPECT_EQ(count_sharp_loops(gentle), 0u);
+    EXPECT_EQ(count_sharp_loops(acute, 160.0), 0u); // 152° is not past 160°
+    // Generated and scanned surfaces: a cone's 30° rim left open is sharp, the bunny's base holes are not.
+    const Hierarchy cone = build_hierarchy(shapes::cone(30000, 0.5, 0.5 / std::tan(radians(60.0))));
+    const MeshResult c = mesh_cut(cone, cut_by_tolerance(cone, 0.005));
+    const std::size_t cone_loops = topology_stats(c.mesh).boundary_loops;
+    EXPECT_EQ(measure_quality(cone, cut_by_tolerance(cone, 0.005), c.mesh).sharp_loops, cone_loops);
+    const Hierarchy bunny = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    for (const double tolerance : {0.005, 0.002, 0.001}) {
+        const Cut cut = cut_by_tolerance(bunny, tolerance);
+        const MeshResult b = mesh_cut(bunny, cut);
+        EXPECT_GT(topology_stats(b.mesh).boundary_loops, 0u);
+        EXPECT_EQ(measure_quality(bunny, cut, b.mesh).sharp_loops, 0u) << tolerance;
+    }
+}
+
 TEST(Reconstruct, points_along_a_curve_are_counted_as_lines)
 {
     std::mt19937 rng(3);
