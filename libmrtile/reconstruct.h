@@ -169,10 +169,11 @@ struct QualityReport
     //! side (a sphere sampled as latitude rings) are surface and do not count.
     std::size_t line_points = 0;
     std::size_t points = 0; //!< in the tiles of the cut (every point of the model: a cut covers them all)
-    //! Boundary loops that run along a sharp edge: among the faces at the loop's vertices are two whose
-    //! normals are more than kSharpLoopDegrees apart (the faces on the two sides of an edge of 70 degrees
-    //! or less). Acute edges are where closed solids are left open (README: Known limits); a scan's
-    //! own border or a hole in a smooth stretch has faces that turn far less.
+    //! Boundary loops that run along a sharp edge: four fifths of their vertices have, within three
+    //! loop edge lengths, a loop vertex (themselves included) with a face whose normal is more than
+    //! kSharpLoopDegrees from one of their own (the two sides of a slit along an edge of 70 degrees or
+    //! less). Acute edges are where closed solids are left open (README: Known limits); a scan's own
+    //! border or a hole in a smooth stretch turns far less within that reach.
     std::size_t sharp_loops = 0;
 };
 
@@ -181,7 +182,8 @@ inline constexpr double kLineWidthRatio = 0.1;
 //! See QualityReport::sharp_loops: the normals of the two faces of an edge of 70 degrees are 110 apart.
 inline constexpr double kSharpLoopDegrees = 110.0;
 
-//! The number of boundary loops of `mesh` along which faces turn more than `degrees` (QualityReport::sharp_loops).
+//! The number of boundary loops of `mesh` whose faces turn more than `degrees` across them, judged
+//! locally as QualityReport::sharp_loops says.
 std::size_t count_sharp_loops(const Mesh& mesh, double degrees = kSharpLoopDegrees);
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);

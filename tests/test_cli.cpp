@@ -261,8 +261,8 @@ TEST(Cli, points_along_a_curve_are_noted)
     EXPECT_EQ(nlohmann::json::parse(slurp(dir / "s.json"))["line_points"].get<std::size_t>(), 0u);
 }
 
-// Loops left along a sharp edge are counted and noted (a cone's 30° rim); a sphere's and the bunny's
-// meshes get no note (a closed mesh; scan holes in smooth stretches).
+// Loops left along a sharp edge are counted and noted (a cone's 30° rim); the bunny's scan holes, in
+// smooth stretches, get no note.
 TEST(Cli, loops_along_sharp_edges_are_noted)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
