@@ -73,7 +73,7 @@ struct BuildOptions
     //! (Hierarchy::raw_positions), which measure_quality measures to.
     enum class Denoise { Auto, Off, On };
     Denoise denoise = Denoise::Auto;
-    DenoiseOptions denoising;
+    DenoiseOptions denoising; //!< how points are moved when denoised (denoise.h; defaults: 48-point quadrics)
     //! Called now and then with the fraction of points already in flat clusters (0..1).
     std::function<void(double)> progress;
 };

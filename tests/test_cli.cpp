@@ -231,6 +231,15 @@ TEST(Cli, outputs_are_checked_before_any_work)
     r = mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "d.drc").string() + " --quantize 2", dir);
     EXPECT_EQ(r.code, 0);
     EXPECT_NE(r.out.find("--quantize 2 snaps positions to steps of"), std::string::npos) << r.out;
+    // So do a Draco tileset (one grid over every tile) and a LOD chain's files, named where they end up
+    // (a chain is built in a directory aside: the note named that one before).
+    r = mrtile("export " + (dir / "a.mrt").string() + " -o " + (dir / "qt").string() + " --format 3dtiles --draco --quantize 2", dir);
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.out.find("note: " + (dir / "qt").string() + ": --quantize 2 snaps positions"), std::string::npos) << r.out;
+    r = mrtile("lods " + (dir / "a.mrt").string() + " -o " + (dir / "ql").string() + " --format drc --quantize 2", dir);
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.out.find("note: " + (dir / "ql" / "level0.drc").string() + ": --quantize 2 snaps"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find(".tmp."), std::string::npos) << r.out;
 }
 
 // Points along a curve (a helix: 5,000 points on a wire) are noted: the mesh is ribbons along it; the

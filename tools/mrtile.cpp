@@ -175,7 +175,7 @@ struct BuildArgs
                           CLI::detail::to_string(outliers.local_ratio) + "x theirs or > " +
                           CLI::detail::to_string(outliers.global_ratio) + "x the cloud's median)");
         cmd->add_option("--denoise", denoise,
-                        "move the points onto a quadric fitted to their " + std::to_string(DenoiseOptions{}.neighbours) +
+                        "move each point onto a quadric fitted to it and its " + std::to_string(DenoiseOptions{}.neighbours - 1) +
                             " nearest neighbours and build again: auto (when the sample is noisy, about a point spacing or more), on, off")
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
@@ -447,7 +447,7 @@ struct OutputArgs
 };
 
 const char* const kMeshExtensionHelp =
-    "unknown output extension (use .ply .obj .off .stl .om .glb .gltf .drc, or --format 3dtiles with a directory)";
+    "unknown output extension (use .ply .obj .off .stl .om .glb .gltf .drc; export and reconstruct also take a directory with --format 3dtiles)";
 
 bool is_mesh_extension(const std::string& ext)
 {
@@ -490,31 +490,34 @@ void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out)
                     out.string().c_str(), bits, step, 100.0 * step / mean_edge);
 }
 
-// Writes a mesh to any supported single-file format, chosen by extension.
-void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, const OutputArgs& args)
+// Writes a mesh to any supported single-file format, chosen by extension. Notes name `shown` (the path
+// the user will find the file at, when `out` is inside a directory built aside), else `out`.
+void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, const OutputArgs& args,
+                    const fs::path& shown = {})
 {
     const std::string ext = lower_extension(out);
+    const fs::path& named = shown.empty() ? out : shown;
     if (ext == ".glb" || ext == ".gltf") {
         write_gltf(mesh, origin, out, args.gltf());
         if (args.draco)
-            note_coarse_quantization(mesh, args.quantize, out);
+            note_coarse_quantization(mesh, args.quantize, named);
     } else if (ext == ".drc") {
         DracoOptions d;
         d.position_bits = args.quantize;
         write_drc(mesh, origin, out, d);
-        note_coarse_quantization(mesh, args.quantize, out);
+        note_coarse_quantization(mesh, args.quantize, named);
         // Draco has no transform, and float positions far from 0 lose their digits: the file keeps
         // them relative to the origin, which a reader must add back. Say so where it matters.
         if (origin != Vec3{0, 0, 0})
             std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g), stored as its "
                         "\"mrtile_origin\" metadata entry (Draco has no transform)\n",
-                        out.string().c_str(), origin.x, origin.y, origin.z);
+                        named.string().c_str(), origin.x, origin.y, origin.z);
     } else if (is_mesh_extension(ext)) { // OpenMesh's writers: .ply .obj .off .stl .om
         write_mesh(mesh, origin, out);
         if (ext == ".stl" && stl_is_relative(mesh, origin))
             std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g): STL has only 32-bit "
                         "floats, which lose digits that far out (.ply, .obj and .off keep absolute double coordinates)\n",
-                        out.string().c_str(), origin.x, origin.y, origin.z);
+                        named.string().c_str(), origin.x, origin.y, origin.z);
     } else {
         throw UsageError(out.string() + ": " + kMeshExtensionHelp);
     }
@@ -1078,6 +1081,8 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         origin = Vec3{0, 0, 0};
     }
     write_lod_tileset(set, origin, dir, t);
+    if (o.draco) // one grid over the whole set: the finest level is where a coarse step shows
+        note_coarse_quantization(set.levels.back().mesh, o.quantize, dir);
     if (placed)
         std::printf("placed on the globe by %s: local east-north-up metres at longitude %.7f, latitude %.7f, "
                     "height %.2f m (WGS 84)\n",
@@ -1110,6 +1115,8 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     GltfLodOptions lod_options;
     lod_options.gltf = o.gltf();
     write_glb_lods(fine_to_coarse, h.cloud.origin, out, lod_options);
+    if (o.draco)
+        note_coarse_quantization(set.levels.back().mesh, o.quantize, out);
     std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
                 seconds_since(start));
 }
@@ -1145,7 +1152,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         const LodLevel& l = set.levels[level];
         const QualityReport& q = quality[level];
         const std::string name = "level" + std::to_string(level) + ext;
-        write_any_mesh(l.mesh, h.cloud.origin, built / name, o);
+        write_any_mesh(l.mesh, h.cloud.origin, built / name, o, dir / name);
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
@@ -1531,7 +1538,7 @@ int run(int argc, char** argv)
     Globals g;
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
     app.add_flag("--below-noise", g.below_noise,
-                 "let tolerance cuts refine below the points' noise level (noisy samples break into pieces there)");
+                 "let tolerance, region and camera cuts refine below the points' noise level (noisy samples break into pieces there)");
     std::size_t threads = 0;
     app.add_option("--threads", threads, "worker threads (0 = one per hardware thread); output does not depend on it")
         ->check(CLI::Range(std::size_t{0}, std::size_t{4096}))
