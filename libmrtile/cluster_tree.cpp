@@ -12,6 +12,7 @@
 #include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gabriel_graph.h"
+#include "libmrtile/huge_pages.h"
 
 #include <algorithm>
 #include <cassert>
@@ -36,10 +37,13 @@ struct Member
     Vec3 p;
     std::uint32_t index;
 };
+// A cluster's member list. Every split writes its cluster's members into two fresh lists, so the build
+// touches new memory all the time: large lists ask for huge pages (huge_pages.h).
+using Members = std::vector<Member, HugePageAllocator<Member>>;
 
 struct Cluster
 {
-    std::vector<Member> members;
+    Members members;
     Moments moments;
     double internal_error = 0.0;            // eq. 1: sum of distances to the centre
     double radius = 0.0;                    // largest distance of a member to the centre
@@ -98,7 +102,7 @@ public:
 private:
     bool is_flat(const Moments& m) const;
     void refresh(std::uint32_t id);
-    void refresh_incremental(std::uint32_t id, const std::vector<Member>& left, const std::vector<Member>& arrived);
+    void refresh_incremental(std::uint32_t id, const Members& left, const Members& arrived);
     void requeue(std::uint32_t id);
     void set_failing(std::uint32_t id, bool failing);
     void split(std::uint32_t id);
@@ -210,7 +214,7 @@ void Builder::set_failing(std::uint32_t id, bool failing)
 // A neighbour that gained or lost a few points: exact moments by Welford updates, and eq. 1 and the
 // bounding radius updated from the moved points only (eq. 1 only orders the splits; the stored tree
 // recomputes it exactly). Large changes take the full pass.
-void Builder::refresh_incremental(std::uint32_t id, const std::vector<Member>& left, const std::vector<Member>& arrived)
+void Builder::refresh_incremental(std::uint32_t id, const Members& left, const Members& arrived)
 {
     Cluster& c = clusters_[id];
     if (c.members.empty() || 8 * (left.size() + arrived.size()) > c.members.size()) {
@@ -286,7 +290,7 @@ void Builder::connect_new(std::uint32_t a, std::uint32_t b, const std::vector<st
 void Builder::split(std::uint32_t id)
 {
     // Copy what we need of C: the clusters_ vector grows below.
-    const std::vector<Member> members = std::move(clusters_[id].members);
+    const Members members = std::move(clusters_[id].members);
     const std::vector<std::uint32_t> neighbours = std::move(clusters_[id].neighbours);
     const Moments moments = clusters_[id].moments;
     const Vec3 c = moments.mean;
@@ -352,7 +356,7 @@ void Builder::split(std::uint32_t id)
 
     // Reclassify the points of C among {a, b} ∪ neighbours(C) ...
     const bool reclassify = options_.reclassify;
-    std::vector<std::vector<Member>> incoming(neighbours.size());
+    std::vector<Members> incoming(neighbours.size());
     std::vector<Vec3> neighbour_centres(neighbours.size());
     for (std::size_t k = 0; k < neighbours.size(); ++k)
         neighbour_centres[k] = centre(neighbours[k]);
@@ -377,7 +381,7 @@ void Builder::split(std::uint32_t id)
     }
 
     // ... and the points of each neighbour N among {N, a, b}.
-    std::vector<std::vector<Member>> leaving(neighbours.size());
+    std::vector<Members> leaving(neighbours.size());
     if (reclassify) {
         for (std::size_t k = 0; k < neighbours.size(); ++k) {
             Cluster& n = clusters_[neighbours[k]];
@@ -394,7 +398,7 @@ void Builder::split(std::uint32_t id)
             const double ta = 0.5 * (squared_norm(ca) - squared_norm(cn));
             const double tb = 0.5 * (squared_norm(cb) - squared_norm(cn));
             const double tab = 0.5 * (squared_norm(ca) - squared_norm(cb));
-            std::vector<Member>& list = n.members;
+            Members& list = n.members;
             for (std::size_t i = 0; i < list.size();) {
                 const Vec3& p = list[i].p;
                 const bool nearer_a = dot(p, ua) > ta, nearer_b = dot(p, ub) > tb;
@@ -518,9 +522,9 @@ void Builder::run()
 {
     const std::size_t n = pos_.size();
     add_cluster();
-    clusters_[0].members.resize(n);
+    clusters_[0].members.reserve(n);
     for (std::uint32_t i = 0; i < n; ++i)
-        clusters_[0].members[i] = {pos_[i], i};
+        clusters_[0].members.push_back({pos_[i], i});
     parent_of.push_back(-1);
     refresh(0);
 
@@ -533,6 +537,8 @@ void Builder::run()
     for (int round = 0; round < 64 && options_.split_gaps && !options_.paper_split_order && mark_gaps(); ++round)
         split_failing();
 
+    leaf_of_point.reserve(n);
+    advise_huge_pages(leaf_of_point.data(), n * sizeof(std::uint32_t));
     leaf_of_point.assign(n, 0);
     for (std::uint32_t id = 0; id < clusters_.size(); ++id)
         for (const Member& mb : clusters_[id].members)
@@ -580,6 +586,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
     };
     std::vector<Item> stack;
     h.nodes.reserve(clusters); // at most one node per cluster (splicing drops some): no regrowth copies
+    advise_huge_pages(h.nodes.data(), clusters * sizeof(Node));
     if (n > 0)
         stack.push_back({0, -1, true});
     while (!stack.empty()) {
@@ -630,7 +637,10 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
     for (std::size_t i = 1; i < start.size(); ++i)
         start[i] += start[i - 1];
     std::vector<std::uint64_t> fill(start.begin(), start.end() - 1);
-    std::vector<std::uint32_t> order(n);
+    std::vector<std::uint32_t> order;
+    order.reserve(n);
+    advise_huge_pages(order.data(), n * sizeof(std::uint32_t));
+    order.resize(n);
     for (std::uint32_t i = 0; i < n; ++i)
         order[fill[static_cast<std::size_t>(node_of_leaf[leaf_of_point[i]])]++] = i;
     for (std::size_t k = 0; k < h.nodes.size(); ++k) {

@@ -5,6 +5,7 @@
 #include "libmrtile/point_cloud.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/huge_pages.h"
 
 #include <algorithm>
 #include <array>
@@ -161,6 +162,8 @@ double tolerance_scale(const std::vector<Vec3>& positions)
     // (the build sees the input's order, a loaded model the tree's).
     const std::uint64_t k = std::max<std::uint64_t>(1, n / kSampleSize);
     std::array<std::vector<double>, 3> sample;
+    for (std::vector<double>& axis : sample)
+        axis.reserve(2 * (n / k) + 16); // about n / k are taken: no regrowth copies
     for (const Vec3& p : positions)
         if (k == 1 || mix(mix(mix(0, p.x), p.y), p.z) % k == 0)
             for (int axis = 0; axis < 3; ++axis)
@@ -210,9 +213,14 @@ std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions)
     // Open addressing, linear probing. A slot holds the index + 1 of the first point seen there (low
     // half; 0 = empty) and the hash's high half as a tag, so a probe past another position rarely has
     // to load that position (the table is random access; the positions would be a second miss).
-    std::vector<std::uint64_t> slots(size, 0);
+    // Both written once, at random and in order: fresh memory, so huge pages (huge_pages.h).
+    std::vector<std::uint64_t> slots;
+    slots.reserve(size);
+    advise_huge_pages(slots.data(), size * sizeof(std::uint64_t));
+    slots.resize(size, 0);
     std::vector<std::uint32_t> kept;
     kept.reserve(n);
+    advise_huge_pages(kept.data(), n * sizeof(std::uint32_t));
     for (std::size_t i = 0; i < n; ++i) {
         const Vec3& p = positions[i];
         const std::uint64_t hash = mix(mix(mix(0, p.x), p.y), p.z);
