@@ -44,6 +44,7 @@ Front::Front(const Layout& layout, const std::vector<Tile>& tiles, Surface& surf
       parts_(layout.vertices.size())
 {
     edges_.reserve(3 * (2 * layout.vertices.size() + 16));
+    face_normals_.reserve(2 * layout.vertices.size() + 16);
     const std::vector<Tri>& triangles = candidates.triangles;
     // Candidates by vertex (compressed rows, candidate order within a row): for every edge (u, w) of
     // candidate i, the entry {w, i} in u's row and {u, i} in w's. Looking up an edge scans one short

@@ -630,7 +630,7 @@ private:
     std::vector<bool> placed_;
     std::vector<Vec3> oriented_normal_; // tile normal times its placed orientation
     std::vector<std::uint32_t> row_start_;                      // candidates by vertex, see the constructor
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows_; // {other vertex, candidate}
+    std::vector<std::pair<std::uint32_t, std::uint32_t>, HugePageAllocator<std::pair<std::uint32_t, std::uint32_t>>> rows_; // {other vertex, candidate}
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> queue_;
     std::vector<bool> banned_;   // fallback candidates found to add a handle
     std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
@@ -643,14 +643,14 @@ private:
     // vertices has (about 2 per vertex), on huge pages: grown by doubling, it was a quarter of the page
     // faults of a fine cut (each doubling a fresh block, huge_pages.h).
     std::vector<EdgeState, HugePageAllocator<EdgeState>> edges_;
-    mutable std::vector<Vec3> face_normals_; // see surface_normal
+    mutable std::vector<Vec3, HugePageAllocator<Vec3>> face_normals_; // see surface_normal (grows with the faces)
     struct CachedNormal
     {
         Vec3 normal;
         std::uint64_t clock = 0;
         bool valid = false;
     };
-    mutable std::vector<CachedNormal> vertex_normals_; // see vertex_normal
+    mutable std::vector<CachedNormal, HugePageAllocator<CachedNormal>> vertex_normals_; // see vertex_normal
 };
 
 // ---------------------------------------------------------------------------------------------------
