@@ -183,6 +183,53 @@ TEST_F(DracoFiles, independent_decoders_agree)
     EXPECT_NE(header.find("element face " + std::to_string(mesh.n_faces()) + "\n"), std::string::npos) << header;
 }
 
+// encode_draco reports what a decoder gets back without decoding (the encoder's own counts, the ids
+// the attributes keep, the extremes quantized by the encoder's transform): the same counts, ids and
+// bounds as decoding its bytes gives, with and without an explicit grid, with colours, and with a
+// vertex where two fans touch, which Draco splits into two points.
+TEST(DracoEncode, reports_what_the_decoder_gets_back)
+{
+    const Mesh bowtie = [] {
+        Mesh m;
+        std::vector<Mesh::VertexHandle> v;
+        for (const auto& p : std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0.5}})
+            v.push_back(m.add_vertex(to_point(p)));
+        testing::add_checked_face(m, v[0], v[1], v[2]);
+        testing::add_checked_face(m, v[0], v[3], v[4]);
+        return m;
+    }();
+    const Mesh sphere = uv_sphere(12, 24, 2.0, {0.3, -0.2, 0.1}, true);
+    const Mesh grid = grid_mesh(7, 5, -0.7, 0.2, 0.31, testing::wave);
+    DracoOptions with_grid;
+    with_grid.grid = QuantizationGrid{Vec3{-3, -3, -3}, 6.123456789}; // a range Draco keeps to six digits
+    for (const Mesh* mesh : {&bowtie, &sphere, &grid})
+        for (const DracoOptions& options : {DracoOptions{}, with_grid}) {
+            MeshBufferOptions buffer_options;
+            buffer_options.offset = draco_grid_offset(options, buffer_options.up_axis);
+            const MeshBuffers buffers = make_mesh_buffers(*mesh, buffer_options);
+            const DracoEncoded encoded = encode_draco(buffers, options);
+            const DracoDecoded decoded = decode_draco(encoded.bytes, "round trip");
+            EXPECT_EQ(encoded.vertex_count, decoded.positions.size() / 3);
+            EXPECT_EQ(encoded.face_count, decoded.indices.size() / 3);
+            EXPECT_EQ(encoded.position_id, 0);
+            EXPECT_EQ(encoded.normal_id, 1);
+            EXPECT_EQ(encoded.color_id, mesh->has_vertex_colors() ? 2 : -1);
+            EXPECT_EQ(decoded.colors.empty(), !mesh->has_vertex_colors());
+            for (std::size_t k = 0; k < 3; ++k) {
+                float lo = INFINITY, hi = -INFINITY;
+                for (std::size_t i = k; i < decoded.positions.size(); i += 3) {
+                    lo = std::min(lo, decoded.positions[i]);
+                    hi = std::max(hi, decoded.positions[i]);
+                }
+                EXPECT_EQ(encoded.min[k], lo) << "axis " << k;
+                EXPECT_EQ(encoded.max[k], hi) << "axis " << k;
+            }
+        }
+    // The bowtie's shared corner comes back as two points.
+    const DracoEncoded split = encode_draco(make_mesh_buffers(bowtie), DracoOptions{});
+    EXPECT_EQ(split.vertex_count, 6u);
+}
+
 TEST_F(DracoFiles, output_is_byte_deterministic)
 {
     const Mesh mesh = uv_sphere(10, 20, 1.0, {}, true);
