@@ -4,16 +4,13 @@
 #include "libmrtile/face_sequence.h"
 
 #include <array>
-#include <utility>
 
 namespace mrt {
 
 void FaceSequence::reserve(std::size_t vertices, std::size_t faces)
 {
     outgoing_.reserve(vertices);
-    const std::size_t halfedges = 3 * faces + 6; // a closed triangle surface: 3/2 edges per face
-    for (std::vector<int>* v : {&to_, &next_, &prev_, &face_})
-        v->reserve(halfedges);
+    halfedges_.reserve(3 * faces + 6); // a closed triangle surface: 3/2 edges per face
     face_halfedge_.reserve(faces);
 }
 
@@ -24,9 +21,9 @@ int FaceSequence::find_halfedge(int from, int to) const
     const int start = outgoing_[static_cast<std::size_t>(from)];
     int h = start;
     while (h >= 0) {
-        if (to_[static_cast<std::size_t>(h)] == to)
+        if (at(h).to == to)
             return h;
-        h = next_[static_cast<std::size_t>(opposite(h))];
+        h = at(opposite(h)).next;
         if (h == start)
             break;
     }
@@ -35,13 +32,9 @@ int FaceSequence::find_halfedge(int from, int to) const
 
 int FaceSequence::new_edge(int from, int to)
 {
-    const int h = static_cast<int>(to_.size());
-    to_.push_back(to);
-    to_.push_back(from);
-    for (std::vector<int>* v : {&next_, &prev_, &face_}) {
-        v->push_back(-1);
-        v->push_back(-1);
-    }
+    const int h = static_cast<int>(halfedges_.size());
+    halfedges_.push_back({to, -1, -1, -1});
+    halfedges_.push_back({from, -1, -1, -1});
     return h;
 }
 
@@ -52,11 +45,11 @@ void FaceSequence::adjust_outgoing(int v)
     const int start = outgoing_[static_cast<std::size_t>(v)];
     int h = start;
     while (h >= 0) {
-        if (face_[static_cast<std::size_t>(h)] < 0) {
+        if (at(h).face < 0) {
             outgoing_[static_cast<std::size_t>(v)] = h;
             return;
         }
-        h = next_[static_cast<std::size_t>(opposite(h))];
+        h = at(opposite(h)).next;
         if (h == start)
             return;
     }
@@ -73,16 +66,19 @@ int FaceSequence::add_face(int a, int b, int c)
             return -1; // a corner with no gap around it
         he[i] = find_halfedge(v[i], v[(i + 1) % 3]);
         fresh[i] = he[i] < 0;
-        if (!fresh[i] && face_[static_cast<std::size_t>(he[i])] >= 0)
+        if (!fresh[i] && at(he[i]).face >= 0)
             return -1; // that side of the edge has its face already
     }
     // Links are recorded and set at the end, as add_face does: every rule below reads the links as
     // they were before this face.
-    std::array<std::pair<int, int>, 18> links{};
+    std::array<int, 18> link_from, link_to; // at most 6 links per corner; not zeroed, only the first link_count are read
     std::size_t link_count = 0;
-    const auto link = [&](int from, int to) { links[link_count++] = {from, to}; };
-    auto next = [&](int h) { return next_[static_cast<std::size_t>(h)]; };
-    auto prev = [&](int h) { return prev_[static_cast<std::size_t>(h)]; };
+    const auto link = [&](int from, int to) {
+        link_from[link_count] = from;
+        link_to[link_count++] = to;
+    };
+    auto next = [&](int h) { return at(h).next; };
+    auto prev = [&](int h) { return at(h).prev; };
     for (std::size_t i = 0; i < 3; ++i) {
         const std::size_t j = (i + 1) % 3;
         if (fresh[i] || fresh[j])
@@ -95,7 +91,7 @@ int FaceSequence::add_face(int a, int b, int c)
         int gap_prev = opposite(in_next);
         do
             gap_prev = opposite(next(gap_prev));
-        while (face_[static_cast<std::size_t>(gap_prev)] >= 0);
+        while (at(gap_prev).face >= 0);
         if (gap_prev == in_prev)
             return -1; // no other gap
         const int gap_next = next(gap_prev);
@@ -134,11 +130,11 @@ int FaceSequence::add_face(int a, int b, int c)
         } else {
             adjust[j] = outgoing_[corner] == in_next;
         }
-        face_[static_cast<std::size_t>(in_prev)] = f;
+        at(in_prev).face = f;
     }
     for (std::size_t k = 0; k < link_count; ++k) {
-        next_[static_cast<std::size_t>(links[k].first)] = links[k].second;
-        prev_[static_cast<std::size_t>(links[k].second)] = links[k].first;
+        at(link_from[k]).next = link_to[k];
+        at(link_to[k]).prev = link_from[k];
     }
     for (std::size_t i = 0; i < 3; ++i)
         if (adjust[i])
@@ -148,22 +144,23 @@ int FaceSequence::add_face(int a, int b, int c)
 
 void FaceSequence::apply(Mesh& mesh) const
 {
-    const std::size_t halfedges = to_.size();
+    const std::size_t halfedges = halfedges_.size();
     mesh.resize(outgoing_.size(), halfedges / 2, face_halfedge_.size());
     for (std::size_t v = 0; v < outgoing_.size(); ++v)
         mesh.set_halfedge_handle(Mesh::VertexHandle(static_cast<int>(v)), Mesh::HalfedgeHandle(outgoing_[v]));
     for (std::size_t h = 0; h < halfedges; ++h) {
         const Mesh::HalfedgeHandle handle(static_cast<int>(h));
-        mesh.set_vertex_handle(handle, Mesh::VertexHandle(to_[h]));
-        mesh.set_face_handle(handle, Mesh::FaceHandle(face_[h]));
-        if (next_[h] >= 0)
-            mesh.set_next_halfedge_handle(handle, Mesh::HalfedgeHandle(next_[h]));
+        const Halfedge& e = halfedges_[h];
+        mesh.set_vertex_handle(handle, Mesh::VertexHandle(e.to));
+        mesh.set_face_handle(handle, Mesh::FaceHandle(e.face));
+        if (e.next >= 0)
+            mesh.set_next_halfedge_handle(handle, Mesh::HalfedgeHandle(e.next));
     }
     // set_next_halfedge_handle also set the prev links, each to the last half-edge naming it as next;
     // they are set again as add_face left them (the same, unless a stale link pointed there too).
     for (std::size_t h = 0; h < halfedges; ++h)
-        if (prev_[h] >= 0)
-            mesh.set_prev_halfedge_handle(Mesh::HalfedgeHandle(static_cast<int>(h)), Mesh::HalfedgeHandle(prev_[h]));
+        if (halfedges_[h].prev >= 0)
+            mesh.set_prev_halfedge_handle(Mesh::HalfedgeHandle(static_cast<int>(h)), Mesh::HalfedgeHandle(halfedges_[h].prev));
     for (std::size_t f = 0; f < face_halfedge_.size(); ++f)
         mesh.set_halfedge_handle(Mesh::FaceHandle(static_cast<int>(f)), Mesh::HalfedgeHandle(face_halfedge_[f]));
 }

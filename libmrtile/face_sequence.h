@@ -48,17 +48,23 @@ public:
 
 private:
     static int opposite(int h) { return h ^ 1; }
+    struct Halfedge
+    {
+        int to = -1, next = -1, prev = -1, face = -1;
+    };
+    Halfedge& at(int h) { return halfedges_[static_cast<std::size_t>(h)]; }
+    const Halfedge& at(int h) const { return halfedges_[static_cast<std::size_t>(h)]; }
     bool is_boundary_vertex(int v) const
     {
         const int h = outgoing_[static_cast<std::size_t>(v)];
-        return h < 0 || face_[static_cast<std::size_t>(h)] < 0;
+        return h < 0 || at(h).face < 0;
     }
     int find_halfedge(int from, int to) const;
     int new_edge(int from, int to);
     void adjust_outgoing(int v);
 
     std::vector<int> outgoing_;                   // per vertex: its half-edge, -1 when isolated
-    std::vector<int> to_, next_, prev_, face_;    // per half-edge; half-edges 2e and 2e + 1 form edge e
+    std::vector<Halfedge> halfedges_;             // half-edges 2e and 2e + 1 form edge e
     std::vector<int> face_halfedge_;              // per face
 };
 

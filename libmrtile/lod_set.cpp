@@ -98,12 +98,17 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level)
         if (owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size())
             ++index.faces_below[static_cast<std::size_t>(owner)];
     }
+    // Sorted as (first point, face) keys in one integer each: the order of a stable sort by first point
+    // of the faces in face order, at a third of its cost (no comparator looking up two nodes).
+    std::vector<std::uint64_t> keys;
+    keys.reserve(index.face_owner.size());
     for (std::size_t f = 0; f < index.face_owner.size(); ++f)
         if (index.face_owner[f] >= 0 && static_cast<std::size_t>(index.face_owner[f]) < h.nodes.size())
-            index.faces_by_owner.push_back(static_cast<std::uint32_t>(f));
-    auto first_point = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
-    std::stable_sort(index.faces_by_owner.begin(), index.faces_by_owner.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return first_point(a) < first_point(b); });
+            keys.push_back(std::uint64_t{h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin} << 32 | f);
+    std::sort(keys.begin(), keys.end());
+    index.faces_by_owner.reserve(keys.size());
+    for (const std::uint64_t key : keys)
+        index.faces_by_owner.push_back(static_cast<std::uint32_t>(key & 0xffffffffu));
     index.error_below.assign(h.nodes.size(), 0.0);
     for (std::int32_t id : level.cut) {
         index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
@@ -133,7 +138,6 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     assert(out.n_vertices() == 0);
     const Mesh& src = level.mesh;
     std::vector<int> map(src.n_vertices(), -1);
-    std::vector<char> selected(src.n_faces(), 0);
     // The faces owned by nodes inside the region, in face order: an owner inside the region starts in
     // it, so they are among the run of faces_by_owner whose owners start in [region.begin, region.end).
     auto owner_begin = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
@@ -158,7 +162,6 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     };
     for (const std::uint32_t fi : faces) {
         const Mesh::FaceHandle f(static_cast<int>(fi));
-        selected[fi] = 1;
         std::array<int, 3> vs;
         int k = 0;
         for (const auto v : src.fv_range(f)) {
@@ -179,6 +182,12 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         }
     }
     *skirt_faces = 0;
+    // A face is the tile's when its owner is a cut node inside the region (what chose `faces` above).
+    auto selected = [&](Mesh::FaceHandle f) {
+        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
+        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
+               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
+    };
     if (skirts && skirt_depth > 0) {
         // Border edges of the region that are interior edges of the level mesh get a skirt quad.
         std::vector<int> lowered(src.n_vertices(), -1);
@@ -201,7 +210,7 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
             const auto g = src.opposite_face_handle(he);
             if (!f.is_valid() || !g.is_valid())
                 continue; // a border of the surface itself: nothing shows through
-            if (!selected[static_cast<std::size_t>(f.idx())] || selected[static_cast<std::size_t>(g.idx())])
+            if (!selected(f) || selected(g))
                 continue;
             // he runs a → b inside the selected face f; the skirt quad runs b → a on top, consistently.
             const auto a = src.from_vertex_handle(he), b = src.to_vertex_handle(he);
