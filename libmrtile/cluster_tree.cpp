@@ -537,8 +537,7 @@ void Builder::run()
     for (int round = 0; round < 64 && options_.split_gaps && !options_.paper_split_order && mark_gaps(); ++round)
         split_failing();
 
-    leaf_of_point.reserve(n);
-    advise_huge_pages(leaf_of_point.data(), n * sizeof(std::uint32_t));
+    reserve_on_huge_pages(leaf_of_point, n);
     leaf_of_point.assign(n, 0);
     for (std::uint32_t id = 0; id < clusters_.size(); ++id)
         for (const Member& mb : clusters_[id].members)
@@ -585,8 +584,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         bool is_left;
     };
     std::vector<Item> stack;
-    h.nodes.reserve(clusters); // at most one node per cluster (splicing drops some): no regrowth copies
-    advise_huge_pages(h.nodes.data(), clusters * sizeof(Node));
+    reserve_on_huge_pages(h.nodes, clusters); // at most one node per cluster (splicing drops some): no regrowth copies
     if (n > 0)
         stack.push_back({0, -1, true});
     while (!stack.empty()) {
@@ -638,8 +636,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         start[i] += start[i - 1];
     std::vector<std::uint64_t> fill(start.begin(), start.end() - 1);
     std::vector<std::uint32_t> order;
-    order.reserve(n);
-    advise_huge_pages(order.data(), n * sizeof(std::uint32_t));
+    reserve_on_huge_pages(order, n);
     order.resize(n);
     for (std::uint32_t i = 0; i < n; ++i)
         order[fill[static_cast<std::size_t>(node_of_leaf[leaf_of_point[i]])]++] = i;

@@ -39,6 +39,14 @@ inline void advise_huge_pages(const void* p, std::size_t bytes)
 #endif
 }
 
+//! Reserves room for `n` elements in an empty vector and advises huge pages for it, before it is filled.
+template <class Vector>
+void reserve_on_huge_pages(Vector& v, std::size_t n)
+{
+    v.reserve(n);
+    advise_huge_pages(v.data(), n * sizeof(typename Vector::value_type));
+}
+
 //! std::allocator that advises huge pages for every large block it hands out (the build's per-cluster
 //! member lists: see the file comment). Mapping large blocks on their own in whole huge pages was
 //! tried: more 4 KiB faults (glibc then kept its mmap threshold low), no faster.

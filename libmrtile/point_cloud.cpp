@@ -215,12 +215,10 @@ std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions)
     // to load that position (the table is random access; the positions would be a second miss).
     // Both written once, at random and in order: fresh memory, so huge pages (huge_pages.h).
     std::vector<std::uint64_t> slots;
-    slots.reserve(size);
-    advise_huge_pages(slots.data(), size * sizeof(std::uint64_t));
+    reserve_on_huge_pages(slots, size);
     slots.resize(size, 0);
     std::vector<std::uint32_t> kept;
-    kept.reserve(n);
-    advise_huge_pages(kept.data(), n * sizeof(std::uint32_t));
+    reserve_on_huge_pages(kept, n);
     for (std::size_t i = 0; i < n; ++i) {
         const Vec3& p = positions[i];
         const std::uint64_t hash = mix(mix(mix(0, p.x), p.y), p.z);
