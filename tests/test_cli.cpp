@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 #include <sys/wait.h>
+#include <gnu/libc-version.h>
 
 namespace mrt {
 namespace {
@@ -36,10 +37,11 @@ std::string slurp(const fs::path& p)
     return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-Result mrtile(const std::string& args, const fs::path& dir)
+// `env`: variable settings for the command's environment, as `env` takes them ("-u NAME", "NAME=VALUE").
+Result mrtile(const std::string& args, const fs::path& dir, const std::string& env = "")
 {
     const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = std::string(MRTILE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
+    const std::string command = (env.empty() ? "" : "env " + env + " ") + std::string(MRTILE_CLI) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
     const int status = std::system(command.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -659,6 +661,46 @@ TEST(Cli, build_info_mesh_and_determinism)
     EXPECT_GE(files, 3u);
     EXPECT_EQ(mrtile("--threads x info " + (dir / "a.mrt").string(), dir).code, 2);
     EXPECT_EQ(mrtile("--threads -1 info " + (dir / "a.mrt").string(), dir).code, 2); // not 2^64 - 1 threads
+}
+
+// The CLI re-executes itself with glibc's huge-page malloc where that helps (THP in madvise mode, glibc
+// 2.35+; tools/huge_page_malloc.h), leaves a user's own setting alone, and writes the same bytes either way.
+TEST(Cli, huge_page_malloc_is_chosen_and_changes_no_output)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+    const std::string modes((std::istreambuf_iterator<char>(thp)), std::istreambuf_iterator<char>());
+    int major = 0, minor = 0;
+    ASSERT_EQ(std::sscanf(gnu_get_libc_version(), "%d.%d", &major, &minor), 2);
+    const bool applies = modes.find("[madvise]") != std::string::npos && (major > 2 || minor >= 35);
+
+    Result r = mrtile("--version", dir, "-u GLIBC_TUNABLES");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find(applies ? "heap: glibc.malloc.hugetlb=1\n" : "heap: the default malloc\n"), std::string::npos)
+        << r.out;
+    r = mrtile("--version", dir, "GLIBC_TUNABLES=glibc.malloc.hugetlb=0");
+    EXPECT_NE(r.out.find("heap: glibc.malloc.hugetlb=0\n"), std::string::npos) << r.out;
+    r = mrtile("--version", dir, "GLIBC_TUNABLES=glibc.malloc.check=0"); // another tunable is kept beside it
+    EXPECT_NE(r.out.find(applies ? "heap: glibc.malloc.hugetlb=1\n" : "heap: the default malloc\n"), std::string::npos)
+        << r.out;
+
+    const fs::path xyz = sphere_xyz(dir);
+    for (const char* setting : {"0", "1"}) {
+        const fs::path out = dir / (std::string("h") + setting);
+        const std::string env = std::string("GLIBC_TUNABLES=glibc.malloc.hugetlb=") + setting;
+        r = mrtile("reconstruct " + xyz.string() + " -o " + out.string() + " --format 3dtiles --draco", dir, env);
+        ASSERT_EQ(r.code, 0) << r.err;
+        r = mrtile("reconstruct " + xyz.string() + " -o " + out.string() + ".ply --tolerance 0.002", dir, env);
+        ASSERT_EQ(r.code, 0) << r.err;
+    }
+    EXPECT_EQ(slurp(dir / "h0.ply"), slurp(dir / "h1.ply"));
+    std::size_t files = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "h0"))
+        if (entry.is_regular_file()) {
+            ++files;
+            EXPECT_EQ(slurp(entry.path()), slurp(dir / "h1" / fs::relative(entry.path(), dir / "h0"))) << entry.path();
+        }
+    EXPECT_GE(files, 3u);
 }
 
 // `mesh --triangles N`: the mesh fits the target and comes close; combined with another cut kind it is

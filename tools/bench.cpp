@@ -3,6 +3,7 @@
 // below maps `--only` names to them, so adding a table is one function and one line.
 #include "tools/bench.h"
 #include "tools/bench_measure.h"
+#include "tools/huge_page_malloc.h"
 
 #include <CLI/CLI.hpp>
 
@@ -47,6 +48,8 @@ std::vector<std::string> split_list(const std::string& list)
 int main(int argc, char** argv)
 {
     using namespace mrt::bench;
+    // As the CLI runs (huge_page_malloc.h); GLIBC_TUNABLES=glibc.malloc.hugetlb=0 measures without.
+    mrt::tools::use_huge_page_malloc(argv);
     BenchContext context;
     context.data_dir = MRTILE_SHARED_DATA;
     std::string only;
@@ -103,7 +106,7 @@ int main(int argc, char** argv)
         return 1;
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "_Machine: " << load_before << " before, " << load_average() << " after; benchmark took "
-              << fixed(seconds, 0) << " s._\n";
+    std::cout << "_Machine: " << load_before << " before, " << load_average() << " after; heap: " << mrt::tools::heap_setting()
+              << " (as the CLI runs); benchmark took " << fixed(seconds, 0) << " s._\n";
     return 0;
 }

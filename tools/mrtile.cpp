@@ -5,6 +5,7 @@
 #include "formats/write_3d_tiles.h"
 #include "formats/write_gltf.h"
 #include "formats/write_mesh.h"
+#include "tools/huge_page_malloc.h"
 #include "libmrtile/atomic_file.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
@@ -1532,7 +1533,7 @@ int run(int argc, char** argv)
 {
     CLI::App app{"mrtile: point clouds to multiresolution meshes, glTF and 3D Tiles "
                  "(Heckel, Uva, Hamann clustering-based hierarchical surface models)"};
-    app.set_version_flag("--version", std::string("mrtile ") + MRTILE_VERSION);
+    app.set_version_flag("--version", std::string("mrtile ") + MRTILE_VERSION + "\nheap: " + mrt::tools::heap_setting());
     app.require_subcommand(1);
     app.fallthrough(); // global flags (-q) may follow the command
     Globals g;
@@ -1852,6 +1853,7 @@ int run(int argc, char** argv)
 
 int main(int argc, char** argv)
 {
+    mrt::tools::use_huge_page_malloc(argv); // returns in the re-executed process (or when it does not apply)
     mrt::install_signal_cleanup(); // an interrupted run leaves no temporary file or directory behind
     try {
         return run(argc, argv);
