@@ -1076,6 +1076,36 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
     // as if it were whole. Skipping them costs a pass over the rest of the file, no parsing.
     for (std::size_t e = vertex_index + 1; e < header.elements.size(); ++e)
         skip_element(in, header.elements[e], binary, swap);
+    // Data after the last element means a header that declares fewer elements than the file holds (a
+    // count written before the data was complete, or two files run together): what was read is part
+    // of the cloud, refused rather than read as if it were whole. Blank lines, or binary padding
+    // shorter than one vertex record, are not data.
+    const auto declared = [&] {
+        std::string text;
+        for (const PlyElement& element : header.elements)
+            text += (text.empty() ? "" : ", ") + std::to_string(element.count) + " " + element.name;
+        return " (the header declares " + text + " elements): the header does not describe the data";
+    };
+    if (binary) {
+        if (in.request(std::max<std::size_t>(vertex.min_size, 1))) {
+            std::uint64_t rest = 0;
+            if (in.file_size() > 0) {
+                rest = in.file_size() - in.offset();
+            } else {
+                while (in.available() > 0 || in.request(1)) {
+                    rest += in.available();
+                    in.consume(in.available());
+                }
+            }
+            throw InvalidInput(in.name() + ": " + std::to_string(rest) + " bytes after the last element" +
+                               declared());
+        }
+    } else {
+        std::string_view line;
+        while (in.next_line(line))
+            if (std::any_of(line.begin(), line.end(), [](char c) { return !kBlanks(c); }))
+                fail_line(in, "data after the last element" + declared());
+    }
     return cloud;
 }
 

@@ -1388,6 +1388,39 @@ TEST(ReadErrors, truncated_and_oversized_binary_ply)
     }
 }
 
+// A header that declares fewer elements than the file holds (a count written before the data was
+// complete, or two files run together) would give only part of the cloud, read as if it were whole:
+// data after the last element is refused. A trailing blank line, or a few bytes of binary padding
+// shorter than one vertex record, is not data, and reads.
+TEST(ReadErrors, data_after_the_last_ply_element)
+{
+    const fs::path dir = test_dir();
+    const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+    const fs::path ascii = write_file(dir / "more.ply", "ply\nformat ascii 1.0\nelement vertex 2\n" + xyz +
+                                                          "end_header\n1 2 3\n4 5 6\n7 8 9\n1 1 1\n");
+    expect_error<InvalidInput>([&] { read_points(ascii); },
+                               {ascii.string(), "line 10", "after the last element", "2 vertex"});
+    const std::string whole = make_ply(Encoding::ascii, "float", kPoints, kColors);
+    const fs::path after_faces = write_file(dir / "after_faces.ply", whole + "3 0 1 2 0\n");
+    expect_error<InvalidInput>([&] { read_points(after_faces); }, {after_faces.string(), "after the last element"});
+    const fs::path ascii_gz = write_gz(dir / "more.ply.gz", read_bytes(ascii));
+    expect_error<InvalidInput>([&] { read_points(ascii_gz); }, {ascii_gz.string(), "after the last element"});
+    expect_points(read_points(write_file(dir / "blank_end.ply", whole + "\n  \n\r\n")), kPoints);
+
+    Bytes b;
+    for (const Vec3& p : kPoints)
+        for (int a = 0; a < 3; ++a)
+            b.put(static_cast<float>(p[a]));
+    const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex 2\n" + xyz + "end_header\n";
+    const fs::path binary = write_file(dir / "more_binary.ply", header + b.data);
+    expect_error<InvalidInput>([&] { read_points(binary); },
+                               {binary.string(), "24 bytes after the last element", "2 vertex"});
+    const fs::path binary_gz = write_gz(dir / "more_binary.ply.gz", header + b.data);
+    expect_error<InvalidInput>([&] { read_points(binary_gz); }, {binary_gz.string(), "after the last element"});
+    const std::string padded = make_ply(Encoding::binary_le, "float", kPoints, kColors) + "\n\n";
+    expect_points(read_points(write_file(dir / "padded.ply", padded)), kPoints);
+}
+
 TEST(ReadErrors, malformed_ply_headers)
 {
     const fs::path dir = test_dir();
