@@ -196,6 +196,10 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --stats-json ''", "must not be empty"},
         {"mesh " + (dir / "a.mrt").string() + " -o " + (dir / "x.txt").string(), "unknown output extension"},
         {tiles + " --levels 10000000", "--levels"},
+        // Zero levels or a zero alpha cannot work; both were taken as the default (QA round 27).
+        {tiles + " --levels 0", "--levels"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --levels 0", "--levels"},
+        {a + " --alpha 0", "--alpha"},
         {tiles + " --levels 2 --lod-tolerances 0.01,0.001", "excludes"},
         {tiles + " --lod-tolerances 0.001,0.01", "decrease"},
         {tiles + " --max-tile-triangles 63", "--max-tile-triangles"},

@@ -369,7 +369,7 @@ struct MeshArgs
     void add(CLI::App* cmd, bool one_mesh = true)
     {
         cmd->add_option("--alpha", alpha, "gap triangulation alpha in model units (default: automatic)")
-            ->check(kNonNegative);
+            ->check(kPositive);
         cmd->add_option("--height-field", height_field, "2D Delaunay on the projection: auto, on or off")
             ->check(CLI::IsMember({"auto", "on", "off"}))
             ->capture_default_str();
@@ -797,7 +797,7 @@ struct ExportArgs
                                   ->check(integer_check(64, 1ull << 31))
                                   ->capture_default_str());
         auto* l = cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)")
-                      ->check(integer_check(0, kMaxLevels));
+                      ->check(integer_check(1, kMaxLevels));
         auto* t = cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")
                       ->delimiter(',')
                       ->check(kNonNegative);
