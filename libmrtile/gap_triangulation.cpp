@@ -5,14 +5,17 @@
 // from the same 3D triangulation, the convex hull that stands in for a cloud too small to tile).
 #include "libmrtile/gap_triangulation.h"
 
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
 #include <algorithm>
 #include <iterator>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -27,6 +30,11 @@ using Vb2 = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Kernel>;
 using Tds2 = CGAL::Triangulation_data_structure_2<Vb2>;
 using Delaunay2 = CGAL::Delaunay_triangulation_2<Kernel, Tds2>;
 using Triangle = std::array<std::uint32_t, 3>;
+// Constrained 2D triangulation: vertex info = input index, face info = inside the polygon.
+using CdtVb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Kernel>;
+using CdtFb = CGAL::Triangulation_face_base_with_info_2<char, Kernel, CGAL::Constrained_triangulation_face_base_2<Kernel>>;
+using CdtTds = CGAL::Triangulation_data_structure_2<CdtVb, CdtFb>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CdtTds, CGAL::No_constraint_intersection_tag>;
 
 Triangle sorted(std::uint32_t a, std::uint32_t b, std::uint32_t c)
 {
@@ -134,6 +142,94 @@ std::vector<std::array<std::uint32_t, 3>> convex_hull_triangles(const std::vecto
     }
     std::sort(hull.begin(), hull.end());
     return hull;
+}
+
+std::vector<Triangle> polygon_triangles(const std::vector<std::array<double, 2>>& polygon,
+                                        const std::vector<std::array<double, 2>>& inside)
+{
+    const std::size_t n = polygon.size();
+    if (n < 3)
+        return {};
+    Cdt cdt;
+    std::vector<Cdt::Vertex_handle> corners(n);
+    try {
+        for (std::size_t i = 0; i < n; ++i) {
+            corners[i] = cdt.insert(Kernel::Point_2(polygon[i][0], polygon[i][1]));
+            corners[i]->info() = static_cast<std::uint32_t>(i);
+        }
+        if (cdt.number_of_vertices() != n)
+            return {}; // a repeated corner
+        for (std::size_t i = 0; i < n; ++i)
+            cdt.insert_constraint(corners[i], corners[(i + 1) % n]);
+    } catch (const std::exception&) {
+        return {}; // No_constraint_intersection_tag: edges that cross or touch
+    }
+    // A corner strictly between two others on a constraint would have split it: the polygon touches itself.
+    if (cdt.number_of_vertices() != n)
+        return {};
+    // Inside = reached from the infinite face across an odd number of constraints (one, for a simple polygon).
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f)
+        f->info() = -1;
+    std::vector<Cdt::Face_handle> stack{cdt.infinite_face()};
+    cdt.infinite_face()->info() = 0;
+    std::vector<Cdt::Face_handle> inner_seeds;
+    while (!stack.empty()) {
+        const Cdt::Face_handle f = stack.back();
+        stack.pop_back();
+        for (int k = 0; k < 3; ++k) {
+            const Cdt::Face_handle g = f->neighbor(k);
+            if (g->info() != -1)
+                continue;
+            if (cdt.is_constrained(Cdt::Edge(f, k))) {
+                inner_seeds.push_back(g);
+                continue;
+            }
+            g->info() = 0;
+            stack.push_back(g);
+        }
+    }
+    for (const Cdt::Face_handle seed : inner_seeds)
+        if (seed->info() == -1) {
+            seed->info() = 1;
+            stack.push_back(seed);
+            while (!stack.empty()) {
+                const Cdt::Face_handle f = stack.back();
+                stack.pop_back();
+                for (int k = 0; k < 3; ++k) {
+                    const Cdt::Face_handle g = f->neighbor(k);
+                    if (g->info() == -1 && !cdt.is_constrained(Cdt::Edge(f, k))) {
+                        g->info() = 1;
+                        stack.push_back(g);
+                    }
+                }
+            }
+        }
+    // The inside points, each strictly inside: located in an inside face, not on its edges.
+    for (std::size_t i = 0; i < inside.size(); ++i) {
+        const Kernel::Point_2 p(inside[i][0], inside[i][1]);
+        Cdt::Locate_type type;
+        int li = 0;
+        const Cdt::Face_handle f = cdt.locate(p, type, li);
+        if (type == Cdt::VERTEX)
+            continue; // coincides with a point already in: appears in no triangle
+        const bool on_outline = type == Cdt::EDGE && cdt.is_constrained(Cdt::Edge(f, li));
+        if ((type != Cdt::FACE && type != Cdt::EDGE) || on_outline || cdt.is_infinite(f) || f->info() != 1)
+            return {};
+        const Cdt::Vertex_handle v = cdt.insert(p, type, f, li);
+        v->info() = static_cast<std::uint32_t>(n + i);
+        // Faces made by the insertion inherit nothing: they are inside, as the face they split was.
+        const Cdt::Face_circulator first = cdt.incident_faces(v);
+        Cdt::Face_circulator fc = first;
+        do {
+            fc->info() = 1;
+        } while (++fc != first);
+    }
+    std::vector<Triangle> out;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+        if (f->info() == 1)
+            out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+    std::sort(out.begin(), out.end()); // CGAL's face order follows its memory: sorted for determinism
+    return out;
 }
 
 } // namespace mrt

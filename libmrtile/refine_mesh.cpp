@@ -1,0 +1,671 @@
+// Incremental refinement of a cut's mesh (the "any cut" issue's incremental form), built from the
+// paper's own parts: §4.2 pseudo tiles of the finer nodes, and a Delaunay triangulation of their
+// points (§4.3's T2, here constrained to the coarse tile's outline). Why inside the fan only: the fan
+// is the one part of mesh_cut's surface that belongs to a single node, so replacing it by a
+// triangulated disc with the same outline cannot change the topology or open a crack anywhere; the
+// outline's vertices and everything beyond them stay bit for bit.
+#include "libmrtile/refine_mesh.h"
+
+#include "libmrtile/errors.h"
+#include "libmrtile/gap_triangulation.h"
+
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace mrt {
+namespace {
+
+using Point2 = std::array<double, 2>;
+
+// Rounds of mending a region that touches itself at a vertex (LocalRefiner::unpinch).
+constexpr int kPinchRounds = 20;
+
+// The height fit of the new vertices (LocalRefiner::fit_heights): points per descendant tile used,
+// damping towards the start, the largest move as a share of the shortest incident edge, sweeps.
+constexpr std::size_t kFitPointsPerTile = 64;
+constexpr double kFitDamping = 0.05;
+constexpr double kFitMaxMove = 0.5;
+constexpr int kFitSweeps = 20;
+
+double segment_distance2(const Point2& p, const Point2& a, const Point2& b)
+{
+    const double dx = b[0] - a[0], dy = b[1] - a[1];
+    const double len2 = dx * dx + dy * dy;
+    double t = len2 > 0.0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    const double ex = a[0] + t * dx - p[0], ey = a[1] + t * dy - p[1];
+    return ex * ex + ey * ey;
+}
+
+// The plane a region is re-triangulated in (see LocalRefiner::plane_of): u, v, n right-handed.
+struct Plane
+{
+    Vec3 origin, u, v, n;
+    Point2 project(const Vec3& p) const
+    {
+        const Vec3 d = p - origin;
+        return {dot(d, u), dot(d, v)};
+    }
+};
+
+// A point to insert: where it is, which descendant it belongs to, which input point it is (or -1).
+struct NewPoint
+{
+    Vec3 position;
+    Point2 uv;
+    std::int32_t node;
+    std::int64_t input_point;
+};
+
+class LocalRefiner
+{
+public:
+    LocalRefiner(const Hierarchy& h, MeshResult& result, const LocalRefineOptions& options)
+        : h_(h), mesh_(result.mesh), options_(options),
+          tile_(OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh_, kFaceTile)),
+          gap_(OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh_, kFaceGap)),
+          cluster_(OpenMesh::getProperty<OpenMesh::VertexHandle, int>(mesh_, kVertexCluster))
+    {
+        for (const auto f : mesh_.faces())
+            if (tile_[f] >= 0)
+                fans_[tile_[f]].push_back(f);
+        for (const auto v : mesh_.vertices())
+            if (cluster_[v] >= 0)
+                vertices_[cluster_[v]].push_back(v);
+    }
+
+    // Replaces the fan of `node` by a triangulation of its outline with the descendants' points;
+    // false (and nothing changed) where that cannot be done safely.
+    bool refine(std::int32_t node, const std::vector<std::int32_t>& descendants, LocalRefineStats& stats)
+    {
+        std::vector<Mesh::FaceHandle> fan = region_of(node);
+        if (fan.empty())
+            return false;
+        std::vector<Mesh::VertexHandle> outline;
+        std::vector<Mesh::VertexHandle> pinches;
+        bool disc = disc_outline(fan, outline, pinches);
+        std::vector<int> tried;
+        for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
+            unpinch(pinches, fan, tried);
+            outline.clear();
+            pinches.clear();
+            disc = disc_outline(fan, outline, pinches);
+        }
+        for (const auto f : fan)
+            in_region_[static_cast<std::size_t>(f.idx())] = 0;
+        if (!disc)
+            return false;
+        const Plane plane = plane_of(node, fan);
+        std::vector<Point2> polygon;
+        polygon.reserve(outline.size());
+        for (const auto v : outline)
+            polygon.push_back(plane.project(to_vec3(mesh_.point(v))));
+        if (signed_area(polygon) <= 0.0)
+            return false; // the outline folds in the plane (or is degenerate)
+        std::vector<NewPoint> points = descendant_points(plane, polygon, descendants);
+        std::vector<Point2> inside;
+        inside.reserve(points.size());
+        for (const NewPoint& p : points)
+            inside.push_back(p.uv);
+        const std::vector<std::array<std::uint32_t, 3>> triangles = polygon_triangles(polygon, inside);
+        if (triangles.empty())
+            return false;
+        // Where each triangle corner is in 3D: an outline vertex, or a new point.
+        auto position = [&](std::uint32_t k) {
+            return k < outline.size() ? to_vec3(mesh_.point(outline[k])) : points[k - outline.size()].position;
+        };
+        const double min_cos = std::cos(options_.max_tilt_degrees * M_PI / 180.0);
+        auto folds = [&] {
+            for (const auto& t : triangles) {
+                const Vec3 normal = cross(position(t[1]) - position(t[0]), position(t[2]) - position(t[0]));
+                const double length = norm(normal);
+                if (!(length > 0.0) || dot(normal, plane.n) < min_cos * length)
+                    return true;
+            }
+            return false;
+        };
+        if (folds())
+            return false;
+        if (options_.fit) {
+            const std::vector<NewPoint> unfitted = points;
+            fit_heights(plane, polygon, outline, descendants, triangles, points);
+            if (folds())
+                points = unfitted;
+        }
+        if (!replace_fan(fan, outline, points, triangles)) {
+            ++stats.refused;
+            return false;
+        }
+        stats.faces_removed += fan.size();
+        stats.faces_added += triangles.size();
+        fans_.erase(node);
+        vertices_.erase(node);
+        return true;
+    }
+
+private:
+    // The new vertices moved along the plane's normal to fit the descendants' points in least squares
+    // (the region is a graph over the plane: a height per vertex, linear over each triangle), as
+    // fit_vertices does for a whole mesh: interpolated input points leave a curved patch's chords
+    // below it. The outline stays. Damped towards where each vertex started and bounded by half its
+    // shortest edge, as FitOptions' defaults are.
+    void fit_heights(const Plane& plane, const std::vector<Point2>& polygon, const std::vector<Mesh::VertexHandle>& outline,
+                     const std::vector<std::int32_t>& descendants, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                     std::vector<NewPoint>& points) const
+    {
+        const std::size_t fixed = outline.size(), count = fixed + points.size();
+        std::vector<Point2> uv(count);
+        std::vector<double> height(count);
+        for (std::size_t k = 0; k < fixed; ++k) {
+            uv[k] = polygon[k];
+            height[k] = dot(to_vec3(mesh_.point(outline[k])) - plane.origin, plane.n);
+        }
+        for (std::size_t k = fixed; k < count; ++k) {
+            uv[k] = points[k - fixed].uv;
+            height[k] = dot(points[k - fixed].position - plane.origin, plane.n);
+        }
+        // A grid of the triangles' boxes, about one triangle per cell, to find the triangle under a point.
+        double lo_u = uv[0][0], hi_u = lo_u, lo_v = uv[0][1], hi_v = lo_v;
+        for (const Point2& p : uv) {
+            lo_u = std::min(lo_u, p[0]);
+            hi_u = std::max(hi_u, p[0]);
+            lo_v = std::min(lo_v, p[1]);
+            hi_v = std::max(hi_v, p[1]);
+        }
+        const std::size_t side = std::max<std::size_t>(1, static_cast<std::size_t>(std::sqrt(static_cast<double>(triangles.size()))));
+        const double cell_u = std::max(hi_u - lo_u, 1e-300) / static_cast<double>(side);
+        const double cell_v = std::max(hi_v - lo_v, 1e-300) / static_cast<double>(side);
+        auto cell = [&](double u, double v) {
+            const auto i = std::min(side - 1, static_cast<std::size_t>(std::max(0.0, (u - lo_u) / cell_u)));
+            const auto j = std::min(side - 1, static_cast<std::size_t>(std::max(0.0, (v - lo_v) / cell_v)));
+            return std::array<std::size_t, 2>{i, j};
+        };
+        std::vector<std::vector<std::uint32_t>> grid(side * side);
+        for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+            const Point2 &a = uv[triangles[t][0]], &b = uv[triangles[t][1]], &c = uv[triangles[t][2]];
+            const auto lo = cell(std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}));
+            const auto hi = cell(std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}));
+            for (std::size_t i = lo[0]; i <= hi[0]; ++i)
+                for (std::size_t j = lo[1]; j <= hi[1]; ++j)
+                    grid[j * side + i].push_back(t);
+        }
+        // Per triangle, the normal equations of its points: Σ λλᵀ and Σ λ z.
+        std::vector<std::array<double, 9>> normal(triangles.size(), std::array<double, 9>{});
+        std::vector<std::array<double, 3>> rhs(triangles.size(), std::array<double, 3>{});
+        std::size_t samples = 0;
+        for (const std::int32_t d : descendants) {
+            const Node& node = h_.nodes[static_cast<std::size_t>(d)];
+            const std::size_t n = node.end - node.begin;
+            const std::size_t stride = std::max<std::size_t>(1, n / kFitPointsPerTile);
+            for (std::size_t i = node.begin; i < node.end; i += stride) {
+                const Vec3& q = h_.cloud.positions[i];
+                const Point2 p = plane.project(q);
+                const auto c = cell(p[0], p[1]);
+                for (const std::uint32_t t : grid[c[1] * side + c[0]]) {
+                    const Point2 &a = uv[triangles[t][0]], &b = uv[triangles[t][1]], &e = uv[triangles[t][2]];
+                    const double det = (b[0] - a[0]) * (e[1] - a[1]) - (e[0] - a[0]) * (b[1] - a[1]);
+                    const double l1 = ((p[0] - a[0]) * (e[1] - a[1]) - (e[0] - a[0]) * (p[1] - a[1])) / det;
+                    const double l2 = ((b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1])) / det;
+                    const std::array<double, 3> l{1.0 - l1 - l2, l1, l2};
+                    if (!(det > 0.0) || l[0] < -1e-9 || l[1] < -1e-9 || l[2] < -1e-9)
+                        continue;
+                    const double z = dot(q - plane.origin, plane.n);
+                    for (int r = 0; r < 3; ++r) {
+                        rhs[t][static_cast<std::size_t>(r)] += l[static_cast<std::size_t>(r)] * z;
+                        for (int k = 0; k < 3; ++k)
+                            normal[t][static_cast<std::size_t>(3 * r + k)] += l[static_cast<std::size_t>(r)] * l[static_cast<std::size_t>(k)];
+                    }
+                    ++samples;
+                    break;
+                }
+            }
+        }
+        if (samples == 0)
+            return;
+        // Gauss-Seidel on the new vertices' heights; the damping weight is a share of the mean weight
+        // the points put on a vertex.
+        std::vector<std::vector<std::pair<std::uint32_t, int>>> incident(count); // (triangle, corner)
+        std::vector<double> shortest(count, std::numeric_limits<double>::infinity());
+        for (std::uint32_t t = 0; t < triangles.size(); ++t)
+            for (int r = 0; r < 3; ++r) {
+                const std::uint32_t k = triangles[t][static_cast<std::size_t>(r)];
+                incident[k].push_back({t, r});
+                const std::uint32_t next = triangles[t][static_cast<std::size_t>((r + 1) % 3)];
+                const double length = distance(position_of(plane, uv[k], height[k]), position_of(plane, uv[next], height[next]));
+                shortest[k] = std::min(shortest[k], length);
+                shortest[next] = std::min(shortest[next], length);
+            }
+        double weight = 0.0;
+        for (std::size_t k = fixed; k < count; ++k)
+            for (const auto& [t, r] : incident[k])
+                weight += normal[t][static_cast<std::size_t>(4 * r)];
+        const double damping = kFitDamping * weight / static_cast<double>(count - fixed) + 1e-300;
+        const std::vector<double> start = height;
+        for (int sweep = 0; sweep < kFitSweeps; ++sweep)
+            for (std::size_t k = fixed; k < count; ++k) {
+                double diagonal = damping, sum = damping * start[k];
+                for (const auto& [t, r] : incident[k]) {
+                    diagonal += normal[t][static_cast<std::size_t>(4 * r)];
+                    sum += rhs[t][static_cast<std::size_t>(r)];
+                    for (int c = 0; c < 3; ++c)
+                        if (c != r)
+                            sum -= normal[t][static_cast<std::size_t>(3 * r + c)] * height[triangles[t][static_cast<std::size_t>(c)]];
+                }
+                const double bound = kFitMaxMove * shortest[k];
+                height[k] = std::clamp(sum / diagonal, start[k] - bound, start[k] + bound);
+            }
+        for (std::size_t k = fixed; k < count; ++k)
+            points[k - fixed].position = position_of(plane, uv[k], height[k]);
+    }
+
+    static Vec3 position_of(const Plane& plane, const Point2& uv, double height)
+    {
+        return plane.origin + plane.u * uv[0] + plane.v * uv[1] + plane.n * height;
+    }
+
+    // The node's fan (f:tile = node) and the faces between tiles (f:tile -1: gap faces, faces flipped
+    // across tiles) at the fan's and the node's vertices: the strips to the neighbours' rims are re-made
+    // with the descendants' points too. Marked in in_region_ (the caller clears the marks).
+    std::vector<Mesh::FaceHandle> region_of(std::int32_t node)
+    {
+        in_region_.resize(mesh_.n_faces(), 0);
+        std::vector<Mesh::FaceHandle> region;
+        auto take = [&](Mesh::FaceHandle f) {
+            char& mark = in_region_[static_cast<std::size_t>(f.idx())];
+            if (!mark) {
+                mark = 1;
+                region.push_back(f);
+            }
+        };
+        auto take_around = [&](Mesh::VertexHandle v) {
+            for (const auto g : mesh_.vf_range(v))
+                if (tile_[g] < 0 || tile_[g] == node)
+                    take(g);
+        };
+        if (const auto fan = fans_.find(node); fan != fans_.end())
+            for (const auto f : fan->second)
+                if (!mesh_.status(f).deleted())
+                    for (const auto v : mesh_.fv_range(f))
+                        take_around(v);
+        if (const auto own = vertices_.find(node); own != vertices_.end())
+            for (const auto v : own->second)
+                if (!mesh_.status(v).deleted())
+                    take_around(v);
+        return region;
+    }
+
+    // Where the region's outline passes a vertex twice (the region touches itself there), the faces
+    // between tiles at that vertex join the region (which often makes it an inner vertex); where that
+    // was tried before at the vertex, they leave it instead.
+    void unpinch(const std::vector<Mesh::VertexHandle>& pinches, std::vector<Mesh::FaceHandle>& region,
+                 std::vector<int>& tried)
+    {
+        for (const auto w : pinches) {
+            const bool fill = std::find(tried.begin(), tried.end(), w.idx()) == tried.end();
+            tried.push_back(w.idx());
+            for (const auto g : mesh_.vf_range(w))
+                if (tile_[g] < 0) {
+                    char& mark = in_region_[static_cast<std::size_t>(g.idx())];
+                    if (fill && !mark)
+                        region.push_back(g);
+                    mark = fill ? 1 : 0;
+                }
+        }
+        region.erase(std::remove_if(region.begin(), region.end(),
+                                    [&](Mesh::FaceHandle f) { return !in_region_[static_cast<std::size_t>(f.idx())]; }),
+                     region.end());
+    }
+
+    // True when the region's faces form one disc with a simple outline; the outline, in the winding of
+    // its faces (counter-clockwise seen from their side). Else the vertices it passes twice, if any.
+    bool disc_outline(const std::vector<Mesh::FaceHandle>& fan, std::vector<Mesh::VertexHandle>& outline,
+                      std::vector<Mesh::VertexHandle>& pinches)
+    {
+        auto in_fan = [&](Mesh::FaceHandle f) { return f.is_valid() && in_region_[static_cast<std::size_t>(f.idx())]; };
+        std::unordered_map<int, Mesh::HalfedgeHandle> next_on_outline; // from-vertex → outline half-edge
+        std::size_t edges = 0, border = 0;
+        std::vector<int> vertices;
+        for (const auto f : fan)
+            for (const auto he : mesh_.fh_range(f)) {
+                vertices.push_back(mesh_.from_vertex_handle(he).idx());
+                const auto opposite = mesh_.opposite_face_handle(he);
+                if (in_fan(opposite)) {
+                    ++edges; // counted from both sides
+                    continue;
+                }
+                ++border;
+                if (!next_on_outline.emplace(mesh_.from_vertex_handle(he).idx(), he).second)
+                    pinches.push_back(mesh_.from_vertex_handle(he)); // the outline passes it twice
+            }
+        if (!pinches.empty())
+            return false;
+        std::sort(vertices.begin(), vertices.end());
+        vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+        const std::size_t e = edges / 2 + border;
+        // One disc: Euler characteristic 1, and the outline is one loop through all its half-edges.
+        if (static_cast<long long>(vertices.size()) - static_cast<long long>(e) + static_cast<long long>(fan.size()) != 1)
+            return false;
+        Mesh::HalfedgeHandle he = next_on_outline.begin()->second;
+        const Mesh::HalfedgeHandle first = he;
+        do {
+            outline.push_back(mesh_.from_vertex_handle(he));
+            const auto next = next_on_outline.find(mesh_.to_vertex_handle(he).idx());
+            if (next == next_on_outline.end() || outline.size() > border)
+                return false;
+            he = next->second;
+        } while (he != first);
+        if (outline.size() != border || border < 3)
+            return false;
+        // Start at the smallest vertex index: the same outline gives the same polygon, whatever the map's order.
+        std::rotate(outline.begin(), std::min_element(outline.begin(), outline.end()), outline.end());
+        return true;
+    }
+
+    // The plane the region is re-triangulated in: through the node's mean, normal to the region's
+    // area-weighted face normal (the node's PCA normal when the faces cancel out). The region's own
+    // normal, not the node's: the strips around the fan belong to it too, and a plane that sees the
+    // whole region face-on folds it least.
+    Plane plane_of(std::int32_t node, const std::vector<Mesh::FaceHandle>& region) const
+    {
+        const Node& n = h_.nodes[static_cast<std::size_t>(node)];
+        Vec3 faces{0, 0, 0};
+        for (const auto f : region) {
+            const std::array<Vec3, 3> c = face_corners(mesh_, f);
+            faces += cross(c[1] - c[0], c[2] - c[0]);
+        }
+        Vec3 normal = n.frame.vectors[0];
+        const double length = norm(faces);
+        if (length > 0.0)
+            normal = faces / length;
+        // Any unit vector across the normal: the largest PCA axis with its normal part taken out.
+        Vec3 u = n.frame.vectors[2] - normal * dot(n.frame.vectors[2], normal);
+        if (!(norm(u) > 1e-6))
+            u = n.frame.vectors[1] - normal * dot(n.frame.vectors[1], normal);
+        u = u / norm(u);
+        return {n.moments.mean, u, cross(normal, u), normal}; // cross(u, v) == normal: right-handed
+    }
+
+    static double signed_area(const std::vector<Point2>& polygon)
+    {
+        double area = 0.0;
+        for (std::size_t i = 0; i < polygon.size(); ++i) {
+            const Point2& a = polygon[i];
+            const Point2& b = polygon[(i + 1) % polygon.size()];
+            area += a[0] * b[1] - a[1] * b[0];
+        }
+        return 0.5 * area;
+    }
+
+    // The descendants' pseudo-tile points (apex and hull) that lie inside the outline, apart from it
+    // and from each other by LocalRefineOptions::min_separation of their tile's spacing.
+    std::vector<NewPoint> descendant_points(const Plane& plane, const std::vector<Point2>& polygon,
+                                            const std::vector<std::int32_t>& descendants) const
+    {
+        std::vector<NewPoint> candidates;
+        std::vector<double> separation;
+        for (const std::int32_t d : descendants) {
+            const Tile tile = make_tile(h_, d, options_.tiles);
+            const double sep = options_.min_separation * tile.spacing();
+            auto add = [&](const Vec3& p, std::int64_t input) {
+                candidates.push_back({p, plane.project(p), d, input});
+                separation.push_back(sep);
+            };
+            if (tile.has_fan())
+                add(tile.apex, -1);
+            for (const std::uint32_t i : tile.boundary)
+                add(h_.cloud.positions[i], static_cast<std::int64_t>(i));
+        }
+        std::vector<NewPoint> kept;
+        std::vector<double> kept_separation;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            const NewPoint& c = candidates[k];
+            const double s2 = separation[k] * separation[k];
+            if (!inside_polygon(polygon, c.uv))
+                continue;
+            bool clear = true;
+            for (std::size_t i = 0; i < polygon.size() && clear; ++i)
+                clear = segment_distance2(c.uv, polygon[i], polygon[(i + 1) % polygon.size()]) >= s2;
+            for (std::size_t j = 0; j < kept.size() && clear; ++j) {
+                const double dx = kept[j].uv[0] - c.uv[0], dy = kept[j].uv[1] - c.uv[1];
+                const double s = std::max(separation[k], kept_separation[j]);
+                clear = dx * dx + dy * dy >= s * s;
+            }
+            if (clear) {
+                kept.push_back(c);
+                kept_separation.push_back(separation[k]);
+            }
+        }
+        return kept;
+    }
+
+    static bool inside_polygon(const std::vector<Point2>& polygon, const Point2& p)
+    {
+        bool inside = false;
+        for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+            const Point2& a = polygon[i];
+            const Point2& b = polygon[j];
+            if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0])
+                inside = !inside;
+        }
+        return inside;
+    }
+
+    // Deletes the fan and adds the new faces in an order that always attaches to what is there (each
+    // face shares an edge with the outline or with faces already added); if OpenMesh refuses any
+    // face, the fan is put back as it was and false returned.
+    bool replace_fan(const std::vector<Mesh::FaceHandle>& fan,
+                     const std::vector<Mesh::VertexHandle>& outline, const std::vector<NewPoint>& points,
+                     const std::vector<std::array<std::uint32_t, 3>>& triangles)
+    {
+        std::vector<std::array<Mesh::VertexHandle, 3>> old_faces;
+        std::vector<char> old_gap;
+        std::vector<int> old_tile;
+        for (const auto f : fan) {
+            old_faces.push_back(face_vertices(mesh_, f));
+            old_gap.push_back(gap_[f] ? 1 : 0);
+            old_tile.push_back(tile_[f]);
+        }
+        const std::vector<std::size_t> order = attach_order(triangles, outline.size());
+        if (order.size() != triangles.size())
+            return false;
+        for (const auto f : fan)
+            mesh_.delete_face(f, false);
+        std::vector<Mesh::VertexHandle> corner(outline.begin(), outline.end());
+        for (const NewPoint& p : points) {
+            const auto v = mesh_.add_vertex(to_point(p.position));
+            cluster_[v] = p.node;
+            vertices_[p.node].push_back(v);
+            if (mesh_.has_vertex_colors())
+                mesh_.set_color(v, colour_of(p));
+            corner.push_back(v);
+        }
+        std::vector<Mesh::FaceHandle> added;
+        bool refused = false;
+        {
+            const QuietOpenMesh quiet;
+            for (const std::size_t k : order) {
+                const auto& t = triangles[k];
+                const auto f = mesh_.add_face(corner[t[0]], corner[t[1]], corner[t[2]]);
+                if (!f.is_valid()) {
+                    refused = true;
+                    break;
+                }
+                added.push_back(f);
+                const std::int32_t owner = owner_of(t, points, outline.size());
+                tile_[f] = owner;
+                gap_[f] = owner < 0;
+            }
+        }
+        if (refused) {
+            for (const auto f : added)
+                mesh_.delete_face(f, false);
+            for (std::size_t k = outline.size(); k < corner.size(); ++k)
+                mesh_.delete_vertex(corner[k], false);
+            const QuietOpenMesh quiet;
+            for (std::size_t k = 0; k < old_faces.size(); ++k) {
+                const auto f = mesh_.add_face(old_faces[k][0], old_faces[k][1], old_faces[k][2]);
+                if (!f.is_valid())
+                    throw std::logic_error("refine_mesh: a fan could not be put back after a refused face");
+                tile_[f] = old_tile[k];
+                gap_[f] = old_gap[k] != 0;
+            }
+            return false;
+        }
+        for (const auto f : added)
+            if (tile_[f] >= 0)
+                fans_[tile_[f]].push_back(f);
+        // The fan's own vertices inside the outline (its apex) are left without faces: remove them.
+        for (const auto& corners : old_faces)
+            for (const auto v : corners)
+                if (!mesh_.status(v).deleted() && mesh_.is_isolated(v))
+                    mesh_.delete_vertex(v, false);
+        return true;
+    }
+
+    // Triangles in an order where each shares an edge with the outline or an earlier one (a breadth-
+    // first walk from the outline). Shorter than `triangles` if some cannot be reached.
+    static std::vector<std::size_t> attach_order(const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                                                 std::size_t outline_size)
+    {
+        auto key = [](std::uint32_t a, std::uint32_t b) {
+            return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
+        };
+        std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_edge;
+        for (std::size_t k = 0; k < triangles.size(); ++k)
+            for (int i = 0; i < 3; ++i)
+                by_edge[key(triangles[k][i], triangles[k][(i + 1) % 3])].push_back(k);
+        std::vector<char> placed(triangles.size(), 0);
+        std::vector<std::size_t> order;
+        order.reserve(triangles.size());
+        for (std::uint32_t i = 0; i < outline_size; ++i) {
+            const auto it = by_edge.find(key(i, static_cast<std::uint32_t>((i + 1) % outline_size)));
+            if (it == by_edge.end())
+                return {};
+            for (const std::size_t k : it->second)
+                if (!placed[k]) {
+                    placed[k] = 1;
+                    order.push_back(k);
+                }
+        }
+        for (std::size_t head = 0; head < order.size(); ++head) {
+            const auto& t = triangles[order[head]];
+            for (int i = 0; i < 3; ++i)
+                for (const std::size_t k : by_edge[key(t[i], t[(i + 1) % 3])])
+                    if (!placed[k]) {
+                        placed[k] = 1;
+                        order.push_back(k);
+                    }
+        }
+        return order;
+    }
+
+    // The descendant whose points make all three corners, or -1 (a face between descendants or on the outline).
+    static std::int32_t owner_of(const std::array<std::uint32_t, 3>& t, const std::vector<NewPoint>& points,
+                                 std::size_t outline_size)
+    {
+        std::int32_t owner = -1;
+        for (const std::uint32_t k : t) {
+            if (k < outline_size)
+                return -1;
+            const std::int32_t node = points[k - outline_size].node;
+            if (owner >= 0 && node != owner)
+                return -1;
+            owner = node;
+        }
+        return owner;
+    }
+
+    Mesh::Color colour_of(const NewPoint& p) const
+    {
+        const auto& colours = h_.cloud.colors;
+        std::size_t i = p.input_point >= 0 ? static_cast<std::size_t>(p.input_point)
+                                           : h_.nodes[static_cast<std::size_t>(p.node)].begin;
+        if (i >= colours.size())
+            return Mesh::Color(255, 255, 255, 255);
+        return Mesh::Color(colours[i][0], colours[i][1], colours[i][2], colours[i][3]);
+    }
+
+    const Hierarchy& h_;
+    Mesh& mesh_;
+    const LocalRefineOptions& options_;
+    OpenMesh::PropertyManager<OpenMesh::FPropHandleT<int>> tile_;
+    OpenMesh::PropertyManager<OpenMesh::FPropHandleT<bool>> gap_;
+    OpenMesh::PropertyManager<OpenMesh::VPropHandleT<int>> cluster_;
+    std::unordered_map<std::int32_t, std::vector<Mesh::FaceHandle>> fans_;
+    std::unordered_map<std::int32_t, std::vector<Mesh::VertexHandle>> vertices_; // by v:cluster
+    std::vector<char> in_region_; // per face: in the region being refined
+};
+
+} // namespace
+
+LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+{
+    if (!(options.max_tilt_degrees > 0.0 && options.max_tilt_degrees <= 90.0))
+        throw InvalidInput("LocalRefineOptions::max_tilt_degrees must be in (0, 90]");
+    if (!(options.min_separation >= 0.0))
+        throw InvalidInput("LocalRefineOptions::min_separation must be >= 0");
+    if (!OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(result.mesh, kFaceTile) ||
+        !OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(result.mesh, kFaceGap) ||
+        !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
+        throw InvalidInput("refine_mesh: the mesh has no tile ids (v:cluster, f:tile, f:gap); pass a mesh_cut result");
+    check_node_ids(h, finer);
+    if (!is_partition(h, finer))
+        throw InvalidInput("refine_mesh: the finer cut is not a partition of the points");
+    check_node_ids(h, result.cut);
+    // The finer cut's nodes by first point: the ones under a node of the mesh's cut are one run.
+    std::vector<std::int32_t> by_begin = finer;
+    std::sort(by_begin.begin(), by_begin.end(), [&](std::int32_t a, std::int32_t b) {
+        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+    });
+    auto below = [&](std::int32_t node) {
+        const Node& n = h.nodes[static_cast<std::size_t>(node)];
+        const auto first = std::partition_point(by_begin.begin(), by_begin.end(), [&](std::int32_t d) {
+            return h.nodes[static_cast<std::size_t>(d)].begin < n.begin;
+        });
+        std::vector<std::int32_t> run;
+        for (auto it = first; it != by_begin.end() && h.nodes[static_cast<std::size_t>(*it)].end <= n.end; ++it)
+            run.push_back(*it);
+        std::size_t covered = 0;
+        for (const std::int32_t d : run)
+            covered += h.nodes[static_cast<std::size_t>(d)].end - h.nodes[static_cast<std::size_t>(d)].begin;
+        if (run.empty() || covered != n.end - n.begin || h.nodes[static_cast<std::size_t>(run.front())].begin != n.begin)
+            throw InvalidInput("refine_mesh: node " + std::to_string(node) +
+                               " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; use mesh_cut)");
+        return run;
+    };
+
+    LocalRefineStats stats;
+    LocalRefiner refiner(h, result, options);
+    Cut meshed;
+    meshed.reserve(finer.size());
+    for (const std::int32_t node : result.cut) {
+        const std::vector<std::int32_t> run = below(node);
+        if (run.size() == 1 && run.front() == node) {
+            meshed.push_back(node);
+        } else if (refiner.refine(node, run, stats)) {
+            ++stats.refined;
+            meshed.insert(meshed.end(), run.begin(), run.end());
+        } else {
+            ++stats.kept;
+            meshed.push_back(node);
+        }
+    }
+    std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {
+        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+    });
+    result.mesh.garbage_collection();
+    result.mesh.update_normals();
+    result.cut = std::move(meshed);
+    result.tiles = result.cut.size();
+    return stats;
+}
+
+} // namespace mrt

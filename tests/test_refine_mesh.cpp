@@ -1,0 +1,226 @@
+// Incremental refinement of a cut's mesh (refine_mesh.h) and the constrained polygon triangulation it
+// uses (gap_triangulation.h): topology kept exactly, the untouched part bit for bit, distances lower
+// where refined, on analytic shapes and the bunny scan.
+#include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
+#include "libmrtile/errors.h"
+#include "libmrtile/gap_triangulation.h"
+#include "libmrtile/mesh_stats.h"
+#include "libmrtile/reconstruct.h"
+#include "libmrtile/refine_mesh.h"
+#include "libmrtile/shapes.h"
+#include "formats/read_points.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <vector>
+
+namespace mrt {
+namespace {
+
+using Point2 = std::array<double, 2>;
+using Triangles = std::vector<std::array<std::uint32_t, 3>>;
+
+double area(const Point2& a, const Point2& b, const Point2& c)
+{
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+}
+
+TEST(PolygonTriangles, a_square_with_points_inside_is_covered_exactly)
+{
+    const std::vector<Point2> square{{0, 0}, {2, 0}, {2, 1}, {1.2, 1.4}, {0, 1}};
+    const std::vector<Point2> inside{{0.5, 0.5}, {1.0, 0.4}, {1.5, 0.6}};
+    const Triangles t = polygon_triangles(square, inside);
+    // Euler: a polygon of n corners with m points inside has n - 2 + 2m triangles.
+    ASSERT_EQ(t.size(), square.size() - 2 + 2 * inside.size());
+    std::vector<Point2> all = square;
+    all.insert(all.end(), inside.begin(), inside.end());
+    double total = 0.0;
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+    for (const auto& tri : t) {
+        const double a = area(all[tri[0]], all[tri[1]], all[tri[2]]);
+        EXPECT_GT(a, 0.0); // counter-clockwise
+        total += a;
+        for (int i = 0; i < 3; ++i)
+            ++directed[{tri[static_cast<std::size_t>(i)], tri[static_cast<std::size_t>((i + 1) % 3)]}];
+    }
+    double polygon_area = 0.0;
+    for (std::size_t i = 0; i < square.size(); ++i)
+        polygon_area += 0.5 * (square[i][0] * square[(i + 1) % square.size()][1] -
+                               square[(i + 1) % square.size()][0] * square[i][1]);
+    EXPECT_NEAR(total, polygon_area, 1e-12);
+    for (std::uint32_t i = 0; i < square.size(); ++i) // every outline edge, in the outline's direction
+        EXPECT_EQ((directed[{i, static_cast<std::uint32_t>((i + 1) % square.size())}]), 1) << i;
+    EXPECT_EQ(polygon_triangles(square, inside), t); // deterministic
+}
+
+TEST(PolygonTriangles, refuses_what_is_not_a_simple_polygon_with_points_strictly_inside)
+{
+    const std::vector<Point2> square{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    EXPECT_TRUE(polygon_triangles({{0, 0}, {1, 1}, {1, 0}, {0, 1}}, {}).empty()); // a bow tie
+    EXPECT_TRUE(polygon_triangles(square, {{1.5, 0.5}}).empty());                // outside
+    EXPECT_TRUE(polygon_triangles(square, {{1.0, 0.5}}).empty());                // on the outline
+    EXPECT_TRUE(polygon_triangles({{0, 0}, {1, 0}, {0, 0}, {0, 1}}, {}).empty()); // a repeated corner
+    EXPECT_TRUE(polygon_triangles({{0, 0}, {1, 0}}, {}).empty());
+    // A point twice: the second appears in no triangle.
+    const Triangles t = polygon_triangles(square, {{0.5, 0.5}, {0.5, 0.5}});
+    ASSERT_EQ(t.size(), 4u);
+    for (const auto& tri : t)
+        EXPECT_TRUE(std::find(tri.begin(), tri.end(), 5u) == tri.end());
+}
+
+std::vector<Vec3> positions_of(const Mesh& mesh)
+{
+    std::vector<Vec3> p;
+    for (const auto v : mesh.vertices())
+        p.push_back(to_vec3(mesh.point(v)));
+    return p;
+}
+
+std::vector<Vec3> points_within(const Hierarchy& h, const Vec3& centre, double radius)
+{
+    std::vector<Vec3> p;
+    for (const Vec3& q : h.cloud.positions)
+        if (distance(q, centre) < radius)
+            p.push_back(q);
+    return p;
+}
+
+void expect_manifold(const Mesh& mesh, std::size_t loops, int genus)
+{
+    const TopologyStats t = topology_stats(mesh);
+    EXPECT_EQ(t.nonmanifold_edges, 0u);
+    EXPECT_EQ(t.nonmanifold_vertices, 0u);
+    EXPECT_EQ(t.boundary_loops, loops);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, genus);
+    EXPECT_TRUE(t.consistently_oriented);
+}
+
+// A focus region refined on a closed torus: the mesh stays closed with genus 1, the cut becomes the
+// refined one, everything away from the region keeps its vertices bit for bit, and the points in the
+// region come nearer the mesh.
+TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(60000));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.005));
+    FocusRegion focus;
+    focus.centre = Vec3{1.35, 0.0, 0.0} - h.cloud.origin; // on the outer equator
+    focus.radius = 0.25;
+    focus.tolerance = 0.0005;
+    const Cut finer = refine_cut(h, base.cut, 0.005, {focus});
+    ASSERT_GT(finer.size(), base.cut.size() + 20);
+
+    MeshResult refined = base;
+    const LocalRefineStats stats = refine_mesh(h, refined, finer);
+    EXPECT_GT(stats.refined, 5u);
+    EXPECT_LE(stats.kept * 5, stats.refined); // at most a fifth left as it was
+    EXPECT_EQ(stats.refused, 0u);
+    EXPECT_EQ(refined.mesh.n_faces(), base.mesh.n_faces() - stats.faces_removed + stats.faces_added);
+    EXPECT_TRUE(is_partition(h, refined.cut));
+    EXPECT_EQ(refined.tiles, refined.cut.size());
+    EXPECT_GT(refined.cut.size(), base.cut.size() + 10);
+    expect_manifold(refined.mesh, 0, 1);
+    EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
+
+    // Away from the refined tiles (farther from the region than twice the largest of them: past their
+    // strips and their neighbours' rims), every vertex of the base mesh is still there, unmoved.
+    const std::set<std::int32_t> kept_nodes(refined.cut.begin(), refined.cut.end());
+    double largest = 0.0;
+    for (const std::int32_t node : base.cut)
+        if (kept_nodes.count(node) == 0)
+            largest = std::max(largest, h.nodes[static_cast<std::size_t>(node)].box.diagonal());
+    std::set<std::array<double, 3>> now;
+    for (const Vec3& p : positions_of(refined.mesh))
+        now.insert({p.x, p.y, p.z});
+    std::size_t far = 0;
+    for (const Vec3& p : positions_of(base.mesh))
+        if (distance(p, focus.centre) > focus.radius + 2.0 * largest) {
+            ++far;
+            EXPECT_EQ(now.count({p.x, p.y, p.z}), 1u);
+        }
+    EXPECT_GT(far, base.mesh.n_vertices() / 2);
+
+    const std::vector<Vec3> near = points_within(h, focus.centre, focus.radius);
+    ASSERT_GT(near.size(), 500u);
+    EXPECT_LT(point_to_mesh_distance(near, refined.mesh).mean, 0.6 * point_to_mesh_distance(near, base.mesh).mean);
+    EXPECT_GT(refined.mesh.n_faces(), base.mesh.n_faces());
+
+    // The same again gives the same mesh.
+    MeshResult again = base;
+    refine_mesh(h, again, finer);
+    EXPECT_EQ(positions_of(again.mesh), positions_of(refined.mesh));
+    EXPECT_EQ(again.cut, refined.cut);
+}
+
+// The whole of a sphere refined by two levels of tolerance: closed, genus 0, nearly every tile refined,
+// and the mean distance between the coarse mesh's and a fresh mesh_cut's of the finer cut.
+TEST(RefineMesh, a_whole_sphere_refined_stays_closed_and_comes_nearer)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(30000));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.01));
+    const Cut finer = cut_by_tolerance(h, 0.0025);
+    MeshResult refined = base;
+    const LocalRefineStats stats = refine_mesh(h, refined, finer);
+    EXPECT_GE(stats.refined, base.cut.size() * 9 / 10);
+    expect_manifold(refined.mesh, 0, 0);
+    EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
+    const double before = point_to_mesh_distance(h.cloud.positions, base.mesh).mean;
+    const double after = point_to_mesh_distance(h.cloud.positions, refined.mesh).mean;
+    const double fresh = point_to_mesh_distance(h.cloud.positions, mesh_cut(h, finer).mesh).mean;
+    EXPECT_LT(after, 0.7 * before);
+    EXPECT_LT(after, 4.0 * fresh); // the price of a local re-triangulation (README: about twice)
+
+    // Without the height fit the new vertices sit on input points and apexes: farther on a sphere.
+    LocalRefineOptions unfitted;
+    unfitted.fit = false;
+    MeshResult plain = base;
+    refine_mesh(h, plain, finer, unfitted);
+    EXPECT_LT(after, point_to_mesh_distance(h.cloud.positions, plain.mesh).mean);
+}
+
+// A real scan, open at its base with holes in the scan: its borders stay as they were.
+TEST(RefineMesh, the_bunny_keeps_its_borders)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.005));
+    const TopologyStats before = topology_stats(base.mesh);
+    MeshResult refined = base;
+    const LocalRefineStats stats = refine_mesh(h, refined, cut_by_tolerance(h, 0.002));
+    EXPECT_GE(stats.refined, 3 * stats.kept);
+    expect_manifold(refined.mesh, before.boundary_loops, before.genus);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, refined.mesh).mean,
+              point_to_mesh_distance(h.cloud.positions, base.mesh).mean);
+}
+
+TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(5000));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.01));
+    MeshResult same = base;
+    const LocalRefineStats stats = refine_mesh(h, same, base.cut);
+    EXPECT_EQ(stats.refined + stats.kept, 0u);
+    EXPECT_EQ(positions_of(same.mesh), positions_of(base.mesh));
+    EXPECT_EQ(same.mesh.n_faces(), base.mesh.n_faces());
+
+    MeshResult m = base;
+    EXPECT_THROW(refine_mesh(h, m, cut_by_tolerance(h, 0.1)), InvalidInput); // coarser somewhere
+    Cut not_a_partition = base.cut;
+    not_a_partition.pop_back();
+    EXPECT_THROW(refine_mesh(h, m, not_a_partition), InvalidInput);
+    LocalRefineOptions bad;
+    bad.max_tilt_degrees = 0.0;
+    EXPECT_THROW(refine_mesh(h, m, base.cut, bad), InvalidInput);
+    MeshResult bare;
+    bare.cut = base.cut;
+    bare.mesh.add_vertex(Mesh::Point(0, 0, 0));
+    EXPECT_THROW(refine_mesh(h, bare, base.cut), InvalidInput); // no tile ids
+}
+
+} // namespace
+} // namespace mrt
