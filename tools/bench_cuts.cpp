@@ -7,8 +7,10 @@
 #include "tools/bench_measure.h"
 
 #include "libmrtile/cluster_tree.h"
+#include "libmrtile/mesh_stats.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/reconstruct.h"
+#include "libmrtile/refine_mesh.h"
 
 #include <array>
 #include <functional>
@@ -35,6 +37,17 @@ struct CutMeasurement
     double fit_seconds = 0.0;     // the part spent in fit_vertices, wall
 };
 
+// refine_mesh (incremental) against a fresh mesh_cut of the same finer cut.
+struct RefineMeasurement
+{
+    std::uint64_t tiles_before = 0, tiles_after = 0, fresh_tiles = 0;
+    std::uint64_t refined = 0, kept = 0;
+    std::uint64_t faces = 0, fresh_faces = 0, faces_added = 0;
+    Timing refine, fresh;
+    DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
+};
+constexpr std::size_t kRefines = 2;
+
 struct CutsMeasurement
 {
     std::uint64_t points = 0;
@@ -45,6 +58,7 @@ struct CutsMeasurement
     Timing load;
     std::uint64_t peak = 0; // bytes, the whole child
     std::array<CutMeasurement, kCuts> cuts;
+    std::array<RefineMeasurement, kRefines> refines;
 };
 
 // The focus sphere sits on the torus's outer equator (+x side of the box), so it covers surface.
@@ -74,6 +88,30 @@ CutMeasurement measure_cut(const Hierarchy& h, const std::function<Cut()>& make_
     return m;
 }
 
+// The base mesh refined to `finer` in place (refine_mesh) and, for comparison, `finer` meshed afresh;
+// distances of `probe` (points of the cloud) to both.
+RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, const Cut& finer,
+                                 const std::vector<Vec3>& probe)
+{
+    RefineMeasurement m;
+    m.tiles_before = base.cut.size();
+    MeshResult refined = base; // copied outside the timing: a caller refines its mesh in place
+    LocalRefineStats stats;
+    m.refine = time_call([&] { stats = refine_mesh(h, refined, finer); });
+    m.refined = stats.refined;
+    m.kept = stats.kept;
+    m.faces_added = stats.faces_added;
+    m.tiles_after = refined.cut.size();
+    m.faces = refined.mesh.n_faces();
+    MeshResult fresh;
+    m.fresh = time_call([&] { fresh = mesh_cut(h, finer); });
+    m.fresh_tiles = fresh.cut.size();
+    m.fresh_faces = fresh.mesh.n_faces();
+    m.distance = point_to_mesh_distance(probe, refined.mesh);
+    m.fresh_distance = point_to_mesh_distance(probe, fresh.mesh);
+    return m;
+}
+
 CutsMeasurement measure_cuts(std::size_t points)
 {
     return run_in_child<CutsMeasurement>([points] {
@@ -97,6 +135,22 @@ CutsMeasurement measure_cuts(std::size_t points)
         const FocusRegion region = focus_region(h);
         m.cuts[2] = measure_cut(h, [&] { return cut_by_regions(h, kFocusBaseTolerance, {region}); });
         m.peak = peak_resident_bytes();
+        progress("cuts: incremental refinement (refine_mesh) against fresh meshes ...");
+        {
+            const MeshResult base = mesh_cut(h, cut_by_tolerance(h, kFocusBaseTolerance));
+            std::vector<Vec3> inside; // the points in the focus sphere
+            for (const Vec3& p : h.cloud.positions)
+                if (distance(p, region.centre) < region.radius)
+                    inside.push_back(p);
+            m.refines[0] = measure_refine(h, base, refine_cut(h, base.cut, kFocusBaseTolerance, {region}), inside);
+        }
+        {
+            const MeshResult base = mesh_cut(h, cut_by_budget(h, 1000));
+            std::vector<Vec3> sample; // every 40th point
+            for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
+                sample.push_back(h.cloud.positions[i]);
+            m.refines[1] = measure_refine(h, base, cut_by_budget(h, 10000), sample);
+        }
         return m;
     });
 }
@@ -137,6 +191,40 @@ Table cuts_table(const CutsMeasurement& m, const std::string& input)
     return t;
 }
 
+Table refine_table(const CutsMeasurement& m, const std::string& input)
+{
+    const char* names[kRefines] = {"focus sphere: 0.01 → 0.0005 inside", "budget 1,000 → 10,000 tiles"};
+    Table t;
+    t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input;
+    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"refined / kept"},
+                 {"faces (fresh)"}, {"refine s"}, {"fresh mesh_cut s"}, {"speed-up"},
+                 {"output triangles/s (≥ 1M)"}, {"mean dist (fresh)"}, {"max dist (fresh)"}};
+    for (std::size_t i = 0; i < kRefines; ++i)
+    {
+        const RefineMeasurement& r = m.refines[i];
+        const double rate = static_cast<double>(r.faces) / r.refine.cpu;
+        t.rows.push_back({names[i],
+                          with_commas(r.tiles_before) + " → " + with_commas(r.tiles_after) + " (" + with_commas(r.fresh_tiles) + ")",
+                          with_commas(r.refined) + " / " + with_commas(r.kept),
+                          with_commas(r.faces) + " (" + with_commas(r.fresh_faces) + ")", fixed(r.refine.cpu, 3),
+                          fixed(r.fresh.cpu, 2), fixed(r.fresh.cpu / r.refine.cpu, 1) + "×",
+                          with_commas(static_cast<std::uint64_t>(rate)) + " " + verdict(rate >= kMinTrianglesPerSecond),
+                          scientific(r.distance.mean) + " (" + scientific(r.fresh_distance.mean) + ")",
+                          scientific(r.distance.max) + " (" + scientific(r.fresh_distance.max) + ")"});
+    }
+    t.notes = {
+        "Base meshes: `mesh_cut` of `cut_by_tolerance(h, 0.01)` (focus row) and of `cut_by_budget(h, 1000)`; "
+        "finer cuts: `refine_cut(h, base.cut, 0.01, {the focus sphere above})` and `cut_by_budget(h, 10000)`. Refine s: "
+        "`refine_mesh(h, base, finer)` in place (CPU, once; the copy of the base mesh is not timed); fresh: `mesh_cut(h, finer)` "
+        "(CPU, once). Refined / kept: tiles re-triangulated / left as they were (their region was not one disc or "
+        "would fold; the cut after keeps them, so it can have fewer tiles than the fresh one).",
+        "Output triangles/s: the whole refined mesh's faces / refine CPU seconds; it needs a meshed base cut, so it is "
+        "the incremental path, not a cut meshed from the model alone (the table above). Distances: focus row, the "
+        "points inside the sphere; budget row, every 40th point; to the mesh, as fractions of the bbox "
+        "diagonal of the points measured (`point_to_mesh_distance`)."};
+    return t;
+}
+
 } // namespace
 
 std::vector<Table> cuts_tables(const BenchContext& context)
@@ -146,7 +234,8 @@ std::vector<Table> cuts_tables(const BenchContext& context)
         points = static_cast<std::size_t>(context.max_points);
     const std::string input = "noisy torus " + short_count(points);
     progress("cuts: " + input + ": build, save, load ...");
-    return {cuts_table(measure_cuts(points), input)};
+    const CutsMeasurement m = measure_cuts(points);
+    return {cuts_table(m, input), refine_table(m, input)};
 }
 
 } // namespace mrt::bench
