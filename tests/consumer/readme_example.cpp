@@ -5,6 +5,7 @@
 #include "libmrtile/cut.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/reconstruct.h"
+#include "libmrtile/refine_mesh.h"
 #include "libmrtile/shapes.h"
 
 #include <cstdio>
@@ -29,5 +30,13 @@ int main(int argc, char** argv)
     mrt::write_mesh(result.mesh, h.cloud.origin, "focus.ply");
     std::printf("%zu tiles, %zu faces, %zu refused\n", result.tiles, static_cast<std::size_t>(result.mesh.n_faces()),
                 result.surface.refused_faces);
-    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 ? 0 : 1;
+
+    // The same focus reached incrementally: a coarse mesh patched in place where the cut got finer.
+    mrt::MeshResult coarse = mrt::mesh_cut(h, mrt::cut_by_tolerance(h, 0.01));
+    const mrt::LocalRefineStats patched = mrt::refine_mesh(h, coarse, mrt::refine_cut(h, coarse.cut, 0.01, {focus}));
+    std::printf("refined %zu tiles in place (%zu kept), %zu faces\n", patched.refined, patched.kept,
+                static_cast<std::size_t>(coarse.mesh.n_faces()));
+    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0
+               ? 0
+               : 1;
 }
