@@ -146,6 +146,23 @@ public:
         }
         stats.faces_removed += fan.size();
         stats.faces_added += triangles.size();
+        // The node leaves the cut: its vertices on the outline now belong to its nearest descendant,
+        // so that every vertex still names a tile of the cut (v:cluster, as mesh_cut leaves it).
+        for (const auto v : outline)
+            if (cluster_[v] == node) {
+                const Vec3 p = to_vec3(mesh_.point(v));
+                std::int32_t nearest = descendants.front();
+                double best = std::numeric_limits<double>::infinity();
+                for (const std::int32_t d : descendants) {
+                    const double d2 = squared_distance(p, h_.nodes[static_cast<std::size_t>(d)].moments.mean);
+                    if (d2 < best) {
+                        best = d2;
+                        nearest = d;
+                    }
+                }
+                cluster_[v] = nearest;
+                vertices_[nearest].push_back(v);
+            }
         fans_.erase(node);
         vertices_.erase(node);
         return true;

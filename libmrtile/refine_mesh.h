@@ -61,7 +61,9 @@ struct LocalRefineStats
 //! `kept`. result.cut becomes the cut actually meshed (the refined nodes replaced by their descendants
 //! in `finer`, in order of their points; the kept ones stay), result.tiles its size. New faces: f:tile = the
 //! descendant whose points make all three corners (f:gap false), else -1 (f:gap true: the strips between
-//! the descendants, as mesh_cut's gap faces); new vertices: v:cluster = their descendant, normals
+//! the descendants, as mesh_cut's gap faces); new vertices: v:cluster = their descendant (the split
+//! node's own vertices left on the outline: its descendant with the nearest centre, so that every
+//! vertex names a tile of the cut), normals
 //! recomputed, colours from their input point (an apex: its node's first point) when the mesh has
 //! colours. Cost: in proportion to the refined tiles' faces and the descendants' pseudo tiles (each
 //! built from at most TileOptions::max_points of its points), plus one pass over the faces to find the

@@ -11,6 +11,7 @@
 #include "libmrtile/shapes.h"
 #include "formats/read_points.h"
 
+#include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -127,6 +128,11 @@ TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
     EXPECT_GT(refined.cut.size(), base.cut.size() + 10);
     expect_manifold(refined.mesh, 0, 1);
     EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
+    // Every vertex names a tile of the cut, as after mesh_cut (LOD sets own gap faces by it).
+    const std::set<std::int32_t> in_cut(refined.cut.begin(), refined.cut.end());
+    const auto cluster = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(refined.mesh, kVertexCluster);
+    for (const auto v : refined.mesh.vertices())
+        EXPECT_EQ(in_cut.count(cluster[v]), 1u) << cluster[v];
 
     // Away from the refined tiles (farther from the region than twice the largest of them: past their
     // strips and their neighbours' rims), every vertex of the base mesh is still there, unmoved.
