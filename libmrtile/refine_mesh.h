@@ -56,18 +56,19 @@ struct LocalRefineStats
 //! \param result a mesh_cut result (or one refine_mesh already changed): its mesh and its cut.
 //! \param finer a cut at or below result.cut everywhere (refine_cut, or a cut by a smaller tolerance).
 //! \details Each node of result.cut that `finer` splits is re-triangulated as the file comment says,
-//! when its fan faces (f:tile = the node) form one disc whose outline and new faces do not fold in
-//! the node's plane (LocalRefineOptions::max_tilt_degrees); otherwise it is left as it was and counted in
-//! `kept`. result.cut becomes the cut actually meshed (the refined nodes replaced by their descendants
-//! in `finer`, in order of their points; the kept ones stay), result.tiles its size. New faces: f:tile = the
-//! descendant whose points make all three corners (f:gap false), else -1 (f:gap true: the strips between
-//! the descendants, as mesh_cut's gap faces); new vertices: v:cluster = their descendant (the split
-//! node's own vertices left on the outline: its descendant with the nearest centre, so that every
-//! vertex names a tile of the cut), normals
-//! recomputed, colours from their input point (an apex: its node's first point) when the mesh has
-//! colours. Cost: in proportion to the refined tiles' faces and the descendants' pseudo tiles (each
-//! built from at most TileOptions::max_points of its points), plus one pass over the faces to find the
-//! fans and one to recompute normals. Deterministic.
+//! when its region (its fan, f:tile = the node, and the faces between tiles around its vertices,
+//! mended where it touches itself at a vertex) is one disc whose outline and new faces do not fold in
+//! the region's plane (LocalRefineOptions::max_tilt_degrees); otherwise it is left as it was and
+//! counted in `kept`. result.cut becomes the cut actually meshed (the refined nodes replaced by their
+//! descendants in `finer`, the kept ones staying; ordered by first point), result.tiles its size.
+//! New faces: f:tile = the descendant whose points make all three corners (f:gap false), else -1
+//! (f:gap true: the strips between the descendants, as mesh_cut's gap faces). New vertices: v:cluster
+//! = their descendant; the split node's own vertices left on the outline go to its descendant with the
+//! nearest centre, so that every vertex names a tile of the cut. Normals are recomputed; colours come
+//! from the new vertex's input point (an apex: its node's first point) when the mesh has colours.
+//! Cost: in proportion to the refined tiles' regions and the descendants' pseudo tiles (each built
+//! from at most TileOptions::max_points of its points), plus one pass over the mesh to index the fans
+//! and one to recompute normals. Deterministic.
 //! \throw InvalidInput if `finer` is not a partition of the points into nodes at or below result.cut's,
 //! or result.mesh lacks the v:cluster / f:tile / f:gap properties (mesh.h).
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer,
