@@ -8,6 +8,7 @@
 
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/mesh_stats.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -82,28 +84,51 @@ public:
                 vertices_[cluster_[v]].push_back(v);
     }
 
-    // Replaces the fan of `node` by a triangulation of its outline with the descendants' points;
-    // false (and nothing changed) where that cannot be done safely.
-    bool refine(std::int32_t node, const std::vector<std::int32_t>& descendants, LocalRefineStats& stats)
+    enum class Outcome { refined, absent, kept };
+
+    // Replaces the region of `node` by a triangulation of its outline with the descendants' points:
+    // first the region with the strips around it, then, where that cannot be done safely (it folds in
+    // its plane, or is no disc), the fan alone. `absent`: the node has no face and no vertex to replace.
+    Outcome refine(std::int32_t node, const std::vector<std::int32_t>& descendants, LocalRefineStats& stats)
     {
-        std::vector<Mesh::FaceHandle> fan = region_of(node);
-        if (fan.empty())
-            return false;
-        std::vector<Mesh::VertexHandle> outline;
-        std::vector<Mesh::VertexHandle> pinches;
-        bool disc = disc_outline(fan, outline, pinches);
-        std::vector<int> tried;
-        for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
-            unpinch(pinches, fan, tried);
-            outline.clear();
-            pinches.clear();
-            disc = disc_outline(fan, outline, pinches);
+        bool any = false;
+        for (const bool with_strips : {true, false}) {
+            std::vector<Mesh::FaceHandle> region = with_strips ? region_of(node) : fan_of(node);
+            if (region.empty())
+                continue;
+            any = true;
+            keep_main_piece(node, region);
+            std::vector<Mesh::VertexHandle> outline;
+            std::vector<Mesh::VertexHandle> pinches;
+            bool disc = disc_outline(region, outline, pinches);
+            std::vector<int> tried;
+            for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
+                unpinch(pinches, region, tried);
+                outline.clear();
+                pinches.clear();
+                disc = disc_outline(region, outline, pinches);
+            }
+            for (const auto f : region)
+                in_region_[static_cast<std::size_t>(f.idx())] = 0;
+            if (disc && replace_region(node, descendants, region, outline, stats)) {
+                hand_over(node, descendants);
+                return Outcome::refined;
+            }
         }
-        for (const auto f : fan)
-            in_region_[static_cast<std::size_t>(f.idx())] = 0;
-        if (!disc)
-            return false;
-        const Plane plane = plane_of(node, fan);
+        if (any)
+            return Outcome::kept;
+        hand_over(node, descendants);
+        return Outcome::absent;
+    }
+
+private:
+    // Re-triangulates the disc `region` (outline as given) with the descendants' points; false, and
+    // nothing changed, where its outline or new faces fold in its plane or OpenMesh refuses a face.
+    bool replace_region(std::int32_t node, const std::vector<std::int32_t>& descendants,
+                        const std::vector<Mesh::FaceHandle>& region, const std::vector<Mesh::VertexHandle>& outline,
+                        LocalRefineStats& stats)
+    {
+        const Plane plane = plane_of(node, region);
         std::vector<Point2> polygon;
         polygon.reserve(outline.size());
         for (const auto v : outline)
@@ -140,35 +165,100 @@ public:
             if (folds())
                 points = unfitted;
         }
-        if (!replace_fan(fan, outline, points, triangles)) {
-            ++stats.refused;
+        Replaced replaced = Replaced::done;
+        if (!replace_fan(region, outline, points, triangles, &replaced)) {
+            stats.refused += replaced == Replaced::refused ? 1 : 0;
             return false;
         }
-        stats.faces_removed += fan.size();
+        stats.faces_removed += region.size();
         stats.faces_added += triangles.size();
-        // The node leaves the cut: its vertices on the outline now belong to its nearest descendant,
-        // so that every vertex still names a tile of the cut (v:cluster, as mesh_cut leaves it).
-        for (const auto v : outline)
-            if (cluster_[v] == node) {
-                const Vec3 p = to_vec3(mesh_.point(v));
-                std::int32_t nearest = descendants.front();
-                double best = std::numeric_limits<double>::infinity();
-                for (const std::int32_t d : descendants) {
-                    const double d2 = squared_distance(p, h_.nodes[static_cast<std::size_t>(d)].moments.mean);
-                    if (d2 < best) {
-                        best = d2;
-                        nearest = d;
-                    }
-                }
-                cluster_[v] = nearest;
-                vertices_[nearest].push_back(v);
-            }
-        fans_.erase(node);
-        vertices_.erase(node);
         return true;
     }
 
-private:
+    // The node leaves the cut: its vertices still in the mesh (on the outline, or in another piece of
+    // its region) now belong to its descendant with the nearest centre, so that every vertex names a
+    // tile of the cut (v:cluster, as mesh_cut leaves it).
+    void hand_over(std::int32_t node, const std::vector<std::int32_t>& descendants)
+    {
+        const auto own = vertices_.find(node);
+        if (own != vertices_.end()) {
+            const std::vector<Mesh::VertexHandle> left = std::move(own->second);
+            vertices_.erase(own);
+            for (const auto v : left)
+                if (!mesh_.status(v).deleted() && cluster_[v] == node) {
+                    const Vec3 p = to_vec3(mesh_.point(v));
+                    std::int32_t nearest = descendants.front();
+                    double best = std::numeric_limits<double>::infinity();
+                    for (const std::int32_t d : descendants) {
+                        const double d2 = squared_distance(p, h_.nodes[static_cast<std::size_t>(d)].moments.mean);
+                        if (d2 < best) {
+                            best = d2;
+                            nearest = d;
+                        }
+                    }
+                    cluster_[v] = nearest;
+                    vertices_[nearest].push_back(v);
+                }
+        }
+        fans_.erase(node);
+    }
+
+    // The node's fan alone (f:tile = node), marked in in_region_.
+    std::vector<Mesh::FaceHandle> fan_of(std::int32_t node)
+    {
+        in_region_.resize(mesh_.n_faces(), 0);
+        std::vector<Mesh::FaceHandle> fan;
+        if (const auto found = fans_.find(node); found != fans_.end())
+            for (const auto f : found->second)
+                if (!mesh_.status(f).deleted() && !in_region_[static_cast<std::size_t>(f.idx())]) {
+                    in_region_[static_cast<std::size_t>(f.idx())] = 1;
+                    fan.push_back(f);
+                }
+        return fan;
+    }
+
+    // Keeps the piece of the region (faces joined by edges) with the most faces of the node's fan, or
+    // the largest piece: a node's vertices can lie apart (an outline vertex handed over by a neighbour).
+    void keep_main_piece(std::int32_t node, std::vector<Mesh::FaceHandle>& region)
+    {
+        std::vector<int> piece(region.size(), -1);
+        std::unordered_map<int, std::size_t> position;
+        for (std::size_t k = 0; k < region.size(); ++k)
+            position[region[k].idx()] = k;
+        std::vector<std::pair<std::size_t, std::size_t>> score; // (fan faces, faces) per piece
+        for (std::size_t start = 0; start < region.size(); ++start) {
+            if (piece[start] >= 0)
+                continue;
+            const int id = static_cast<int>(score.size());
+            score.push_back({0, 0});
+            std::vector<std::size_t> stack{start};
+            piece[start] = id;
+            while (!stack.empty()) {
+                const std::size_t k = stack.back();
+                stack.pop_back();
+                score.back().first += tile_[region[k]] == node ? 1 : 0;
+                ++score.back().second;
+                for (const auto g : mesh_.ff_range(region[k])) {
+                    const auto it = position.find(g.idx());
+                    if (it != position.end() && piece[it->second] < 0) {
+                        piece[it->second] = id;
+                        stack.push_back(it->second);
+                    }
+                }
+            }
+        }
+        if (score.size() < 2)
+            return;
+        const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+        std::vector<Mesh::FaceHandle> kept;
+        for (std::size_t k = 0; k < region.size(); ++k)
+            if (piece[k] == best)
+                kept.push_back(region[k]);
+            else
+                in_region_[static_cast<std::size_t>(region[k].idx())] = 0;
+        region = std::move(kept);
+    }
+
     // The new vertices moved along the plane's normal to fit the descendants' points in least squares
     // (the region is a graph over the plane: a height per vertex, linear over each triangle), as
     // fit_vertices does for a whole mesh: interpolated input points leave a curved patch's chords
@@ -478,10 +568,13 @@ private:
     // Deletes the fan and adds the new faces in an order that always attaches to what is there (each
     // face shares an edge with the outline or with faces already added); if OpenMesh refuses any
     // face, the fan is put back as it was and false returned.
+    enum class Replaced { done, unreachable, refused, crossing };
+
     bool replace_fan(const std::vector<Mesh::FaceHandle>& fan,
                      const std::vector<Mesh::VertexHandle>& outline, const std::vector<NewPoint>& points,
-                     const std::vector<std::array<std::uint32_t, 3>>& triangles)
+                     const std::vector<std::array<std::uint32_t, 3>>& triangles, Replaced* result)
     {
+        *result = Replaced::unreachable;
         std::vector<std::array<Mesh::VertexHandle, 3>> old_faces;
         std::vector<char> old_gap;
         std::vector<int> old_tile;
@@ -495,6 +588,7 @@ private:
             return false;
         for (const auto f : fan)
             mesh_.delete_face(f, false);
+        *result = Replaced::done;
         std::vector<Mesh::VertexHandle> corner(outline.begin(), outline.end());
         for (const NewPoint& p : points) {
             const auto v = mesh_.add_vertex(to_point(p.position));
@@ -521,19 +615,16 @@ private:
                 gap_[f] = owner < 0;
             }
         }
-        if (refused) {
+        // New faces that cross faces just outside the outline (a region steep in its plane can fold
+        // over its surroundings): tested against the faces within two rings of the outline.
+        const bool crossing = !refused && options_.no_crossings && crosses_surroundings(outline, added);
+        if (refused || crossing) {
             for (const auto f : added)
                 mesh_.delete_face(f, false);
             for (std::size_t k = outline.size(); k < corner.size(); ++k)
                 mesh_.delete_vertex(corner[k], false);
-            const QuietOpenMesh quiet;
-            for (std::size_t k = 0; k < old_faces.size(); ++k) {
-                const auto f = mesh_.add_face(old_faces[k][0], old_faces[k][1], old_faces[k][2]);
-                if (!f.is_valid())
-                    throw std::logic_error("refine_mesh: a fan could not be put back after a refused face");
-                tile_[f] = old_tile[k];
-                gap_[f] = old_gap[k] != 0;
-            }
+            put_back(outline, old_faces, old_tile, old_gap);
+            *result = refused ? Replaced::refused : Replaced::crossing;
             return false;
         }
         for (const auto f : added)
@@ -545,6 +636,76 @@ private:
                 if (!mesh_.status(v).deleted() && mesh_.is_isolated(v))
                     mesh_.delete_vertex(v, false);
         return true;
+    }
+
+    // The region's old faces added again, from the outline inwards (as the new ones were): a disc
+    // that was there fits its outline again.
+    void put_back(const std::vector<Mesh::VertexHandle>& outline, const std::vector<std::array<Mesh::VertexHandle, 3>>& faces,
+                  const std::vector<int>& tiles, const std::vector<char>& gaps)
+    {
+        std::unordered_map<int, std::uint32_t> local;
+        std::vector<Mesh::VertexHandle> vertex(outline.begin(), outline.end());
+        for (std::uint32_t k = 0; k < outline.size(); ++k)
+            local[outline[k].idx()] = k;
+        std::vector<std::array<std::uint32_t, 3>> triangles;
+        for (const auto& corners : faces) {
+            std::array<std::uint32_t, 3> t{};
+            for (std::size_t c = 0; c < 3; ++c) {
+                const auto [it, added] = local.emplace(corners[c].idx(), static_cast<std::uint32_t>(vertex.size()));
+                if (added)
+                    vertex.push_back(corners[c]);
+                t[c] = it->second;
+            }
+            triangles.push_back(t);
+        }
+        std::vector<std::size_t> order = attach_order(triangles, outline.size());
+        const QuietOpenMesh quiet;
+        for (const std::size_t k : order) {
+            const auto f = mesh_.add_face(faces[k][0], faces[k][1], faces[k][2]);
+            if (!f.is_valid())
+                throw std::logic_error("refine_mesh: a region could not be put back as it was");
+            tile_[f] = tiles[k];
+            gap_[f] = gaps[k] != 0;
+        }
+        if (order.size() != faces.size())
+            throw std::logic_error("refine_mesh: a region could not be put back as it was");
+    }
+
+    // Whether a new face crosses one of the faces within two rings of the outline (bounding boxes
+    // first, then the exact test of self_intersecting_faces).
+    bool crosses_surroundings(const std::vector<Mesh::VertexHandle>& outline, const std::vector<Mesh::FaceHandle>& added) const
+    {
+        std::unordered_map<int, char> is_new;
+        for (const auto f : added)
+            is_new[f.idx()] = 1;
+        std::vector<Mesh::FaceHandle> around;
+        std::unordered_map<int, char> seen;
+        for (const auto v : outline)
+            for (const auto f : mesh_.vf_range(v))
+                for (const auto w : mesh_.fv_range(f))
+                    for (const auto g : mesh_.vf_range(w))
+                        if (!is_new.count(g.idx()) && seen.emplace(g.idx(), 1).second)
+                            around.push_back(g);
+        auto box = [&](Mesh::FaceHandle f) {
+            const std::array<Vec3, 3> c = face_corners(mesh_, f);
+            return std::array<Vec3, 2>{min(min(c[0], c[1]), c[2]), max(max(c[0], c[1]), c[2])};
+        };
+        std::vector<std::array<Vec3, 2>> around_boxes;
+        around_boxes.reserve(around.size());
+        for (const auto g : around)
+            around_boxes.push_back(box(g));
+        for (const auto f : added) {
+            const std::array<Vec3, 2> a = box(f);
+            for (std::size_t k = 0; k < around.size(); ++k) {
+                const std::array<Vec3, 2>& b = around_boxes[k];
+                if (a[1].x < b[0].x || b[1].x < a[0].x || a[1].y < b[0].y || b[1].y < a[0].y || a[1].z < b[0].z ||
+                    b[1].z < a[0].z)
+                    continue;
+                if (faces_intersect(mesh_, f, around[k]))
+                    return true;
+            }
+        }
+        return false;
     }
 
     // Triangles in an order where each shares an edge with the outline or an earlier one (a breadth-
@@ -667,12 +828,21 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
         const std::vector<std::int32_t> run = below(node);
         if (run.size() == 1 && run.front() == node) {
             meshed.push_back(node);
-        } else if (refiner.refine(node, run, stats)) {
+            continue;
+        }
+        switch (refiner.refine(node, run, stats)) {
+        case LocalRefiner::Outcome::refined:
             ++stats.refined;
             meshed.insert(meshed.end(), run.begin(), run.end());
-        } else {
+            break;
+        case LocalRefiner::Outcome::absent:
+            ++stats.absent;
+            meshed.insert(meshed.end(), run.begin(), run.end());
+            break;
+        case LocalRefiner::Outcome::kept:
             ++stats.kept;
             meshed.push_back(node);
+            break;
         }
     }
     std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {

@@ -37,6 +37,11 @@ struct LocalRefineOptions
     //! Move the new vertices along the plane's normal to fit the descendants' points (least squares
     //! over the re-triangulated patch; false: they stay on the input points and fitted apexes).
     bool fit = true;
+    //! Test the new faces of each region against the faces within two rings of its outline, and leave
+    //! the region as it was (or try its fan alone) where one crosses: a region steep in its plane can
+    //! fold over its surroundings (bunny, tolerance 0.01 → 0.002: 30 crossing pairs without it, none
+    //! with it). Takes about 1.6× the time.
+    bool no_crossings = true;
     //! How the descendants' pseudo tiles are built (§4.2: node sample, hull, fitted apex).
     TileOptions tiles;
 };
@@ -45,6 +50,10 @@ struct LocalRefineStats
 {
     std::size_t refined = 0;       //!< tiles of the mesh re-triangulated with their descendants' points
     std::size_t kept = 0;          //!< tiles the finer cut splits that were left as they were (see refine_mesh)
+    //! Tiles the finer cut splits that have no face and no vertex in the mesh (mesh_cut left them out,
+    //! or an earlier refinement kept none of their points): replaced by their descendants in the cut
+    //! with nothing to re-triangulate.
+    std::size_t absent = 0;
     std::size_t faces_removed = 0; //!< faces of the refined tiles' regions (fans and the strips around them)
     std::size_t faces_added = 0;   //!< faces that replace them
     //! Of `kept`: tiles put back as they were after OpenMesh refused a new face (add_face returned an

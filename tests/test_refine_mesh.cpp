@@ -202,6 +202,20 @@ TEST(RefineMesh, the_bunny_keeps_its_borders)
     expect_manifold(refined.mesh, before.boundary_loops, before.genus);
     EXPECT_LT(point_to_mesh_distance(h.cloud.positions, refined.mesh).mean,
               point_to_mesh_distance(h.cloud.positions, base.mesh).mean);
+
+    // Refined three levels at once, some regions are steep in their planes and would fold over their
+    // surroundings: such regions are put back (or their fans alone refined), so no face crosses another.
+    const MeshResult coarse = mesh_cut(h, cut_by_tolerance(h, 0.01));
+    ASSERT_TRUE(self_intersecting_faces(coarse.mesh).empty());
+    MeshResult checked = coarse;
+    refine_mesh(h, checked, cut_by_tolerance(h, 0.002));
+    EXPECT_TRUE(self_intersecting_faces(checked.mesh).empty());
+    expect_manifold(checked.mesh, before.boundary_loops, before.genus);
+    LocalRefineOptions unchecked;
+    unchecked.no_crossings = false;
+    MeshResult folded = coarse;
+    refine_mesh(h, folded, cut_by_tolerance(h, 0.002), unchecked);
+    EXPECT_FALSE(self_intersecting_faces(folded.mesh).empty()); // what the check prevents
 }
 
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
