@@ -41,7 +41,7 @@ struct CutMeasurement
 struct RefineMeasurement
 {
     std::uint64_t tiles_before = 0, tiles_after = 0, fresh_tiles = 0;
-    std::uint64_t refined = 0, kept = 0;
+    std::uint64_t refined = 0, kept = 0, absent = 0;
     std::uint64_t faces = 0, fresh_faces = 0, faces_added = 0;
     Timing refine, fresh;
     DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
@@ -100,6 +100,7 @@ RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, con
     m.refine = time_call([&] { stats = refine_mesh(h, refined, finer); });
     m.refined = stats.refined;
     m.kept = stats.kept;
+    m.absent = stats.absent;
     m.faces_added = stats.faces_added;
     m.tiles_after = refined.cut.size();
     m.faces = refined.mesh.n_faces();
@@ -196,7 +197,7 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
     const char* names[kRefines] = {"focus sphere: 0.01 → 0.0005 inside", "budget 1,000 → 10,000 tiles"};
     Table t;
     t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input;
-    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"refined / kept"},
+    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"refined / kept / absent"},
                  {"faces (fresh)"}, {"refine s"}, {"fresh mesh_cut s"}, {"speed-up"},
                  {"output triangles/s (≥ 1M)"}, {"mean dist (fresh)"}, {"max dist (fresh)"}};
     for (std::size_t i = 0; i < kRefines; ++i)
@@ -205,7 +206,7 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
         const double rate = static_cast<double>(r.faces) / r.refine.cpu;
         t.rows.push_back({names[i],
                           with_commas(r.tiles_before) + " → " + with_commas(r.tiles_after) + " (" + with_commas(r.fresh_tiles) + ")",
-                          with_commas(r.refined) + " / " + with_commas(r.kept),
+                          with_commas(r.refined) + " / " + with_commas(r.kept) + " / " + with_commas(r.absent),
                           with_commas(r.faces) + " (" + with_commas(r.fresh_faces) + ")", fixed(r.refine.cpu, 3),
                           fixed(r.fresh.cpu, 2), fixed(r.fresh.cpu / r.refine.cpu, 1) + "×",
                           with_commas(static_cast<std::uint64_t>(rate)) + " " + verdict(rate >= kMinTrianglesPerSecond),
@@ -216,8 +217,9 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
         "Base meshes: `mesh_cut` of `cut_by_tolerance(h, 0.01)` (focus row) and of `cut_by_budget(h, 1000)`; "
         "finer cuts: `refine_cut(h, base.cut, 0.01, {the focus sphere above})` and `cut_by_budget(h, 10000)`. Refine s: "
         "`refine_mesh(h, base, finer)` in place (CPU, once; the copy of the base mesh is not timed); fresh: `mesh_cut(h, finer)` "
-        "(CPU, once). Refined / kept: tiles re-triangulated / left as they were (their region was not one disc or "
-        "would fold; the cut after keeps them, so it can have fewer tiles than the fresh one).",
+        "(CPU, once). Refined / kept / absent: tiles re-triangulated / left as they were (their region was not one disc, "
+        "would fold or would cross its surroundings; the cut after keeps them, so it can have fewer tiles than the fresh "
+        "one) / split with nothing of theirs in the mesh.",
         "Output triangles/s: the whole refined mesh's faces / refine CPU seconds; it needs a meshed base cut, so it is "
         "the incremental path, not a cut meshed from the model alone (the table above). Distances: focus row, the "
         "points inside the sphere; budget row, every 40th point; to the mesh, as fractions of the bbox "
