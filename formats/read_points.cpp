@@ -618,6 +618,10 @@ PointCloud read_off(Input& in, const ReadOptions& options)
     if (!parse_count(token, vertex_count))
         fail_line(in, "expected the vertex count, found " + quote_token(token));
     check_max_points(in, vertex_count, options);
+    // The face count checks what follows the vertices (below); without one, any number of faces may follow.
+    std::uint64_t face_count = UINT64_MAX;
+    if (tokens.next(token) && !parse_count(token, face_count))
+        fail_line(in, "expected the face count, found " + quote_token(token));
 
     // A vertex line holds x y z, then 3 normal values (N), 2 texture coordinates (ST) and a colour (C:
     // a colour map index, or 3 or 4 components; writers differ in what they put first) as the keyword
@@ -641,6 +645,37 @@ PointCloud read_off(Input& in, const ReadOptions& options)
                               std::to_string(values) + " values, a " + std::string(prefix) + "OFF vertex has " +
                               (fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " to " + std::to_string(most)) +
                               " (is the vertex count in line 2 right?)");
+    }
+    // The faces are not read, but what follows the vertices must be the faces the header declares:
+    // more data means a vertex count lower than the vertex lines (100 declared, 500 written), and the
+    // cloud read would be part of the file's, as if it were whole. A face is "n i1 .. in [colour]": a
+    // count, then n indices of declared vertices (on the following lines too, as the format allows),
+    // then its colour up to the line's end. A vertex line where a face belongs (a coordinate that is no
+    // count or index), a face too many, or any data when no face is declared is refused. Fewer faces
+    // than declared leave the points whole, and read.
+    const std::string declared = std::to_string(vertex_count) + " vertices" +
+                                 (face_count == UINT64_MAX ? "" : " and " + std::to_string(face_count) + " faces");
+    for (std::uint64_t f = 0; next_content_line(in, tokens, token); ++f) {
+        if (f == face_count)
+            fail_line(in, "data after the " + declared + " the header declares: the header does not describe the data");
+        const auto face = [&] {
+            return "face " + std::to_string(f) + (face_count == UINT64_MAX ? "" : " of " + std::to_string(face_count)) + ": ";
+        };
+        std::uint64_t n = 0;
+        if (!parse_count(token, n))
+            fail_line(in, face() + quote_token(token) + " is not a vertex count (a vertex line? the header declares " +
+                              std::to_string(vertex_count) + " vertices)");
+        for (std::uint64_t k = 0; k < n; ++k) {
+            if (!tokens.next(token) && !next_content_line(in, tokens, token))
+                return cloud; // the file ends inside the faces: the vertices are whole
+            std::uint64_t index = 0;
+            if (!parse_count(token, index))
+                fail_line(in, face() + quote_token(token) + " is not a vertex index (a vertex line? the header declares " +
+                                  std::to_string(vertex_count) + " vertices)");
+            if (index >= vertex_count)
+                fail_line(in, face() + "vertex index " + std::to_string(index) + " is not below the " +
+                                  std::to_string(vertex_count) + " vertices the header declares");
+        }
     }
     return cloud;
 }

@@ -35,7 +35,10 @@
 //!  - OBJ: `v x y z [w]` lines; `v x y z r g b` colours (0..1) are kept when every v line has them.
 //!  - OFF (also COFF, NOFF, STOFF...): the vertices; faces, normals and colours are ignored. A vertex
 //!    line holds x y z and exactly the values its keyword announces (3 normals for N, 2 texture
-//!    coordinates for ST, up to 4 colour values for C): a face line read as a vertex is refused.
+//!    coordinates for ST, up to 4 colour values for C): a face line read as a vertex is refused. The
+//!    lines after the vertices must be the declared faces ("n i1 .. in [colour]", indices below the
+//!    vertex count, continued on the next lines if need be): a vertex line read as a face, a face too
+//!    many or data when no face is declared is refused; fewer faces than declared read.
 //!  - CONF (a Stanford scan list, as scanalyze writes it for the raw range scans of the Stanford 3D
 //!    Scanning Repository): every `bmesh FILE tx ty tz qx qy qz qw` (or `mesh ...`) line is a point file,
 //!    relative to the list's folder, read as above and moved into the common frame (see ScanPlacement);

@@ -1421,6 +1421,40 @@ TEST(ReadErrors, data_after_the_last_ply_element)
     expect_points(read_points(write_file(dir / "padded.ply", padded)), kPoints);
 }
 
+// An OFF header whose vertex count is lower than the vertex lines (100 declared, 500 written) read
+// 100 points: the lines after the declared vertices must be the declared faces, one face per "n i j k
+// [colour]" (an integer count, then that many indices of declared vertices), and nothing after them.
+// A vertex line where a face belongs, a face too many, or any data when no face is declared is refused,
+// naming the line. Faces spread over lines (the format allows it), colours, comments, blank lines, and
+// fewer faces than declared (the points are whole) still read.
+TEST(ReadErrors, data_after_the_declared_off_vertices_and_faces)
+{
+    const fs::path dir = test_dir();
+    std::string vertices;
+    for (int i = 0; i < 500; ++i)
+        vertices += std::to_string(0.5 * i) + " " + std::to_string(0.25 * i) + " 1.5\n";
+    const std::vector<ReadErrorCase> cases = {
+        {"no_faces.off", "OFF\n100 0 0\n" + vertices, "line 103: data after the 100 vertices and 0 faces the header declares", false},
+        {"faces.off", "OFF\n100 2 0\n" + vertices + "3 0 1 2\n3 2 3 4\n",
+         "line 103: face 0 of 2: '50.000000' is not a vertex count (a vertex line? the header declares 100 vertices)", false},
+        {"integers.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n7 7 7\n3 0 1 2\n",
+         "line 6: face 0 of 1: vertex index 7 is not below the 3 vertices the header declares", false},
+        {"more_faces.off", "OFF\n4 1 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n3 1 2 3\n",
+         "line 8: data after the 4 vertices and 1 faces the header declares", false},
+        {"after_colour.off", "COFF 3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2 255 0 0\n1 1 1 1 1 1 1\n",
+         "line 6: data after", false},
+    };
+    expect_read_errors(dir, cases);
+    const fs::path gz = write_gz(dir / "no_faces.off.gz", "OFF\n100 0 0\n" + vertices);
+    expect_error<InvalidInput>([&] { read_points(gz); }, {gz.string(), "line 103"});
+    expect_all_read_as_kpoints({
+        {"split_face.off", "OFF\n4 2 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n4 0 1\n 2 3 0.5 0.5 0.5\n3 1 2 3\n"},
+        {"trailing.off", "OFF\n4 1 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n\n# end\n  \n"},
+        {"fewer_faces.off", "OFF\n4 3 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n"},
+        {"no_face_count.off", "OFF\n4\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n"},
+    });
+}
+
 TEST(ReadErrors, malformed_ply_headers)
 {
     const fs::path dir = test_dir();
