@@ -273,6 +273,19 @@ bool parse_count(std::string_view token, std::uint64_t& value)
     return ec == std::errc() && ptr == token.data() + token.size();
 }
 
+// The bytes from here to the end of the input (read through when the size is unknown: compressed).
+std::uint64_t bytes_left(Input& in)
+{
+    if (in.file_size() > 0)
+        return in.file_size() - in.offset();
+    std::uint64_t rest = 0;
+    while (in.available() > 0 || in.request(1)) {
+        rest += in.available();
+        in.consume(in.available());
+    }
+    return rest;
+}
+
 [[noreturn]] void fail_line(const Input& in, const std::string& cause)
 {
     throw InvalidInput(in.name() + ": line " + std::to_string(in.line_number()) + ": " + cause);
@@ -1122,19 +1135,9 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         return " (the header declares " + text + " elements): the header does not describe the data";
     };
     if (binary) {
-        if (in.request(std::max<std::size_t>(vertex.min_size, 1))) {
-            std::uint64_t rest = 0;
-            if (in.file_size() > 0) {
-                rest = in.file_size() - in.offset();
-            } else {
-                while (in.available() > 0 || in.request(1)) {
-                    rest += in.available();
-                    in.consume(in.available());
-                }
-            }
-            throw InvalidInput(in.name() + ": " + std::to_string(rest) + " bytes after the last element" +
+        if (in.request(std::max<std::size_t>(vertex.min_size, 1)))
+            throw InvalidInput(in.name() + ": " + std::to_string(bytes_left(in)) + " bytes after the last element" +
                                declared());
-        }
     } else {
         std::string_view line;
         while (in.next_line(line))
@@ -1731,6 +1734,15 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
             add_pcd_point(in, p, colors ? &color : nullptr, cloud, i);
             ++i;
         }
+        // Lines after the declared points mean a POINTS (and WIDTH x HEIGHT) lower than the data (100
+        // declared, 500 written): what was read is part of the cloud, refused rather than read as if it
+        // were whole. Blank lines and comments are not data.
+        while (in.next_line(line)) {
+            Tokens tokens(line, kBlanks);
+            if (tokens.next(token))
+                fail_line(in, "data after the " + std::to_string(h.points) +
+                                  " points the header declares: the header does not describe the data");
+        }
         return cloud;
     }
     const bool swap = !host_is_little_endian();
@@ -1754,6 +1766,11 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
             record_point(r + fx.offset, r + fy.offset, r + fz.offset,
                          colors ? r + h.fields[static_cast<std::size_t>(h.rgb)].offset : nullptr, i);
         }
+        // Records after the declared points, as in ASCII; padding shorter than a record is not data.
+        if (in.request(std::max<std::size_t>(h.record_size, 1)))
+            throw InvalidInput(in.name() + ": " + std::to_string(bytes_left(in)) + " bytes after the " +
+                               std::to_string(h.points) + " points the header declares: the header does not " +
+                               "describe the data");
         return cloud;
     }
     // binary_compressed: two 32-bit sizes, then the LZF data of every field's values in turn.

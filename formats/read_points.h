@@ -21,6 +21,8 @@
 //!    packed 32-bit colour ("rgb" or "rgba", as float bits or, in ASCII, an unsigned integer). Points of
 //!    an organized cloud without a measurement (a NaN coordinate) are left out; VIEWPOINT is metadata
 //!    (PCL does not apply it either). A binary_compressed block is one LZF stream, so it is held whole.
+//!    Data after the declared points (a non-blank ASCII line, or binary bytes of a point record or more)
+//!    is refused.
 //!  - XYZ/PTS/TXT/CSV: three columns of each line (separated by spaces, tabs, commas or semicolons).
 //!    Blank lines, lines starting with '#' or "//" and a UTF-8 byte order mark are skipped, so is a
 //!    first line holding a single integer (the point count of PTS files; in a .pts file every such line, as

@@ -1455,6 +1455,32 @@ TEST(ReadErrors, data_after_the_declared_off_vertices_and_faces)
     });
 }
 
+// An ASCII PCD whose POINTS (and WIDTH x HEIGHT) is lower than its lines read only the declared points;
+// a binary one ignored the records after them. Data after the declared points is refused: a non-blank
+// line (named), or binary bytes of at least one point record. Comments, blank lines and binary padding
+// shorter than a record still read.
+TEST(ReadErrors, data_after_the_declared_pcd_points)
+{
+    const fs::path dir = test_dir();
+    std::string lines;
+    for (int i = 0; i < 500; ++i)
+        lines += std::to_string(0.5 * i) + " " + std::to_string(0.25 * i) + " 1.5\n";
+    const std::string head = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100\nHEIGHT 1\nPOINTS 100\nDATA ascii\n";
+    const std::string binary = pcd_file("binary");
+    const std::size_t record = 4 + 4 + 8 + 3 + 4 + 2; // x y z _ rgb intensity
+    const std::string extra_record = binary.substr(binary.size() - record);
+    const std::vector<ReadErrorCase> cases = {
+        {"ascii.pcd", head + lines, "line 108: data after the 100 points the header declares", false},
+        {"binary.pcd", binary + extra_record, "25 bytes after the 6 points the header declares", false},
+        {"binary_more.pcd", binary + extra_record + extra_record + "\n", "51 bytes after the 6 points", false},
+    };
+    expect_read_errors(dir, cases);
+    const fs::path gz = write_gz(dir / "binary.pcd.gz", binary + extra_record);
+    expect_error<InvalidInput>([&] { read_points(gz); }, {gz.string(), "25 bytes after the 6 points"});
+    EXPECT_EQ(read_points(write_file(dir / "padded.pcd", binary + std::string(record - 1, '\0'))).size(), kPoints.size());
+    EXPECT_EQ(read_points(write_file(dir / "blank_end.pcd", pcd_file("ascii") + "\n  \n# end\n")).size(), kPoints.size());
+}
+
 TEST(ReadErrors, malformed_ply_headers)
 {
     const fs::path dir = test_dir();
