@@ -805,6 +805,7 @@ PlyHeader read_ply_header(Input& in)
         throw InvalidInput(in.name() + ": not a PLY file (no 'ply' on the first line)");
     PlyHeader header;
     bool have_format = false;
+    std::uint64_t vertex_line = 0;
     for (;;) {
         if (!in.next_line(line))
             throw InvalidInput(in.name() + ": PLY header has no end_header line");
@@ -831,6 +832,14 @@ PlyHeader read_ply_header(Input& in)
             if (!tokens.next(a) || !tokens.next(b) || !parse_count(b, element.count))
                 fail_line(in, "expected 'element <name> <count>'");
             element.name = std::string(a);
+            // Two vertex elements (two clouds' headers run together, 250 + 250): only the first would be
+            // read, the second skipped as an element the reader does not need.
+            if (element.name == "vertex") {
+                if (vertex_line > 0)
+                    fail_line(in, "a second 'vertex' element (the first is on line " + std::to_string(vertex_line) +
+                                      "): the header does not describe one cloud");
+                vertex_line = in.line_number();
+            }
             header.elements.push_back(std::move(element));
         } else if (keyword == "property") {
             if (header.elements.empty())

@@ -7,7 +7,8 @@
 //!    as colours when `keep_colors`. Other properties and elements are skipped, but a file that ends
 //!    inside one (after the vertices too) is refused as truncated. ASCII PLY is read one
 //!    element instance per line (as every writer produces it); a vertex line holding more values than
-//!    its properties (list lengths included) take is refused.
+//!    its properties (list lengths included) take is refused. Data after the last element, or a second
+//!    `vertex` element in the header, is refused (only part of the cloud would be read).
 //!  - LAS 1.0-1.4, point formats 0-10: scaled coordinates, and colours (formats 2, 3, 5, 7, 8, 10;
 //!    16-bit, or 0-255 as many writers store them: read as 0-255 unless some value exceeds 255).
 //!    Withheld points and points classified as noise (classes 7 and 18) are left out. LAZ-compressed

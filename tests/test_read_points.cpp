@@ -1481,6 +1481,29 @@ TEST(ReadErrors, data_after_the_declared_pcd_points)
     EXPECT_EQ(read_points(write_file(dir / "blank_end.pcd", pcd_file("ascii") + "\n  \n# end\n")).size(), kPoints.size());
 }
 
+// Two `vertex` elements (250 + 250 points, as two clouds run together) read as the first 250: the
+// second was skipped as an element the reader does not need. The header is refused, naming the line.
+TEST(ReadErrors, ply_declaring_the_vertex_element_twice)
+{
+    const fs::path dir = test_dir();
+    const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+    std::string body;
+    for (int i = 0; i < 500; ++i)
+        body += std::to_string(0.5 * i) + " " + std::to_string(0.25 * i) + " 1.5\n";
+    const fs::path path = write_file(dir / "twice.ply", "ply\nformat ascii 1.0\nelement vertex 250\n" + xyz +
+                                                            "element vertex 250\n" + xyz + "end_header\n" + body);
+    expect_error<InvalidInput>([&] { read_points(path); },
+                               {path.string(), "line 7: a second 'vertex' element (the first is on line 3)"});
+    Bytes b;
+    for (int i = 0; i < 4; ++i)
+        b.put(static_cast<float>(i));
+    const fs::path binary = write_file(dir / "twice_binary.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"
+                                                                 "property float x\nproperty float y\nproperty float z\n"
+                                                                 "element face 0\nproperty list uchar int vertex_indices\n"
+                                                                 "element vertex 0\nproperty float w\nend_header\n" + b.data);
+    expect_error<InvalidInput>([&] { read_points(binary); }, {binary.string(), "line 9: a second 'vertex' element"});
+}
+
 TEST(ReadErrors, malformed_ply_headers)
 {
     const fs::path dir = test_dir();
