@@ -46,6 +46,9 @@
 //!    Scanning Repository): every `bmesh FILE tx ty tz qx qy qz qw` (or `mesh ...`) line is a point file,
 //!    relative to the list's folder, read as above and moved into the common frame (see ScanPlacement);
 //!    `camera` lines are ignored.
+//!
+//! Float32 coordinates (PLY float, PCD F 4) far from the origin for the object's size (adjacent float32
+//! values more than 1e-4 of the extent apart) are recorded in PointCloud::coarse_coordinates, not refused.
 
 #include "libmrtile/point_cloud.h"
 

@@ -88,6 +88,8 @@ void append(PointCloud& into, PointCloud from)
         into.viewpoint.reset();
     if (into.crs != from.crs)
         into.crs.clear(); // coordinates in different systems have none in common
+    into.coarse_coordinates.insert(into.coarse_coordinates.end(), from.coarse_coordinates.begin(),
+                                   from.coarse_coordinates.end());
     const std::size_t old_size = into.positions.size();
     into.positions.reserve(old_size + from.positions.size());
     for (const Vec3& p : from.positions)

@@ -38,6 +38,17 @@ struct BoundingBox
     }
 };
 
+//! \brief A file whose coordinates were stored as 32-bit floats so far from the origin that adjacent
+//! float32 values lie more than 1e-4 of the points' extent apart: detail lost before reading began
+//! (nearby points stored as one, a stepped surface), which no tolerance brings back.
+struct CoarseCoordinates
+{
+    std::string file;
+    double magnitude = 0; //!< the largest absolute coordinate stored as float32
+    double spacing = 0;   //!< the distance between adjacent float32 values at that magnitude
+    double extent = 0;    //!< the largest side of the bounding box of the file's points
+};
+
 struct PointCloud
 {
     //! Added to every position to get the input's coordinates.
@@ -55,6 +66,10 @@ struct PointCloud
     //! Only placement on the globe uses it (3D Tiles export, see formats/lod_tileset.h); the hierarchy
     //! and meshes stay in the input's coordinates.
     std::string crs;
+    //! The input files whose float32 coordinates are coarse for the object (see CoarseCoordinates), as
+    //! the readers that know the stored type (PLY, PCD) find them; append() keeps every file's. The
+    //! library only records them: the caller decides whether to say so (the CLI prints a note).
+    std::vector<CoarseCoordinates> coarse_coordinates;
 
     std::size_t size() const { return positions.size(); }
     bool empty() const { return positions.empty(); }

@@ -1242,6 +1242,16 @@ void note_missing_scans(const std::vector<fs::path>& points)
     }
 }
 
+// Float32 coordinates too far from the origin for the object (see CoarseCoordinates): the points
+// merged or stepped before reading began, and no option here brings them back; the file's export can.
+void note_coarse_coordinates(const PointCloud& cloud)
+{
+    for (const CoarseCoordinates& c : cloud.coarse_coordinates)
+        std::printf("note: %s: float32 coordinates about %.0f from the origin are only ~%.2g apart, %.2g%% of the "
+                    "object's size; export the scan with double coordinates or shifted near the origin\n",
+                    c.file.c_str(), c.magnitude, c.spacing, 100 * c.spacing / c.extent);
+}
+
 // A file's own CRS that cannot place a tileset: said at once, not only when exporting.
 void note_unusable_crs(const std::string& crs, const std::string& name)
 {
@@ -1295,6 +1305,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
         viewpoint = Vec3{v[0], v[1], v[2]};
     }
     PointCloud cloud = read_points(points, read);
+    note_coarse_coordinates(cloud);
     if (viewpoint)
         cloud.viewpoint = *viewpoint - cloud.origin;
     if (!crs.empty())
