@@ -121,7 +121,52 @@ public:
         return Outcome::absent;
     }
 
+    // Replaces the regions of the `merged` nodes (their fans and the strips around their vertices) by
+    // one triangulation of their joint outline with the points of their ancestor's pseudo tile. False,
+    // and nothing changed, where the joint region is not one disc or cannot be re-triangulated safely.
+    bool coarsen(std::int32_t ancestor, const std::vector<std::int32_t>& merged, LocalRefineStats& stats)
+    {
+        std::vector<Mesh::FaceHandle> region;
+        for (const std::int32_t node : merged) {
+            const std::vector<Mesh::FaceHandle> part = region_of(node);
+            region.insert(region.end(), part.begin(), part.end());
+        }
+        bool disc = false;
+        std::vector<Mesh::VertexHandle> outline;
+        if (!region.empty()) {
+            // Strips joined to the rest by a corner only may stay; the merged fans must all go.
+            keep_main_piece(ancestor, region);
+            std::vector<Mesh::VertexHandle> pinches;
+            disc = holds_fans(merged) && disc_outline(region, outline, pinches);
+            std::vector<int> tried;
+            for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
+                unpinch(pinches, region, tried);
+                outline.clear();
+                pinches.clear();
+                disc = disc_outline(region, outline, pinches); // unpinching moves strips only: the fans stay
+            }
+        }
+        for (const auto f : region)
+            in_region_[static_cast<std::size_t>(f.idx())] = 0;
+        if (region.empty() || !disc || !replace_region(ancestor, {ancestor}, region, outline, stats))
+            return false;
+        for (const std::int32_t node : merged)
+            hand_over(node, {ancestor});
+        return true;
+    }
+
 private:
+    // Whether every fan face of the nodes is in the region being built (in_region_).
+    bool holds_fans(const std::vector<std::int32_t>& nodes) const
+    {
+        for (const std::int32_t node : nodes)
+            if (const auto fan = fans_.find(node); fan != fans_.end())
+                for (const auto f : fan->second)
+                    if (!mesh_.status(f).deleted() && !in_region_[static_cast<std::size_t>(f.idx())])
+                        return false;
+        return true;
+    }
+
     // Re-triangulates the disc `region` (outline as given) with the descendants' points; false, and
     // nothing changed, where its outline or new faces fold in its plane or OpenMesh refuses a face.
     bool replace_region(std::int32_t node, const std::vector<std::int32_t>& descendants,
@@ -784,7 +829,11 @@ private:
 
 } // namespace
 
-LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+namespace {
+
+// What refine_mesh and coarsen_mesh check before any change.
+void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, const LocalRefineOptions& options,
+                  const char* name)
 {
     if (!(options.max_tilt_degrees > 0.0 && options.max_tilt_degrees <= 90.0))
         throw InvalidInput("LocalRefineOptions::max_tilt_degrees must be in (0, 90]");
@@ -793,39 +842,86 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
     if (!OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(result.mesh, kFaceTile) ||
         !OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(result.mesh, kFaceGap) ||
         !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
-        throw InvalidInput("refine_mesh: the mesh has no tile ids (v:cluster, f:tile, f:gap); pass a mesh_cut result");
-    check_node_ids(h, finer);
-    if (!is_partition(h, finer))
-        throw InvalidInput("refine_mesh: the finer cut is not a partition of the points");
+        throw InvalidInput(std::string(name) + ": the mesh has no tile ids (v:cluster, f:tile, f:gap); pass a mesh_cut result");
+    check_node_ids(h, cut);
+    if (!is_partition(h, cut))
+        throw InvalidInput(std::string(name) + ": the cut asked for is not a partition of the points");
     check_node_ids(h, result.cut);
-    // The finer cut's nodes by first point: the ones under a node of the mesh's cut are one run.
-    std::vector<std::int32_t> by_begin = finer;
-    std::sort(by_begin.begin(), by_begin.end(), [&](std::int32_t a, std::int32_t b) {
+}
+
+// The nodes of `cut` under `node` (all of its points), by first point; empty if `cut` is coarser there.
+class NodesBelow
+{
+public:
+    NodesBelow(const Hierarchy& h, const Cut& cut) : h_(h), by_begin_(cut)
+    {
+        std::sort(by_begin_.begin(), by_begin_.end(), [&](std::int32_t a, std::int32_t b) { return node(a).begin < node(b).begin; });
+    }
+
+    std::vector<std::int32_t> operator()(std::int32_t id) const
+    {
+        const Node& n = node(id);
+        const auto first = std::partition_point(by_begin_.begin(), by_begin_.end(),
+                                                [&](std::int32_t d) { return node(d).begin < n.begin; });
+        std::vector<std::int32_t> run;
+        std::size_t covered = 0;
+        for (auto it = first; it != by_begin_.end() && node(*it).end <= n.end; ++it) {
+            run.push_back(*it);
+            covered += node(*it).end - node(*it).begin;
+        }
+        if (run.empty() || covered != n.end - n.begin || node(run.front()).begin != n.begin)
+            return {};
+        return run;
+    }
+
+private:
+    const Node& node(std::int32_t id) const { return h_.nodes[static_cast<std::size_t>(id)]; }
+    const Hierarchy& h_;
+    std::vector<std::int32_t> by_begin_;
+};
+
+// For each node of `upper`, the nodes of `lower` under it; InvalidInput (prefix, node id, suffix) where
+// `lower` is coarser than `upper`.
+std::vector<std::vector<std::int32_t>> runs_below(const Hierarchy& h, const Cut& upper, const Cut& lower,
+                                                  const char* prefix, const char* suffix)
+{
+    const NodesBelow below(h, lower);
+    std::vector<std::vector<std::int32_t>> runs;
+    runs.reserve(upper.size());
+    for (const std::int32_t node : upper) {
+        runs.push_back(below(node));
+        if (runs.back().empty())
+            throw InvalidInput(prefix + std::to_string(node) + suffix);
+    }
+    return runs;
+}
+
+void finish(const Hierarchy& h, MeshResult& result, Cut meshed)
+{
+    std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {
         return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
     });
-    auto below = [&](std::int32_t node) {
-        const Node& n = h.nodes[static_cast<std::size_t>(node)];
-        const auto first = std::partition_point(by_begin.begin(), by_begin.end(), [&](std::int32_t d) {
-            return h.nodes[static_cast<std::size_t>(d)].begin < n.begin;
-        });
-        std::vector<std::int32_t> run;
-        for (auto it = first; it != by_begin.end() && h.nodes[static_cast<std::size_t>(*it)].end <= n.end; ++it)
-            run.push_back(*it);
-        std::size_t covered = 0;
-        for (const std::int32_t d : run)
-            covered += h.nodes[static_cast<std::size_t>(d)].end - h.nodes[static_cast<std::size_t>(d)].begin;
-        if (run.empty() || covered != n.end - n.begin || h.nodes[static_cast<std::size_t>(run.front())].begin != n.begin)
-            throw InvalidInput("refine_mesh: node " + std::to_string(node) +
-                               " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; use mesh_cut)");
-        return run;
-    };
+    result.mesh.garbage_collection();
+    result.mesh.update_normals();
+    result.cut = std::move(meshed);
+    result.tiles = result.cut.size();
+}
 
+} // namespace
+
+LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+{
+    check_update(h, result, finer, options, "refine_mesh");
+    const std::vector<std::vector<std::int32_t>> runs =
+        runs_below(h, result.cut, finer, "refine_mesh: node ",
+                   " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; coarsen_mesh coarsens)");
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options);
     Cut meshed;
     meshed.reserve(finer.size());
-    for (const std::int32_t node : result.cut) {
-        const std::vector<std::int32_t> run = below(node);
+    for (std::size_t k = 0; k < result.cut.size(); ++k) {
+        const std::int32_t node = result.cut[k];
+        const std::vector<std::int32_t>& run = runs[k];
         if (run.size() == 1 && run.front() == node) {
             meshed.push_back(node);
             continue;
@@ -845,13 +941,34 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
             break;
         }
     }
-    std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    });
-    result.mesh.garbage_collection();
-    result.mesh.update_normals();
-    result.cut = std::move(meshed);
-    result.tiles = result.cut.size();
+    finish(h, result, std::move(meshed));
+    return stats;
+}
+
+LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
+{
+    check_update(h, result, coarser, options, "coarsen_mesh");
+    const std::vector<std::vector<std::int32_t>> runs =
+        runs_below(h, coarser, result.cut, "coarsen_mesh: node ",
+                   " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
+    LocalRefineStats stats;
+    LocalRefiner refiner(h, result, options);
+    Cut meshed;
+    meshed.reserve(result.cut.size());
+    for (std::size_t k = 0; k < coarser.size(); ++k) {
+        const std::int32_t node = coarser[k];
+        const std::vector<std::int32_t>& run = runs[k];
+        if (run.size() == 1 && run.front() == node) {
+            meshed.push_back(node);
+        } else if (refiner.coarsen(node, run, stats)) {
+            ++stats.coarsened;
+            meshed.push_back(node);
+        } else {
+            ++stats.kept;
+            meshed.insert(meshed.end(), run.begin(), run.end());
+        }
+    }
+    finish(h, result, std::move(meshed));
     return stats;
 }
 

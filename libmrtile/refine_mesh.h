@@ -1,7 +1,8 @@
 #pragma once
 //! \file refine_mesh.h
-//! \brief Incremental refinement of a cut's mesh: a finer cut meshed by changing only the tiles it
-//! refines (the "any cut" issue's incremental form; what mesh_cut rebuilds whole, in place).
+//! \brief Incremental refinement (and coarsening) of a cut's mesh: a finer cut meshed by changing only
+//! the tiles it splits, a coarser one by changing only the tiles it merges (the "any cut" issue's
+//! incremental form; what mesh_cut rebuilds whole, in place).
 //! \details mesh_cut builds one global manifold (the surface front, holes, the vertex fit): any change
 //! of the cut rebuilds all of it, at about 1 ms per tile. refine_mesh changes only the tiles that the
 //! finer cut splits. Each one's region (its fan, f:tile = the node, and the faces between tiles around
@@ -51,6 +52,7 @@ struct LocalRefineOptions
 struct LocalRefineStats
 {
     std::size_t refined = 0;       //!< tiles of the mesh re-triangulated with their descendants' points
+    std::size_t coarsened = 0;     //!< coarsen_mesh: groups of tiles re-triangulated as their ancestor's tile
     std::size_t kept = 0;          //!< tiles the finer cut splits that were left as they were (see refine_mesh)
     //! Tiles the finer cut splits that have no face and no vertex in the mesh (mesh_cut left them out,
     //! or an earlier refinement kept none of their points): replaced by their descendants in the cut
@@ -84,5 +86,18 @@ struct LocalRefineStats
 //! or result.mesh lacks the v:cluster / f:tile / f:gap properties (mesh.h).
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer,
                              const LocalRefineOptions& options = {});
+
+//! \brief The other way (coarsen_cut's incremental mesh): the tiles of result.cut that `coarser` merges
+//! into one of its nodes are replaced together by that node's tile, changing nothing else.
+//! \param coarser a cut at or above result.cut everywhere (coarsen_cut, or a cut by a larger tolerance).
+//! \details For each node of `coarser` that is an ancestor of several tiles of result.cut: the union of
+//! their regions (fans and the strips around their vertices) must be one disc holding all their fans;
+//! its outline is kept and triangulated again with the ancestor's pseudo-tile points (hull and apex),
+//! heights fitted, as refine_mesh does; otherwise the tiles stay (counted in `kept`, result.cut keeps
+//! them). Merged nodes' vertices left on the outline name the ancestor. Same guarantees and costs as
+//! refine_mesh.
+//! \throw InvalidInput as refine_mesh, or if `coarser` is finer than result.cut somewhere.
+LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser,
+                              const LocalRefineOptions& options = {});
 
 } // namespace mrt

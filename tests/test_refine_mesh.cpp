@@ -103,6 +103,32 @@ void expect_manifold(const Mesh& mesh, std::size_t loops, int genus)
     EXPECT_TRUE(t.consistently_oriented);
 }
 
+// Every vertex names a tile of the cut, as after mesh_cut (LOD sets own gap faces by it).
+void expect_vertices_name_tiles_of_the_cut(const MeshResult& r)
+{
+    const std::set<std::int32_t> in_cut(r.cut.begin(), r.cut.end());
+    OpenMesh::VPropHandleT<int> cluster;
+    ASSERT_TRUE(r.mesh.get_property_handle(cluster, kVertexCluster));
+    for (const auto v : r.mesh.vertices())
+        EXPECT_EQ(in_cut.count(r.mesh.property(cluster, v)), 1u) << r.mesh.property(cluster, v);
+}
+
+// The vertices of `before` farther than `reach` from `centre` are all in `after`, unmoved; returns how
+// many there were.
+std::size_t expect_far_vertices_kept(const Mesh& before, const Mesh& after, const Vec3& centre, double reach)
+{
+    std::set<std::array<double, 3>> now;
+    for (const Vec3& p : positions_of(after))
+        now.insert({p.x, p.y, p.z});
+    std::size_t far = 0;
+    for (const Vec3& p : positions_of(before))
+        if (distance(p, centre) > reach) {
+            ++far;
+            EXPECT_EQ(now.count({p.x, p.y, p.z}), 1u);
+        }
+    return far;
+}
+
 // A focus region refined on a closed torus: the mesh stays closed with genus 1, the cut becomes the
 // refined one, everything away from the region keeps its vertices bit for bit, and the points in the
 // region come nearer the mesh.
@@ -128,11 +154,7 @@ TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
     EXPECT_GT(refined.cut.size(), base.cut.size() + 10);
     expect_manifold(refined.mesh, 0, 1);
     EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
-    // Every vertex names a tile of the cut, as after mesh_cut (LOD sets own gap faces by it).
-    const std::set<std::int32_t> in_cut(refined.cut.begin(), refined.cut.end());
-    const auto cluster = OpenMesh::getProperty<OpenMesh::VertexHandle, int>(refined.mesh, kVertexCluster);
-    for (const auto v : refined.mesh.vertices())
-        EXPECT_EQ(in_cut.count(cluster[v]), 1u) << cluster[v];
+    expect_vertices_name_tiles_of_the_cut(refined);
 
     // Away from the refined tiles (farther from the region than twice the largest of them: past their
     // strips and their neighbours' rims), every vertex of the base mesh is still there, unmoved.
@@ -141,15 +163,7 @@ TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
     for (const std::int32_t node : base.cut)
         if (kept_nodes.count(node) == 0)
             largest = std::max(largest, h.nodes[static_cast<std::size_t>(node)].box.diagonal());
-    std::set<std::array<double, 3>> now;
-    for (const Vec3& p : positions_of(refined.mesh))
-        now.insert({p.x, p.y, p.z});
-    std::size_t far = 0;
-    for (const Vec3& p : positions_of(base.mesh))
-        if (distance(p, focus.centre) > focus.radius + 2.0 * largest) {
-            ++far;
-            EXPECT_EQ(now.count({p.x, p.y, p.z}), 1u);
-        }
+    const std::size_t far = expect_far_vertices_kept(base.mesh, refined.mesh, focus.centre, focus.radius + 2.0 * largest);
     EXPECT_GT(far, base.mesh.n_vertices() / 2);
 
     const std::vector<Vec3> near = points_within(h, focus.centre, focus.radius);
@@ -216,6 +230,65 @@ TEST(RefineMesh, the_bunny_keeps_its_borders)
     MeshResult folded = coarse;
     refine_mesh(h, folded, cut_by_tolerance(h, 0.002), unchecked);
     EXPECT_FALSE(self_intersecting_faces(folded.mesh).empty()); // what the check prevents
+}
+
+// Coarsening a region of a fine torus mesh: its tiles merge into their ancestors' tiles, the mesh stays
+// closed with genus 1 and loses faces there, the rest keeps its vertices; refined again, the region
+// comes back nearer the points.
+TEST(RefineMesh, a_region_is_coarsened_in_place_and_refined_back)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(60000));
+    const MeshResult fine = mesh_cut(h, cut_by_tolerance(h, 0.001));
+    FocusRegion region;
+    region.centre = Vec3{1.35, 0.0, 0.0} - h.cloud.origin;
+    region.radius = 0.4;
+    // The tiles whose centres lie in the region, each replaced by its ancestor three levels up (with
+    // every tile under it): a cut at or above the fine one, coarser in the region only.
+    std::vector<std::int32_t> ancestors;
+    for (const std::int32_t id : fine.cut) {
+        std::int32_t a = id;
+        if (distance(h.nodes[static_cast<std::size_t>(id)].moments.mean, region.centre) < region.radius)
+            for (int up = 0; up < 3 && h.nodes[static_cast<std::size_t>(a)].parent >= 0; ++up)
+                a = h.nodes[static_cast<std::size_t>(a)].parent;
+        ancestors.push_back(a);
+    }
+    auto inside = [&](std::int32_t a, std::int32_t b) { // a's points within b's
+        const Node &na = h.nodes[static_cast<std::size_t>(a)], &nb = h.nodes[static_cast<std::size_t>(b)];
+        return nb.begin <= na.begin && na.end <= nb.end;
+    };
+    Cut coarser;
+    for (const std::int32_t a : ancestors)
+        if (std::none_of(ancestors.begin(), ancestors.end(), [&](std::int32_t b) { return b != a && inside(a, b); }) &&
+            std::find(coarser.begin(), coarser.end(), a) == coarser.end())
+            coarser.push_back(a);
+    ASSERT_TRUE(is_partition(h, coarser));
+    ASSERT_LT(coarser.size() + 50, fine.cut.size()) << coarser.size() << " " << fine.cut.size();
+
+    MeshResult coarse = fine;
+    const LocalRefineStats stats = coarsen_mesh(h, coarse, coarser);
+    EXPECT_GT(stats.coarsened, 3u);
+    EXPECT_LE(stats.kept * 5, stats.coarsened);
+    EXPECT_EQ(stats.refused, 0u);
+    EXPECT_TRUE(is_partition(h, coarse.cut));
+    EXPECT_LT(coarse.cut.size(), fine.cut.size());
+    EXPECT_LT(coarse.mesh.n_faces() + 200, fine.mesh.n_faces());
+    EXPECT_EQ(coarse.mesh.n_faces(), fine.mesh.n_faces() - stats.faces_removed + stats.faces_added);
+    expect_manifold(coarse.mesh, 0, 1);
+    EXPECT_TRUE(self_intersecting_faces(coarse.mesh).empty());
+    expect_vertices_name_tiles_of_the_cut(coarse);
+    EXPECT_GT(expect_far_vertices_kept(fine.mesh, coarse.mesh, region.centre, 2.0 * region.radius),
+              fine.mesh.n_vertices() / 3);
+
+    const std::vector<Vec3> near = points_within(h, region.centre, 0.5 * region.radius);
+    const double coarse_distance = point_to_mesh_distance(near, coarse.mesh).mean;
+    EXPECT_GT(coarse_distance, point_to_mesh_distance(near, fine.mesh).mean);
+    MeshResult back = coarse;
+    refine_mesh(h, back, fine.cut);
+    expect_manifold(back.mesh, 0, 1);
+    EXPECT_LT(point_to_mesh_distance(near, back.mesh).mean, 0.8 * coarse_distance);
+
+    MeshResult bad = fine;
+    EXPECT_THROW(coarsen_mesh(h, bad, cut_by_tolerance(h, 0.0005)), InvalidInput); // finer somewhere
 }
 
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)

@@ -36,7 +36,11 @@ int main(int argc, char** argv)
     const mrt::LocalRefineStats patched = mrt::refine_mesh(h, coarse, mrt::refine_cut(h, coarse.cut, 0.01, {focus}));
     std::printf("refined %zu tiles in place (%zu kept), %zu faces\n", patched.refined, patched.kept,
                 static_cast<std::size_t>(coarse.mesh.n_faces()));
-    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0
+    const mrt::LocalRefineStats merged = mrt::coarsen_mesh(h, coarse, mrt::coarsen_cut(h, coarse.cut, focus, 0.01));
+    std::printf("coarsened %zu groups back (%zu kept), %zu faces\n", merged.coarsened, merged.kept,
+                static_cast<std::size_t>(coarse.mesh.n_faces()));
+    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0 &&
+                   merged.refused == 0
                ? 0
                : 1;
 }
