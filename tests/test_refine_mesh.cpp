@@ -18,6 +18,8 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <random>
+#include <string>
 #include <set>
 #include <vector>
 
@@ -289,6 +291,37 @@ TEST(RefineMesh, a_region_is_coarsened_in_place_and_refined_back)
 
     MeshResult bad = fine;
     EXPECT_THROW(coarsen_mesh(h, bad, cut_by_tolerance(h, 0.0005)), InvalidInput); // finer somewhere
+}
+
+// Random focus refinements and coarsenings, one after the other on the same mesh, on a scan with
+// borders and a CAD part with sharp edges: after every step the mesh is manifold, consistently
+// oriented, with the topology it started with, no crossing faces, and its vertices name tiles of its cut.
+TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
+{
+    for (const char* name : {"bun_zipper.ply", "fandisk.obj"}) {
+        const Hierarchy h = build_hierarchy(read_points(std::string(MRTILE_SHARED_DATA "/") + name));
+        MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.01));
+        const TopologyStats start = topology_stats(r.mesh);
+        const double diagonal = h.bbox().diagonal();
+        std::mt19937 random(7);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        std::size_t changed = 0;
+        for (int step = 0; step < 12; ++step) {
+            FocusRegion f;
+            f.centre = h.cloud.positions[random() % h.cloud.positions.size()];
+            f.radius = diagonal * (0.05 + 0.25 * unit(random));
+            f.tolerance = std::pow(10.0, -2.0 - 1.5 * unit(random));
+            const LocalRefineStats stats = step % 3 == 2 ? coarsen_mesh(h, r, coarsen_cut(h, r.cut, f, 0.01 + 0.04 * unit(random)))
+                                                         : refine_mesh(h, r, refine_cut(h, r.cut, 0.01, {f}));
+            changed += stats.refined + stats.coarsened;
+            SCOPED_TRACE(std::string(name) + " step " + std::to_string(step));
+            expect_manifold(r.mesh, start.boundary_loops, start.genus);
+            EXPECT_TRUE(is_partition(h, r.cut));
+            EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
+            expect_vertices_name_tiles_of_the_cut(r);
+        }
+        EXPECT_GT(changed, 50u) << name;
+    }
 }
 
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
