@@ -575,6 +575,17 @@ private:
             for (const std::uint32_t i : tile.boundary)
                 add(h_.cloud.positions[i], static_cast<std::int64_t>(i));
         }
+        if (candidates.empty())
+            return {};
+        // Points taken so far, in a grid of cells as wide as the largest separation: a point can be too
+        // near only to points in its own cell and the eight around it.
+        const double cell = std::max(*std::max_element(separation.begin(), separation.end()), 1e-300);
+        auto cell_of = [&](const Point2& p) {
+            return std::array<std::int64_t, 2>{static_cast<std::int64_t>(std::floor(p[0] / cell)),
+                                               static_cast<std::int64_t>(std::floor(p[1] / cell))};
+        };
+        auto key = [](std::int64_t i, std::int64_t j) { return static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(j); };
+        std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
         std::vector<NewPoint> kept;
         std::vector<double> kept_separation;
         for (std::size_t k = 0; k < candidates.size(); ++k) {
@@ -585,12 +596,23 @@ private:
             bool clear = true;
             for (std::size_t i = 0; i < polygon.size() && clear; ++i)
                 clear = segment_distance2(c.uv, polygon[i], polygon[(i + 1) % polygon.size()]) >= s2;
-            for (std::size_t j = 0; j < kept.size() && clear; ++j) {
-                const double dx = kept[j].uv[0] - c.uv[0], dy = kept[j].uv[1] - c.uv[1];
-                const double s = std::max(separation[k], kept_separation[j]);
-                clear = dx * dx + dy * dy >= s * s;
-            }
+            const auto at = cell_of(c.uv);
+            for (std::int64_t di = -1; di <= 1 && clear; ++di)
+                for (std::int64_t dj = -1; dj <= 1 && clear; ++dj) {
+                    const auto found = grid.find(key(at[0] + di, at[1] + dj));
+                    if (found == grid.end())
+                        continue;
+                    for (const std::uint32_t j : found->second) {
+                        const double dx = kept[j].uv[0] - c.uv[0], dy = kept[j].uv[1] - c.uv[1];
+                        const double s = std::max(separation[k], kept_separation[j]);
+                        if (dx * dx + dy * dy < s * s) {
+                            clear = false;
+                            break;
+                        }
+                    }
+                }
             if (clear) {
+                grid[key(at[0], at[1])].push_back(static_cast<std::uint32_t>(kept.size()));
                 kept.push_back(c);
                 kept_separation.push_back(separation[k]);
             }
@@ -718,18 +740,28 @@ private:
 
     // Whether a new face crosses one of the faces within two rings of the outline (bounding boxes
     // first, then the exact test of self_intersecting_faces).
-    bool crosses_surroundings(const std::vector<Mesh::VertexHandle>& outline, const std::vector<Mesh::FaceHandle>& added) const
+    bool crosses_surroundings(const std::vector<Mesh::VertexHandle>& outline, const std::vector<Mesh::FaceHandle>& added)
     {
-        std::unordered_map<int, char> is_new;
+        // Faces are marked with this call's stamp (a fresh number per call: no clearing, no hashing).
+        if (++stamp_ == 0) {
+            std::fill(face_stamp_.begin(), face_stamp_.end(), 0u);
+            stamp_ = 1;
+        }
+        face_stamp_.resize(mesh_.n_faces(), 0u);
+        auto mark = [&](Mesh::FaceHandle f) {
+            std::uint32_t& s = face_stamp_[static_cast<std::size_t>(f.idx())];
+            const bool fresh = s != stamp_;
+            s = stamp_;
+            return fresh;
+        };
         for (const auto f : added)
-            is_new[f.idx()] = 1;
+            mark(f);
         std::vector<Mesh::FaceHandle> around;
-        std::unordered_map<int, char> seen;
         for (const auto v : outline)
             for (const auto f : mesh_.vf_range(v))
                 for (const auto w : mesh_.fv_range(f))
                     for (const auto g : mesh_.vf_range(w))
-                        if (!is_new.count(g.idx()) && seen.emplace(g.idx(), 1).second)
+                        if (mark(g))
                             around.push_back(g);
         auto box = [&](Mesh::FaceHandle f) {
             const std::array<Vec3, 3> c = face_corners(mesh_, f);
@@ -825,6 +857,8 @@ private:
     std::unordered_map<std::int32_t, std::vector<Mesh::FaceHandle>> fans_;
     std::unordered_map<std::int32_t, std::vector<Mesh::VertexHandle>> vertices_; // by v:cluster
     std::vector<char> in_region_; // per face: in the region being refined
+    std::vector<std::uint32_t> face_stamp_; // per face: the crossing test's call that last saw it
+    std::uint32_t stamp_ = 0;
 };
 
 } // namespace
