@@ -6,6 +6,7 @@
 #include "tools/bench_common.h"
 #include "tools/bench_measure.h"
 
+#include "formats/read_points.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/model_file.h"
@@ -46,7 +47,7 @@ struct RefineMeasurement
     Timing refine, fresh;
     DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
 };
-constexpr std::size_t kRefines = 2;
+constexpr std::size_t kRefines = 3;
 
 struct CutsMeasurement
 {
@@ -113,9 +114,9 @@ RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, con
     return m;
 }
 
-CutsMeasurement measure_cuts(std::size_t points)
+CutsMeasurement measure_cuts(std::size_t points, const std::filesystem::path& bunny)
 {
-    return run_in_child<CutsMeasurement>([points] {
+    return run_in_child<CutsMeasurement>([points, bunny] {
         CutsMeasurement m;
         ScratchDir scratch("cuts");
         const auto path = scratch.path() / "torus.mrt";
@@ -151,6 +152,12 @@ CutsMeasurement measure_cuts(std::size_t points)
             for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
                 sample.push_back(h.cloud.positions[i]);
             m.refines[1] = measure_refine(h, base, cut_by_budget(h, 10000), sample);
+        }
+        {
+            // A real scan: the bunny refined everywhere from tolerance 0.005 to 0.001.
+            const Hierarchy rabbit = build_hierarchy(read_points(bunny));
+            const MeshResult base = mesh_cut(rabbit, cut_by_tolerance(rabbit, 0.005));
+            m.refines[2] = measure_refine(rabbit, base, cut_by_tolerance(rabbit, 0.001), rabbit.cloud.positions);
         }
         return m;
     });
@@ -194,9 +201,10 @@ Table cuts_table(const CutsMeasurement& m, const std::string& input)
 
 Table refine_table(const CutsMeasurement& m, const std::string& input)
 {
-    const char* names[kRefines] = {"focus sphere: 0.01 → 0.0005 inside", "budget 1,000 → 10,000 tiles"};
+    const char* names[kRefines] = {"focus sphere: 0.01 → 0.0005 inside", "budget 1,000 → 10,000 tiles",
+                                   "bun_zipper.ply: tolerance 0.005 → 0.001"};
     Table t;
-    t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input;
+    t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input + " and the bunny";
     t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"refined / kept / absent"},
                  {"faces (fresh)"}, {"refine s"}, {"fresh mesh_cut s"}, {"speed-up"},
                  {"output triangles/s (≥ 1M)"}, {"mean dist (fresh)"}, {"max dist (fresh)"}};
@@ -215,14 +223,15 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
     }
     t.notes = {
         "Base meshes: `mesh_cut` of `cut_by_tolerance(h, 0.01)` (focus row) and of `cut_by_budget(h, 1000)`; "
-        "finer cuts: `refine_cut(h, base.cut, 0.01, {the focus sphere above})` and `cut_by_budget(h, 10000)`. Refine s: "
+        "finer cuts: `refine_cut(h, base.cut, 0.01, {the focus sphere above})` and `cut_by_budget(h, 10000)`; for the "
+        "bunny (its own hierarchy, default options), `cut_by_tolerance` 0.005 and 0.001. Refine s: "
         "`refine_mesh(h, base, finer)` in place (CPU, once; the copy of the base mesh is not timed); fresh: `mesh_cut(h, finer)` "
         "(CPU, once). Refined / kept / absent: tiles re-triangulated / left as they were (their region was not one disc, "
         "would fold or would cross its surroundings; the cut after keeps them, so it can have fewer tiles than the fresh "
         "one) / split with nothing of theirs in the mesh.",
         "Output triangles/s: the whole refined mesh's faces / refine CPU seconds; it needs a meshed base cut, so it is "
         "the incremental path, not a cut meshed from the model alone (the table above). Distances: focus row, the "
-        "points inside the sphere; budget row, every 40th point; to the mesh, as fractions of the bbox "
+        "points inside the sphere; budget row, every 40th point; bunny, every point; to the mesh, as fractions of the bbox "
         "diagonal of the points measured (`point_to_mesh_distance`)."};
     return t;
 }
@@ -236,7 +245,7 @@ std::vector<Table> cuts_tables(const BenchContext& context)
         points = static_cast<std::size_t>(context.max_points);
     const std::string input = "noisy torus " + short_count(points);
     progress("cuts: " + input + ": build, save, load ...");
-    const CutsMeasurement m = measure_cuts(points);
+    const CutsMeasurement m = measure_cuts(points, context.data_dir / "bun_zipper.ply");
     return {cuts_table(m, input), refine_table(m, input)};
 }
 
