@@ -84,6 +84,8 @@ public:
                 vertices_[cluster_[v]].push_back(v);
     }
 
+    // refined: the region was re-triangulated (split tiles, or merged ones for coarsen); absent: there was
+    // nothing in the mesh to re-triangulate; kept: left as it was.
     enum class Outcome { refined, absent, kept };
 
     // Replaces the region of `node` by a triangulation of its outline with the descendants' points:
@@ -100,7 +102,8 @@ public:
             keep_main_piece(node, region);
             std::vector<Mesh::VertexHandle> outline;
             std::vector<Mesh::VertexHandle> pinches;
-            bool disc = disc_outline(region, outline, pinches);
+            // A fan in pieces cannot go whole: a face left naming the node would name no tile of the cut.
+            bool disc = holds_fans({node}) && disc_outline(region, outline, pinches);
             std::vector<int> tried;
             for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
                 unpinch(pinches, region, tried);
@@ -124,35 +127,37 @@ public:
     // Replaces the regions of the `merged` nodes (their fans and the strips around their vertices) by
     // one triangulation of their joint outline with the points of their ancestor's pseudo tile. False,
     // and nothing changed, where the joint region is not one disc or cannot be re-triangulated safely.
-    bool coarsen(std::int32_t ancestor, const std::vector<std::int32_t>& merged, LocalRefineStats& stats)
+    Outcome coarsen(std::int32_t ancestor, const std::vector<std::int32_t>& merged, LocalRefineStats& stats)
     {
         std::vector<Mesh::FaceHandle> region;
         for (const std::int32_t node : merged) {
             const std::vector<Mesh::FaceHandle> part = region_of(node);
             region.insert(region.end(), part.begin(), part.end());
         }
-        bool disc = false;
+        if (region.empty()) { // nothing of theirs in the mesh: nothing to re-triangulate
+            for (const std::int32_t node : merged)
+                hand_over(node, {ancestor});
+            return Outcome::absent;
+        }
+        // Strips joined to the rest by a corner only may stay; the merged fans must all go.
+        keep_main_piece(ancestor, region);
         std::vector<Mesh::VertexHandle> outline;
-        if (!region.empty()) {
-            // Strips joined to the rest by a corner only may stay; the merged fans must all go.
-            keep_main_piece(ancestor, region);
-            std::vector<Mesh::VertexHandle> pinches;
-            disc = holds_fans(merged) && disc_outline(region, outline, pinches);
-            std::vector<int> tried;
-            for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
-                unpinch(pinches, region, tried);
-                outline.clear();
-                pinches.clear();
-                disc = disc_outline(region, outline, pinches); // unpinching moves strips only: the fans stay
-            }
+        std::vector<Mesh::VertexHandle> pinches;
+        bool disc = holds_fans(merged) && disc_outline(region, outline, pinches);
+        std::vector<int> tried;
+        for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
+            unpinch(pinches, region, tried);
+            outline.clear();
+            pinches.clear();
+            disc = disc_outline(region, outline, pinches); // unpinching moves strips only: the fans stay
         }
         for (const auto f : region)
             in_region_[static_cast<std::size_t>(f.idx())] = 0;
-        if (region.empty() || !disc || !replace_region(ancestor, {ancestor}, region, outline, stats))
-            return false;
+        if (!disc || !replace_region(ancestor, {ancestor}, region, outline, stats))
+            return Outcome::kept;
         for (const std::int32_t node : merged)
             hand_over(node, {ancestor});
-        return true;
+        return Outcome::refined;
     }
 
 private:
@@ -994,12 +999,21 @@ LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut&
         const std::vector<std::int32_t>& run = runs[k];
         if (run.size() == 1 && run.front() == node) {
             meshed.push_back(node);
-        } else if (refiner.coarsen(node, run, stats)) {
+            continue;
+        }
+        switch (refiner.coarsen(node, run, stats)) {
+        case LocalRefiner::Outcome::refined: // re-triangulated (as the coarser tile)
             ++stats.coarsened;
             meshed.push_back(node);
-        } else {
+            break;
+        case LocalRefiner::Outcome::absent:
+            ++stats.absent;
+            meshed.push_back(node);
+            break;
+        case LocalRefiner::Outcome::kept:
             ++stats.kept;
             meshed.insert(meshed.end(), run.begin(), run.end());
+            break;
         }
     }
     finish(h, result, std::move(meshed));

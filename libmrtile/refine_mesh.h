@@ -54,9 +54,9 @@ struct LocalRefineStats
     std::size_t refined = 0;       //!< tiles of the mesh re-triangulated with their descendants' points
     std::size_t coarsened = 0;     //!< coarsen_mesh: groups of tiles re-triangulated as their ancestor's tile
     std::size_t kept = 0;          //!< tiles the finer cut splits that were left as they were (see refine_mesh)
-    //! Tiles the finer cut splits that have no face and no vertex in the mesh (mesh_cut left them out,
-    //! or an earlier refinement kept none of their points): replaced by their descendants in the cut
-    //! with nothing to re-triangulate.
+    //! Tiles the finer cut splits (coarsen_mesh: groups it merges) that have no face and no vertex in the
+    //! mesh (mesh_cut left them out, or an earlier refinement kept none of their points): replaced in
+    //! the cut with nothing to re-triangulate.
     std::size_t absent = 0;
     std::size_t faces_removed = 0; //!< faces of the refined tiles' regions (fans and the strips around them)
     std::size_t faces_added = 0;   //!< faces that replace them

@@ -105,14 +105,22 @@ void expect_manifold(const Mesh& mesh, std::size_t loops, int genus)
     EXPECT_TRUE(t.consistently_oriented);
 }
 
-// Every vertex names a tile of the cut, as after mesh_cut (LOD sets own gap faces by it).
-void expect_vertices_name_tiles_of_the_cut(const MeshResult& r)
+// Every vertex names a tile of the cut, as after mesh_cut (LOD sets own gap faces by it), and so does
+// every fan face (f:tile; -1 for the faces between tiles).
+void expect_ids_name_tiles_of_the_cut(const MeshResult& r)
 {
     const std::set<std::int32_t> in_cut(r.cut.begin(), r.cut.end());
     OpenMesh::VPropHandleT<int> cluster;
     ASSERT_TRUE(r.mesh.get_property_handle(cluster, kVertexCluster));
     for (const auto v : r.mesh.vertices())
         EXPECT_EQ(in_cut.count(r.mesh.property(cluster, v)), 1u) << r.mesh.property(cluster, v);
+    OpenMesh::FPropHandleT<int> tile;
+    ASSERT_TRUE(r.mesh.get_property_handle(tile, kFaceTile));
+    for (const auto f : r.mesh.faces()) {
+        if (r.mesh.property(tile, f) >= 0) {
+            EXPECT_EQ(in_cut.count(r.mesh.property(tile, f)), 1u) << r.mesh.property(tile, f);
+        }
+    }
 }
 
 // The vertices of `before` farther than `reach` from `centre` are all in `after`, unmoved; returns how
@@ -156,7 +164,7 @@ TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
     EXPECT_GT(refined.cut.size(), base.cut.size() + 10);
     expect_manifold(refined.mesh, 0, 1);
     EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
-    expect_vertices_name_tiles_of_the_cut(refined);
+    expect_ids_name_tiles_of_the_cut(refined);
 
     // Away from the refined tiles (farther from the region than twice the largest of them: past their
     // strips and their neighbours' rims), every vertex of the base mesh is still there, unmoved.
@@ -277,7 +285,7 @@ TEST(RefineMesh, a_region_is_coarsened_in_place_and_refined_back)
     EXPECT_EQ(coarse.mesh.n_faces(), fine.mesh.n_faces() - stats.faces_removed + stats.faces_added);
     expect_manifold(coarse.mesh, 0, 1);
     EXPECT_TRUE(self_intersecting_faces(coarse.mesh).empty());
-    expect_vertices_name_tiles_of_the_cut(coarse);
+    expect_ids_name_tiles_of_the_cut(coarse);
     EXPECT_GT(expect_far_vertices_kept(fine.mesh, coarse.mesh, region.centre, 2.0 * region.radius),
               fine.mesh.n_vertices() / 3);
 
@@ -318,7 +326,7 @@ TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
             expect_manifold(r.mesh, start.boundary_loops, start.genus);
             EXPECT_TRUE(is_partition(h, r.cut));
             EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
-            expect_vertices_name_tiles_of_the_cut(r);
+            expect_ids_name_tiles_of_the_cut(r);
         }
         EXPECT_GT(changed, 50u) << name;
     }
