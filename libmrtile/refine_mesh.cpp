@@ -843,14 +843,28 @@ private:
         return owner;
     }
 
+    // A new vertex's colour: its input point's, or for an apex the mean of (up to kFitPointsPerTile of)
+    // its tile's points, as color_vertices gives a fan centre the colours around it.
     Mesh::Color colour_of(const NewPoint& p) const
     {
         const auto& colours = h_.cloud.colors;
-        std::size_t i = p.input_point >= 0 ? static_cast<std::size_t>(p.input_point)
-                                           : h_.nodes[static_cast<std::size_t>(p.node)].begin;
-        if (i >= colours.size())
+        if (p.input_point >= 0 && static_cast<std::size_t>(p.input_point) < colours.size()) {
+            const auto& c = colours[static_cast<std::size_t>(p.input_point)];
+            return Mesh::Color(c[0], c[1], c[2], c[3]);
+        }
+        const Node& node = h_.nodes[static_cast<std::size_t>(p.node)];
+        const std::size_t stride = std::max<std::size_t>(1, (node.end - node.begin) / kFitPointsPerTile);
+        std::array<double, 4> sum{0, 0, 0, 0};
+        double count = 0.0;
+        for (std::size_t i = node.begin; i < node.end && i < colours.size(); i += stride) {
+            for (std::size_t k = 0; k < 4; ++k)
+                sum[k] += colours[i][k];
+            count += 1.0;
+        }
+        if (count == 0.0)
             return Mesh::Color(255, 255, 255, 255);
-        return Mesh::Color(colours[i][0], colours[i][1], colours[i][2], colours[i][3]);
+        auto mean = [&](std::size_t k) { return static_cast<unsigned char>(std::lround(sum[k] / count)); };
+        return Mesh::Color(mean(0), mean(1), mean(2), mean(3));
     }
 
     const Hierarchy& h_;

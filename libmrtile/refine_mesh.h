@@ -78,7 +78,7 @@ struct LocalRefineStats
 //! (f:gap true: the strips between the descendants, as mesh_cut's gap faces). New vertices: v:cluster
 //! = their descendant; the split node's own vertices left on the outline go to its descendant with the
 //! nearest centre, so that every vertex names a tile of the cut. Normals are recomputed; colours come
-//! from the new vertex's input point (an apex: its node's first point) when the mesh has colours.
+//! from the new vertex's input point (an apex: the mean of its tile's points) when the mesh has colours.
 //! Cost: in proportion to the refined tiles' regions and the descendants' pseudo tiles (each built
 //! from at most TileOptions::max_points of its points), plus one pass over the mesh to index the fans
 //! and one to recompute normals. Deterministic.

@@ -332,6 +332,37 @@ TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
     }
 }
 
+// Coloured points (colour a linear function of the position): the new vertices get the colour of where
+// they are, as mesh_cut's vertices do.
+TEST(RefineMesh, new_vertices_take_the_points_colours)
+{
+    PointCloud cloud = shapes::sphere(20000);
+    auto colour_at = [](const Vec3& p) {
+        return std::array<double, 3>{127.5 * (p.x + 1.0), 127.5 * (p.y + 1.0), 127.5 * (p.z + 1.0)};
+    };
+    for (const Vec3& p : cloud.positions) {
+        const auto c = colour_at(p + cloud.origin);
+        cloud.colors.push_back({static_cast<std::uint8_t>(std::lround(c[0])), static_cast<std::uint8_t>(std::lround(c[1])),
+                                static_cast<std::uint8_t>(std::lround(c[2])), 255});
+    }
+    const Hierarchy h = build_hierarchy(std::move(cloud));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    ASSERT_TRUE(base.mesh.has_vertex_colors());
+    MeshResult refined = base;
+    const LocalRefineStats stats = refine_mesh(h, refined, cut_by_tolerance(h, 0.005));
+    ASSERT_GT(stats.refined, 10u);
+    ASSERT_TRUE(refined.mesh.has_vertex_colors());
+    double worst = 0.0;
+    for (const auto v : refined.mesh.vertices()) {
+        const auto want = colour_at(to_vec3(refined.mesh.point(v)) + h.cloud.origin);
+        const auto got = refined.mesh.color(v);
+        for (int k = 0; k < 3; ++k)
+            worst = std::max(worst, std::abs(want[static_cast<std::size_t>(k)] - got[k]));
+        EXPECT_EQ(got[3], 255);
+    }
+    EXPECT_LT(worst, 12.0); // a tile's mean colour is that of its mean point, off the sphere by its sag
+}
+
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(5000));
