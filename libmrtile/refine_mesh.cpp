@@ -70,18 +70,38 @@ struct NewPoint
 class LocalRefiner
 {
 public:
-    LocalRefiner(const Hierarchy& h, MeshResult& result, const LocalRefineOptions& options)
+    // `changing`: the nodes whose tiles will be replaced (the index of fans and vertices holds those
+    // only; the tiles made later are added as they are made).
+    LocalRefiner(const Hierarchy& h, MeshResult& result, const LocalRefineOptions& options, const std::vector<std::int32_t>& changing)
         : h_(h), mesh_(result.mesh), options_(options),
           tile_(OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh_, kFaceTile)),
           gap_(OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh_, kFaceGap)),
           cluster_(OpenMesh::getProperty<OpenMesh::VertexHandle, int>(mesh_, kVertexCluster))
     {
+        std::vector<char> indexed(h.nodes.size(), 0);
+        for (const std::int32_t node : changing)
+            indexed[static_cast<std::size_t>(node)] = 1;
+        auto wanted = [&](int node) { return node >= 0 && static_cast<std::size_t>(node) < indexed.size() && indexed[static_cast<std::size_t>(node)]; };
         for (const auto f : mesh_.faces())
-            if (tile_[f] >= 0)
+            if (wanted(tile_[f]))
                 fans_[tile_[f]].push_back(f);
         for (const auto v : mesh_.vertices())
-            if (cluster_[v] >= 0)
+            if (wanted(cluster_[v]))
                 vertices_[cluster_[v]].push_back(v);
+    }
+
+    // Normals of the new faces and of the vertices whose faces changed (the rest keep theirs), before
+    // the deleted elements are collected (which renumbers handles).
+    void update_touched_normals()
+    {
+        for (const auto f : touched_faces_)
+            if (!mesh_.status(f).deleted())
+                mesh_.update_normal(f);
+        std::sort(touched_vertices_.begin(), touched_vertices_.end());
+        touched_vertices_.erase(std::unique(touched_vertices_.begin(), touched_vertices_.end()), touched_vertices_.end());
+        for (const auto v : touched_vertices_)
+            if (!mesh_.status(v).deleted())
+                mesh_.update_normal(v);
     }
 
     // refined: the region was re-triangulated (split tiles, or merged ones for coarsen); absent: there was
@@ -699,9 +719,12 @@ private:
             *result = refused ? Replaced::refused : Replaced::crossing;
             return false;
         }
-        for (const auto f : added)
+        for (const auto f : added) {
             if (tile_[f] >= 0)
                 fans_[tile_[f]].push_back(f);
+            touched_faces_.push_back(f);
+        }
+        touched_vertices_.insert(touched_vertices_.end(), corner.begin(), corner.end());
         // The fan's own vertices inside the outline (its apex) are left without faces: remove them.
         for (const auto& corners : old_faces)
             for (const auto v : corners)
@@ -738,6 +761,7 @@ private:
                 throw std::logic_error("refine_mesh: a region could not be put back as it was");
             tile_[f] = tiles[k];
             gap_[f] = gaps[k] != 0;
+            touched_faces_.push_back(f); // a new handle: its normal is computed again (the same one)
         }
         if (order.size() != faces.size())
             throw std::logic_error("refine_mesh: a region could not be put back as it was");
@@ -876,6 +900,8 @@ private:
     std::unordered_map<std::int32_t, std::vector<Mesh::FaceHandle>> fans_;
     std::unordered_map<std::int32_t, std::vector<Mesh::VertexHandle>> vertices_; // by v:cluster
     std::vector<char> in_region_; // per face: in the region being refined
+    std::vector<Mesh::FaceHandle> touched_faces_;     // new faces (update_touched_normals)
+    std::vector<Mesh::VertexHandle> touched_vertices_; // their corners, outlines included
     std::vector<std::uint32_t> face_stamp_; // per face: the crossing test's call that last saw it
     std::uint32_t stamp_ = 0;
 };
@@ -949,13 +975,13 @@ std::vector<std::vector<std::int32_t>> runs_below(const Hierarchy& h, const Cut&
     return runs;
 }
 
-void finish(const Hierarchy& h, MeshResult& result, Cut meshed)
+void finish(const Hierarchy& h, MeshResult& result, LocalRefiner& refiner, Cut meshed)
 {
     std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {
         return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
     });
+    refiner.update_touched_normals();
     result.mesh.garbage_collection();
-    result.mesh.update_normals();
     result.cut = std::move(meshed);
     result.tiles = result.cut.size();
 }
@@ -968,8 +994,12 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
     const std::vector<std::vector<std::int32_t>> runs =
         runs_below(h, result.cut, finer, "refine_mesh: node ",
                    " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; coarsen_mesh coarsens)");
+    std::vector<std::int32_t> changing;
+    for (std::size_t k = 0; k < result.cut.size(); ++k)
+        if (runs[k].size() != 1 || runs[k].front() != result.cut[k])
+            changing.push_back(result.cut[k]);
     LocalRefineStats stats;
-    LocalRefiner refiner(h, result, options);
+    LocalRefiner refiner(h, result, options, changing);
     Cut meshed;
     meshed.reserve(finer.size());
     for (std::size_t k = 0; k < result.cut.size(); ++k) {
@@ -994,7 +1024,7 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
             break;
         }
     }
-    finish(h, result, std::move(meshed));
+    finish(h, result, refiner, std::move(meshed));
     return stats;
 }
 
@@ -1004,8 +1034,12 @@ LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut&
     const std::vector<std::vector<std::int32_t>> runs =
         runs_below(h, coarser, result.cut, "coarsen_mesh: node ",
                    " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
+    std::vector<std::int32_t> changing;
+    for (std::size_t k = 0; k < coarser.size(); ++k)
+        if (runs[k].size() != 1 || runs[k].front() != coarser[k])
+            changing.insert(changing.end(), runs[k].begin(), runs[k].end());
     LocalRefineStats stats;
-    LocalRefiner refiner(h, result, options);
+    LocalRefiner refiner(h, result, options, changing);
     Cut meshed;
     meshed.reserve(result.cut.size());
     for (std::size_t k = 0; k < coarser.size(); ++k) {
@@ -1030,7 +1064,7 @@ LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut&
             break;
         }
     }
-    finish(h, result, std::move(meshed));
+    finish(h, result, refiner, std::move(meshed));
     return stats;
 }
 

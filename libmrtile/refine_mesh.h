@@ -80,8 +80,9 @@ struct LocalRefineStats
 //! nearest centre, so that every vertex names a tile of the cut. Normals are recomputed; colours come
 //! from the new vertex's input point (an apex: the mean of its tile's points) when the mesh has colours.
 //! Cost: in proportion to the refined tiles' regions and the descendants' pseudo tiles (each built
-//! from at most TileOptions::max_points of its points), plus one pass over the mesh to index the fans
-//! and one to recompute normals. Deterministic.
+//! from at most TileOptions::max_points of its points), plus one pass over the mesh to find the changing
+//! tiles' faces and OpenMesh's garbage collection (6 tiles of a 148k-face mesh: 36 ms). Normals are
+//! recomputed where faces changed only. Deterministic.
 //! \throw InvalidInput if `finer` is not a partition of the points into nodes at or below result.cut's,
 //! or result.mesh lacks the v:cluster / f:tile / f:gap properties (mesh.h).
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer,

@@ -165,6 +165,13 @@ TEST(RefineMesh, a_focus_region_on_a_torus_is_refined_in_place)
     expect_manifold(refined.mesh, 0, 1);
     EXPECT_TRUE(self_intersecting_faces(refined.mesh).empty());
     expect_ids_name_tiles_of_the_cut(refined);
+    // Normals were updated where faces changed only: they equal those of a full recomputation.
+    Mesh renormed = refined.mesh;
+    renormed.update_normals();
+    for (const auto v : refined.mesh.vertices())
+        EXPECT_LT((refined.mesh.normal(v) - renormed.normal(v)).norm(), 1e-12);
+    for (const auto f : refined.mesh.faces())
+        EXPECT_LT((refined.mesh.normal(f) - renormed.normal(f)).norm(), 1e-12);
 
     // Away from the refined tiles (farther from the region than twice the largest of them: past their
     // strips and their neighbours' rims), every vertex of the base mesh is still there, unmoved.
