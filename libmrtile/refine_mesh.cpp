@@ -988,6 +988,40 @@ void finish(const Hierarchy& h, MeshResult& result, LocalRefiner& refiner, Cut m
 
 } // namespace
 
+namespace {
+
+// Of the nodes of two partitions, the ones with no ancestor among them (`upper`: the coarser of the
+// two everywhere) or with no descendant among them (`lower`: the finer everywhere); each a partition.
+Cut envelope(const Hierarchy& h, const Cut& a, const Cut& b, bool upper)
+{
+    std::vector<char> in(h.nodes.size(), 0), above(h.nodes.size(), 0); // above: an ancestor of one of them
+    for (const Cut* cut : {&a, &b})
+        for (const std::int32_t n : *cut) {
+            in[static_cast<std::size_t>(n)] = 1;
+            for (std::int32_t p = h.nodes[static_cast<std::size_t>(n)].parent; p >= 0 && !above[static_cast<std::size_t>(p)];
+                 p = h.nodes[static_cast<std::size_t>(p)].parent)
+                above[static_cast<std::size_t>(p)] = 1;
+        }
+    auto has_ancestor_in = [&](std::int32_t n) {
+        for (std::int32_t p = h.nodes[static_cast<std::size_t>(n)].parent; p >= 0; p = h.nodes[static_cast<std::size_t>(p)].parent)
+            if (in[static_cast<std::size_t>(p)])
+                return true;
+        return false;
+    };
+    Cut out;
+    for (const Cut* cut : {&a, &b})
+        for (const std::int32_t n : *cut) {
+            const bool keep = upper ? !has_ancestor_in(n) : !above[static_cast<std::size_t>(n)];
+            if (keep && in[static_cast<std::size_t>(n)] == 1) {
+                in[static_cast<std::size_t>(n)] = 2; // taken once (still counts as in)
+                out.push_back(n);
+            }
+        }
+    return out;
+}
+
+} // namespace
+
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
 {
     check_update(h, result, finer, options, "refine_mesh");
@@ -1065,6 +1099,22 @@ LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut&
         }
     }
     finish(h, result, refiner, std::move(meshed));
+    return stats;
+}
+
+LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& cut, const LocalRefineOptions& options)
+{
+    check_update(h, result, cut, options, "update_mesh");
+    // First merge where the new cut is coarser (to the coarser of the two cuts everywhere), then split
+    // where it is finer than what is meshed then (tiles kept by the first step stay as they are).
+    const LocalRefineStats merged = coarsen_mesh(h, result, envelope(h, result.cut, cut, true), options);
+    LocalRefineStats stats = refine_mesh(h, result, envelope(h, result.cut, cut, false), options);
+    stats.coarsened += merged.coarsened;
+    stats.kept += merged.kept;
+    stats.absent += merged.absent;
+    stats.refused += merged.refused;
+    stats.faces_removed += merged.faces_removed;
+    stats.faces_added += merged.faces_added;
     return stats;
 }
 

@@ -101,4 +101,11 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
 LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser,
                               const LocalRefineOptions& options = {});
 
+//! \brief Any cut, incrementally (a camera that moved, a region given up and another refined): the
+//! mesh of result.cut changed into the mesh of `cut` where they differ, by coarsen_mesh to the coarser of
+//! the two cuts everywhere, then refine_mesh to the finer of that and `cut` everywhere. result.cut is
+//! what was meshed: `cut`, but for tiles either step kept (stats: both steps' counts summed).
+//! \throw InvalidInput as refine_mesh (any partition `cut` is accepted).
+LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& cut, const LocalRefineOptions& options = {});
+
 } // namespace mrt

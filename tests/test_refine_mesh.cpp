@@ -370,6 +370,46 @@ TEST(RefineMesh, new_vertices_take_the_points_colours)
     EXPECT_LT(worst, 12.0); // a tile's mean colour is that of its mean point, off the sphere by its sag
 }
 
+// A camera that moves round a torus: the mesh of the first camera's cut becomes that of the second's
+// (coarser behind, finer in front), closed with genus 1, its cut the second's but for a few tiles kept.
+TEST(RefineMesh, a_moving_camera_updates_the_mesh_both_ways)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(60000));
+    auto camera_at = [&](const Vec3& where) {
+        Camera c;
+        c.position = where - h.cloud.origin;
+        c.direction = (Vec3{0, 0, 0} - h.cloud.origin) - c.position; // at the torus's centre
+        c.viewport_height = 2000.0;
+        c.max_pixel_error = 2.0;
+        return c;
+    };
+    const Camera first = camera_at({2.0, 0.0, 0.6}), second = camera_at({-2.0, 0.0, 0.6});
+    const Cut before = cut_for_camera(h, first), after = cut_for_camera(h, second);
+    MeshResult r = mesh_cut(h, before);
+    const MeshResult start = r;
+    const LocalRefineStats stats = update_mesh(h, r, after);
+    EXPECT_GT(stats.refined, 5u);
+    EXPECT_GT(stats.coarsened, 5u);
+    EXPECT_EQ(stats.refused, 0u);
+    expect_manifold(r.mesh, 0, 1);
+    EXPECT_TRUE(is_partition(h, r.cut));
+    EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
+    expect_ids_name_tiles_of_the_cut(r);
+    const std::set<std::int32_t> wanted(after.begin(), after.end());
+    const auto off = static_cast<std::size_t>(std::count_if(r.cut.begin(), r.cut.end(), [&](std::int32_t n) { return wanted.count(n) == 0; }));
+    EXPECT_LE(off * 10, r.cut.size()); // at most a tenth of the tiles kept as they were
+    // Nearer in front of the second camera, farther in front of the first.
+    const std::vector<Vec3> front = points_within(h, Vec3{-1.35, 0.0, 0.0} - h.cloud.origin, 0.3);
+    const std::vector<Vec3> back = points_within(h, Vec3{1.35, 0.0, 0.0} - h.cloud.origin, 0.3);
+    EXPECT_LT(point_to_mesh_distance(front, r.mesh).mean, point_to_mesh_distance(front, start.mesh).mean);
+    EXPECT_GT(point_to_mesh_distance(back, r.mesh).mean, point_to_mesh_distance(back, start.mesh).mean);
+    // The same cut again changes nothing.
+    MeshResult again = r;
+    const LocalRefineStats none = update_mesh(h, again, r.cut);
+    EXPECT_EQ(none.refined + none.coarsened + none.kept, 0u);
+    EXPECT_EQ(positions_of(again.mesh), positions_of(r.mesh));
+}
+
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
 {
     const Hierarchy h = build_hierarchy(shapes::sphere(5000));
