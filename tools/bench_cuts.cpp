@@ -8,6 +8,7 @@
 
 #include "formats/read_points.h"
 #include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/reconstruct.h"
@@ -47,7 +48,7 @@ struct RefineMeasurement
     Timing refine, fresh;
     DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
 };
-constexpr std::size_t kRefines = 3;
+constexpr std::size_t kRefines = 4;
 
 struct CutsMeasurement
 {
@@ -91,15 +92,16 @@ CutMeasurement measure_cut(const Hierarchy& h, const std::function<Cut()>& make_
 
 // The base mesh refined to `finer` in place (refine_mesh) and, for comparison, `finer` meshed afresh;
 // distances of `probe` (points of the cloud) to both.
+// `update`: refine_mesh (a finer cut) or update_mesh (any cut, coarsened and refined).
 RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, const Cut& finer,
-                                 const std::vector<Vec3>& probe)
+                                 const std::vector<Vec3>& probe, bool any_cut = false)
 {
     RefineMeasurement m;
     m.tiles_before = base.cut.size();
     MeshResult refined = base; // copied outside the timing: a caller refines its mesh in place
     LocalRefineStats stats;
-    m.refine = time_call([&] { stats = refine_mesh(h, refined, finer); });
-    m.refined = stats.refined;
+    m.refine = time_call([&] { stats = any_cut ? update_mesh(h, refined, finer) : refine_mesh(h, refined, finer); });
+    m.refined = stats.refined + stats.coarsened;
     m.kept = stats.kept;
     m.absent = stats.absent;
     m.faces_added = stats.faces_added;
@@ -154,10 +156,26 @@ CutsMeasurement measure_cuts(std::size_t points, const std::filesystem::path& bu
             m.refines[1] = measure_refine(h, base, cut_by_budget(h, 10000), sample);
         }
         {
+            // A camera moved to the other side of the torus (update_mesh: coarser behind, finer in front).
+            const BoundingBox box = h.bbox();
+            auto camera_at = [&](double side) {
+                Camera c;
+                c.position = box.centre() + Vec3{side * box.diagonal(), 0.0, 0.2 * box.diagonal()};
+                c.direction = box.centre() - c.position;
+                c.max_pixel_error = 4.0;
+                return c;
+            };
+            const MeshResult base = mesh_cut(h, cut_for_camera(h, camera_at(0.7)));
+            std::vector<Vec3> sample; // every 40th point
+            for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
+                sample.push_back(h.cloud.positions[i]);
+            m.refines[2] = measure_refine(h, base, cut_for_camera(h, camera_at(-0.7)), sample, true);
+        }
+        {
             // A real scan: the bunny refined everywhere from tolerance 0.005 to 0.001.
             const Hierarchy rabbit = build_hierarchy(read_points(bunny));
             const MeshResult base = mesh_cut(rabbit, cut_by_tolerance(rabbit, 0.005));
-            m.refines[2] = measure_refine(rabbit, base, cut_by_tolerance(rabbit, 0.001), rabbit.cloud.positions);
+            m.refines[3] = measure_refine(rabbit, base, cut_by_tolerance(rabbit, 0.001), rabbit.cloud.positions);
         }
         return m;
     });
@@ -202,10 +220,10 @@ Table cuts_table(const CutsMeasurement& m, const std::string& input)
 Table refine_table(const CutsMeasurement& m, const std::string& input)
 {
     const char* names[kRefines] = {"focus sphere: 0.01 → 0.0005 inside", "budget 1,000 → 10,000 tiles",
-                                   "bun_zipper.ply: tolerance 0.005 → 0.001"};
+                                   "camera moved to the other side (update_mesh)", "bun_zipper.ply: tolerance 0.005 → 0.001"};
     Table t;
     t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input + " and the bunny";
-    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"refined / kept / absent"},
+    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"changed / kept / absent"},
                  {"faces (fresh)"}, {"refine s"}, {"fresh mesh_cut s"}, {"speed-up"},
                  {"output triangles/s (≥ 1M)"}, {"mean dist (fresh)"}, {"max dist (fresh)"}};
     for (std::size_t i = 0; i < kRefines; ++i)
@@ -224,14 +242,16 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
     t.notes = {
         "Base meshes: `mesh_cut` of `cut_by_tolerance(h, 0.01)` (focus row) and of `cut_by_budget(h, 1000)`; "
         "finer cuts: `refine_cut(h, base.cut, 0.01, {the focus sphere above})` and `cut_by_budget(h, 10000)`; for the "
-        "bunny (its own hierarchy, default options), `cut_by_tolerance` 0.005 and 0.001. Refine s: "
+        "bunny (its own hierarchy, default options), `cut_by_tolerance` 0.005 and 0.001; camera row: `cut_for_camera` from "
+        "0.7 bbox diagonals on +x, 0.2 up, looking at the centre (pixel error 4), then the same on −x, and `update_mesh` "
+        "instead of `refine_mesh` (it coarsens behind and refines in front). Refine s: "
         "`refine_mesh(h, base, finer)` in place (CPU, once; the copy of the base mesh is not timed); fresh: `mesh_cut(h, finer)` "
-        "(CPU, once). Refined / kept / absent: tiles re-triangulated / left as they were (their region was not one disc, "
+        "(CPU, once). Changed / kept / absent: tiles re-triangulated (refined, or merged groups) / left as they were (their region was not one disc, "
         "would fold or would cross its surroundings; the cut after keeps them, so it can have fewer tiles than the fresh "
         "one) / split with nothing of theirs in the mesh.",
         "Output triangles/s: the whole refined mesh's faces / refine CPU seconds; it needs a meshed base cut, so it is "
         "the incremental path, not a cut meshed from the model alone (the table above). Distances: focus row, the "
-        "points inside the sphere; budget row, every 40th point; bunny, every point; to the mesh, as fractions of the bbox "
+        "points inside the sphere; budget and camera rows, every 40th point; bunny, every point; to the mesh, as fractions of the bbox "
         "diagonal of the points measured (`point_to_mesh_distance`)."};
     return t;
 }
