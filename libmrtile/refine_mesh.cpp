@@ -119,20 +119,8 @@ public:
             if (region.empty())
                 continue;
             any = true;
-            keep_main_piece(node, region);
             std::vector<Mesh::VertexHandle> outline;
-            std::vector<Mesh::VertexHandle> pinches;
-            // A fan in pieces cannot go whole: a face left naming the node would name no tile of the cut.
-            bool disc = holds_fans({node}) && disc_outline(region, outline, pinches);
-            std::vector<int> tried;
-            for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
-                unpinch(pinches, region, tried);
-                outline.clear();
-                pinches.clear();
-                disc = disc_outline(region, outline, pinches);
-            }
-            for (const auto f : region)
-                in_region_[static_cast<std::size_t>(f.idx())] = 0;
+            const bool disc = mend_into_disc(node, {node}, region, outline);
             if (disc && replace_region(node, descendants, region, outline, stats)) {
                 hand_over(node, descendants);
                 return Outcome::refined;
@@ -159,20 +147,8 @@ public:
                 hand_over(node, {ancestor});
             return Outcome::absent;
         }
-        // Strips joined to the rest by a corner only may stay; the merged fans must all go.
-        keep_main_piece(ancestor, region);
         std::vector<Mesh::VertexHandle> outline;
-        std::vector<Mesh::VertexHandle> pinches;
-        bool disc = holds_fans(merged) && disc_outline(region, outline, pinches);
-        std::vector<int> tried;
-        for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
-            unpinch(pinches, region, tried);
-            outline.clear();
-            pinches.clear();
-            disc = disc_outline(region, outline, pinches); // unpinching moves strips only: the fans stay
-        }
-        for (const auto f : region)
-            in_region_[static_cast<std::size_t>(f.idx())] = 0;
+        const bool disc = mend_into_disc(ancestor, merged, region, outline);
         if (!disc || !replace_region(ancestor, {ancestor}, region, outline, stats))
             return Outcome::kept;
         for (const std::int32_t node : merged)
@@ -181,6 +157,28 @@ public:
     }
 
 private:
+    // The region (marked in in_region_) made one disc if it can be: its main piece kept (strips joined
+    // to it by a corner only may stay), every fan face of the replaced nodes still in it (a face left
+    // naming a node would name no tile of the cut), vertices where it touches itself mended
+    // (unpinch moves strips only, so the fans stay). The outline when it is one; the marks are cleared.
+    bool mend_into_disc(std::int32_t node, const std::vector<std::int32_t>& replaced, std::vector<Mesh::FaceHandle>& region,
+                        std::vector<Mesh::VertexHandle>& outline)
+    {
+        keep_main_piece(node, region);
+        std::vector<Mesh::VertexHandle> pinches;
+        bool disc = holds_fans(replaced) && disc_outline(region, outline, pinches);
+        std::vector<int> tried;
+        for (int round = 0; round < kPinchRounds && !disc && !pinches.empty(); ++round) {
+            unpinch(pinches, region, tried);
+            outline.clear();
+            pinches.clear();
+            disc = disc_outline(region, outline, pinches);
+        }
+        for (const auto f : region)
+            in_region_[static_cast<std::size_t>(f.idx())] = 0;
+        return disc;
+    }
+
     // Whether every fan face of the nodes is in the region being built (in_region_).
     bool holds_fans(const std::vector<std::int32_t>& nodes) const
     {
