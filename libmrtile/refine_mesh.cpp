@@ -179,6 +179,30 @@ private:
         return disc;
     }
 
+    // Whether a new face would join two outline vertices that an edge outside the region already joins
+    // (where the outline turns back on itself across a narrow neck): that edge would get three faces,
+    // and OpenMesh would refuse the face.
+    bool reuses_an_outside_edge(const std::vector<Mesh::FaceHandle>& region, const std::vector<Mesh::VertexHandle>& outline,
+                                const std::vector<std::array<std::uint32_t, 3>>& triangles) const
+    {
+        std::vector<int> inside(region.size());
+        for (std::size_t k = 0; k < region.size(); ++k)
+            inside[k] = region[k].idx();
+        std::sort(inside.begin(), inside.end());
+        auto in_region = [&](Mesh::FaceHandle f) { return f.is_valid() && std::binary_search(inside.begin(), inside.end(), f.idx()); };
+        const std::size_t n = outline.size();
+        for (const auto& t : triangles)
+            for (std::size_t c = 0; c < 3; ++c) {
+                const std::uint32_t a = t[c], b = t[(c + 1) % 3];
+                if (a >= n || b >= n || (a + 1) % n == b || (b + 1) % n == a)
+                    continue; // a new vertex, or an edge of the outline itself
+                const auto he = mesh_.find_halfedge(outline[a], outline[b]);
+                if (he.is_valid() && !(in_region(mesh_.face_handle(he)) && in_region(mesh_.opposite_face_handle(he))))
+                    return true;
+            }
+        return false;
+    }
+
     // Whether every fan face of the nodes is in the region being built (in_region_).
     bool holds_fans(const std::vector<std::int32_t>& nodes) const
     {
@@ -209,7 +233,7 @@ private:
         for (const NewPoint& p : points)
             inside.push_back(p.uv);
         const std::vector<std::array<std::uint32_t, 3>> triangles = polygon_triangles(polygon, inside);
-        if (triangles.empty())
+        if (triangles.empty() || reuses_an_outside_edge(region, outline, triangles))
             return false;
         // Where each triangle corner is in 3D: an outline vertex, or a new point.
         auto position = [&](std::uint32_t k) {
