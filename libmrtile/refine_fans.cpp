@@ -34,18 +34,6 @@ struct Frame
     double height(const Vec3& p) const { return dot(p - centre, n); }
 };
 
-// Barycentric coordinates of q in the triangle (a, b, c) of the plane; false if degenerate.
-bool barycentric(const std::array<double, 2>& q, const std::array<std::array<double, 2>, 3>& t, std::array<double, 3>& l)
-{
-    const double det = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
-    if (!(std::abs(det) > 0.0))
-        return false;
-    l[1] = ((q[0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (q[1] - t[0][1])) / det;
-    l[2] = ((t[1][0] - t[0][0]) * (q[1] - t[0][1]) - (q[0] - t[0][0]) * (t[1][1] - t[0][1])) / det;
-    l[0] = 1.0 - l[1] - l[2];
-    return true;
-}
-
 class FanRefiner
 {
 public:

@@ -409,12 +409,9 @@ private:
                 const Point2 p = plane.project(q);
                 const auto c = cell(p[0], p[1]);
                 for (const std::uint32_t t : grid[c[1] * side + c[0]]) {
-                    const Point2 &a = uv[triangles[t][0]], &b = uv[triangles[t][1]], &e = uv[triangles[t][2]];
-                    const double det = (b[0] - a[0]) * (e[1] - a[1]) - (e[0] - a[0]) * (b[1] - a[1]);
-                    const double l1 = ((p[0] - a[0]) * (e[1] - a[1]) - (e[0] - a[0]) * (p[1] - a[1])) / det;
-                    const double l2 = ((b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1])) / det;
-                    const std::array<double, 3> l{1.0 - l1 - l2, l1, l2};
-                    if (!(det > 0.0) || l[0] < -1e-9 || l[1] < -1e-9 || l[2] < -1e-9)
+                    std::array<double, 3> l{};
+                    if (!barycentric(p, {uv[triangles[t][0]], uv[triangles[t][1]], uv[triangles[t][2]]}, l) || l[0] < -1e-9 ||
+                        l[1] < -1e-9 || l[2] < -1e-9)
                         continue;
                     const double z = dot(q - plane.origin, plane.n);
                     for (int r = 0; r < 3; ++r) {

@@ -5,6 +5,7 @@
 //! georeferenced clouds as accurate as clouds near the origin.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace mrt {
@@ -111,6 +112,19 @@ inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
         return std::atan2(norm(cross(x, y)), dot(x, y));
     };
     return std::max({corner(q, r, p), corner(r, p, q), corner(p, q, r)});
+}
+
+//! Barycentric coordinates `l` of the plane point q in the triangle t of the plane (l[k] weighs t[k]);
+//! false when the triangle has no area.
+inline bool barycentric(const std::array<double, 2>& q, const std::array<std::array<double, 2>, 3>& t, std::array<double, 3>& l)
+{
+    const double det = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
+    if (!(std::abs(det) > 0.0))
+        return false;
+    l[1] = ((q[0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (q[1] - t[0][1])) / det;
+    l[2] = ((t[1][0] - t[0][0]) * (q[1] - t[0][1]) - (q[0] - t[0][0]) * (t[1][1] - t[0][1])) / det;
+    l[0] = 1.0 - l[1] - l[2];
+    return true;
 }
 
 //! Whether triangle (p, q, r) has an area that is more than rounding noise for its size.
