@@ -1,9 +1,10 @@
 // Incremental refinement of a cut's mesh (the "any cut" issue's incremental form), built from the
 // paper's own parts: §4.2 pseudo tiles of the finer nodes, and a Delaunay triangulation of their
-// points (§4.3's T2, here constrained to the coarse tile's outline). Why inside the fan only: the fan
-// is the one part of mesh_cut's surface that belongs to a single node, so replacing it by a
-// triangulated disc with the same outline cannot change the topology or open a crack anywhere; the
-// outline's vertices and everything beyond them stay bit for bit.
+// points (§4.3's T2, here constrained to the changed tiles' outline). Why a disc with a kept outline:
+// a tile's region (its fan and the strips between tiles around its vertices) is the part of mesh_cut's
+// surface that belongs to it, so replacing it by a triangulated disc with the same outline cannot
+// change the topology or open a crack anywhere; the outline's vertices and everything beyond them stay
+// bit for bit.
 #include "libmrtile/refine_mesh.h"
 
 #include "libmrtile/errors.h"
@@ -113,20 +114,22 @@ public:
     // its plane, or is no disc), the fan alone. `absent`: the node has no face and no vertex to replace.
     Outcome refine(std::int32_t node, const std::vector<std::int32_t>& descendants, LocalRefineStats& stats)
     {
-        bool any = false;
+        std::vector<Tile> tiles; // the descendants' pseudo tiles, built once for both attempts
         for (const bool with_strips : {true, false}) {
             std::vector<Mesh::FaceHandle> region = with_strips ? region_of(node) : fan_of(node);
             if (region.empty())
                 continue;
-            any = true;
+            if (tiles.empty())
+                for (const std::int32_t d : descendants)
+                    tiles.push_back(make_tile(h_, d, options_.tiles));
             std::vector<Mesh::VertexHandle> outline;
             const bool disc = mend_into_disc(node, {node}, region, outline);
-            if (disc && replace_region(node, descendants, region, outline, stats)) {
+            if (disc && replace_region(node, tiles, region, outline, stats)) {
                 hand_over(node, descendants);
                 return Outcome::refined;
             }
         }
-        if (any)
+        if (!tiles.empty())
             return Outcome::kept;
         hand_over(node, descendants);
         return Outcome::absent;
@@ -149,7 +152,7 @@ public:
         }
         std::vector<Mesh::VertexHandle> outline;
         const bool disc = mend_into_disc(ancestor, merged, region, outline);
-        if (!disc || !replace_region(ancestor, {ancestor}, region, outline, stats))
+        if (!disc || !replace_region(ancestor, {make_tile(h_, ancestor, options_.tiles)}, region, outline, stats))
             return Outcome::kept;
         for (const std::int32_t node : merged)
             hand_over(node, {ancestor});
@@ -214,11 +217,11 @@ private:
         return true;
     }
 
-    // Re-triangulates the disc `region` (outline as given) with the descendants' points; false, and
-    // nothing changed, where its outline or new faces fold in its plane or OpenMesh refuses a face.
-    bool replace_region(std::int32_t node, const std::vector<std::int32_t>& descendants,
-                        const std::vector<Mesh::FaceHandle>& region, const std::vector<Mesh::VertexHandle>& outline,
-                        LocalRefineStats& stats)
+    // Re-triangulates the disc `region` (outline as given) of `node` with the points of `tiles` (the
+    // pseudo tiles of the nodes that replace it); false, and nothing changed, where its outline or new
+    // faces fold in its plane, cross the faces around it, or OpenMesh refuses a face.
+    bool replace_region(std::int32_t node, const std::vector<Tile>& tiles, const std::vector<Mesh::FaceHandle>& region,
+                        const std::vector<Mesh::VertexHandle>& outline, LocalRefineStats& stats)
     {
         const Plane plane = plane_of(node, region);
         std::vector<Point2> polygon;
@@ -227,7 +230,7 @@ private:
             polygon.push_back(plane.project(to_vec3(mesh_.point(v))));
         if (signed_area(polygon) <= 0.0)
             return false; // the outline folds in the plane (or is degenerate)
-        std::vector<NewPoint> points = descendant_points(plane, polygon, descendants);
+        std::vector<NewPoint> points = tile_points(plane, polygon, tiles);
         std::vector<Point2> inside;
         inside.reserve(points.size());
         for (const NewPoint& p : points)
@@ -253,15 +256,12 @@ private:
             return false;
         if (options_.fit) {
             const std::vector<NewPoint> unfitted = points;
-            fit_heights(plane, polygon, outline, descendants, triangles, points);
+            fit_heights(plane, polygon, outline, tiles, triangles, points);
             if (folds())
                 points = unfitted;
         }
-        Replaced replaced = Replaced::done;
-        if (!replace_fan(region, outline, points, triangles, &replaced)) {
-            stats.refused += replaced == Replaced::refused ? 1 : 0;
+        if (!replace_faces(region, outline, points, triangles, stats))
             return false;
-        }
         stats.faces_removed += region.size();
         stats.faces_added += triangles.size();
         return true;
@@ -357,7 +357,7 @@ private:
     // below it. The outline stays. Damped towards where each vertex started and bounded by half its
     // shortest edge, as FitOptions' defaults are.
     void fit_heights(const Plane& plane, const std::vector<Point2>& polygon, const std::vector<Mesh::VertexHandle>& outline,
-                     const std::vector<std::int32_t>& descendants, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                     const std::vector<Tile>& tiles, const std::vector<std::array<std::uint32_t, 3>>& triangles,
                      std::vector<NewPoint>& points) const
     {
         const std::size_t fixed = outline.size(), count = fixed + points.size();
@@ -400,8 +400,8 @@ private:
         std::vector<std::array<double, 9>> normal(triangles.size(), std::array<double, 9>{});
         std::vector<std::array<double, 3>> rhs(triangles.size(), std::array<double, 3>{});
         std::size_t samples = 0;
-        for (const std::int32_t d : descendants) {
-            const Node& node = h_.nodes[static_cast<std::size_t>(d)];
+        for (const Tile& tile : tiles) {
+            const Node& node = h_.nodes[static_cast<std::size_t>(tile.node)];
             const std::size_t n = node.end - node.begin;
             const std::size_t stride = std::max<std::size_t>(1, n / kFitPointsPerTile);
             for (std::size_t i = node.begin; i < node.end; i += stride) {
@@ -522,18 +522,18 @@ private:
 
     // True when the region's faces form one disc with a simple outline; the outline, in the winding of
     // its faces (counter-clockwise seen from their side). Else the vertices it passes twice, if any.
-    bool disc_outline(const std::vector<Mesh::FaceHandle>& fan, std::vector<Mesh::VertexHandle>& outline,
+    bool disc_outline(const std::vector<Mesh::FaceHandle>& region, std::vector<Mesh::VertexHandle>& outline,
                       std::vector<Mesh::VertexHandle>& pinches)
     {
-        auto in_fan = [&](Mesh::FaceHandle f) { return f.is_valid() && in_region_[static_cast<std::size_t>(f.idx())]; };
+        auto in_region = [&](Mesh::FaceHandle f) { return f.is_valid() && in_region_[static_cast<std::size_t>(f.idx())]; };
         std::unordered_map<int, Mesh::HalfedgeHandle> next_on_outline; // from-vertex → outline half-edge
         std::size_t edges = 0, border = 0;
         std::vector<int> vertices;
-        for (const auto f : fan)
+        for (const auto f : region)
             for (const auto he : mesh_.fh_range(f)) {
                 vertices.push_back(mesh_.from_vertex_handle(he).idx());
                 const auto opposite = mesh_.opposite_face_handle(he);
-                if (in_fan(opposite)) {
+                if (in_region(opposite)) {
                     ++edges; // counted from both sides
                     continue;
                 }
@@ -547,7 +547,7 @@ private:
         vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
         const std::size_t e = edges / 2 + border;
         // One disc: Euler characteristic 1, and the outline is one loop through all its half-edges.
-        if (static_cast<long long>(vertices.size()) - static_cast<long long>(e) + static_cast<long long>(fan.size()) != 1)
+        if (static_cast<long long>(vertices.size()) - static_cast<long long>(e) + static_cast<long long>(region.size()) != 1)
             return false;
         Mesh::HalfedgeHandle he = next_on_outline.begin()->second;
         const Mesh::HalfedgeHandle first = he;
@@ -600,18 +600,17 @@ private:
         return 0.5 * area;
     }
 
-    // The descendants' pseudo-tile points (apex and hull) that lie inside the outline, apart from it
+    // The pseudo-tile points (apex and hull) of `tiles` that lie inside the outline, apart from it
     // and from each other by LocalRefineOptions::min_separation of their tile's spacing.
-    std::vector<NewPoint> descendant_points(const Plane& plane, const std::vector<Point2>& polygon,
-                                            const std::vector<std::int32_t>& descendants) const
+    std::vector<NewPoint> tile_points(const Plane& plane, const std::vector<Point2>& polygon,
+                                            const std::vector<Tile>& tiles) const
     {
         std::vector<NewPoint> candidates;
         std::vector<double> separation;
-        for (const std::int32_t d : descendants) {
-            const Tile tile = make_tile(h_, d, options_.tiles);
+        for (const Tile& tile : tiles) {
             const double sep = options_.min_separation * tile.spacing();
             auto add = [&](const Vec3& p, std::int64_t input) {
-                candidates.push_back({p, plane.project(p), d, input});
+                candidates.push_back({p, plane.project(p), tile.node, input});
                 separation.push_back(sep);
             };
             if (tile.has_fan())
@@ -676,20 +675,18 @@ private:
         return inside;
     }
 
-    // Deletes the fan and adds the new faces in an order that always attaches to what is there (each
-    // face shares an edge with the outline or with faces already added); if OpenMesh refuses any
-    // face, the fan is put back as it was and false returned.
-    enum class Replaced { done, unreachable, refused, crossing };
-
-    bool replace_fan(const std::vector<Mesh::FaceHandle>& fan,
-                     const std::vector<Mesh::VertexHandle>& outline, const std::vector<NewPoint>& points,
-                     const std::vector<std::array<std::uint32_t, 3>>& triangles, Replaced* result)
+    // Deletes the region and adds the new faces in an order that always attaches to what is there
+    // (each face shares an edge with the outline or with faces already added); if OpenMesh refuses a
+    // face (counted in stats.refused) or a new face crosses the faces around, the region is put back
+    // as it was and false returned.
+    bool replace_faces(const std::vector<Mesh::FaceHandle>& region, const std::vector<Mesh::VertexHandle>& outline,
+                       const std::vector<NewPoint>& points, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                       LocalRefineStats& stats)
     {
-        *result = Replaced::unreachable;
         std::vector<std::array<Mesh::VertexHandle, 3>> old_faces;
         std::vector<char> old_gap;
         std::vector<int> old_tile;
-        for (const auto f : fan) {
+        for (const auto f : region) {
             old_faces.push_back(face_vertices(mesh_, f));
             old_gap.push_back(gap_[f] ? 1 : 0);
             old_tile.push_back(tile_[f]);
@@ -697,9 +694,8 @@ private:
         const std::vector<std::size_t> order = attach_order(triangles, outline.size());
         if (order.size() != triangles.size())
             return false;
-        for (const auto f : fan)
+        for (const auto f : region)
             mesh_.delete_face(f, false);
-        *result = Replaced::done;
         std::vector<Mesh::VertexHandle> corner(outline.begin(), outline.end());
         for (const NewPoint& p : points) {
             const auto v = mesh_.add_vertex(to_point(p.position));
@@ -735,7 +731,7 @@ private:
             for (std::size_t k = outline.size(); k < corner.size(); ++k)
                 mesh_.delete_vertex(corner[k], false);
             put_back(outline, old_faces, old_tile, old_gap);
-            *result = refused ? Replaced::refused : Replaced::crossing;
+            stats.refused += refused ? 1 : 0;
             return false;
         }
         for (const auto f : added) {
@@ -925,10 +921,6 @@ private:
     std::uint32_t stamp_ = 0;
 };
 
-} // namespace
-
-namespace {
-
 // What refine_mesh and coarsen_mesh check before any change.
 void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, const LocalRefineOptions& options,
                   const char* name)
@@ -1004,10 +996,6 @@ void finish(const Hierarchy& h, MeshResult& result, LocalRefiner& refiner, Cut m
     result.cut = std::move(meshed);
     result.tiles = result.cut.size();
 }
-
-} // namespace
-
-namespace {
 
 // Of the nodes of two partitions, the ones with no ancestor among them (`upper`: the coarser of the
 // two everywhere) or with no descendant among them (`lower`: the finer everywhere); each a partition.
