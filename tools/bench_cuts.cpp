@@ -43,7 +43,7 @@ struct CutMeasurement
 struct RefineMeasurement
 {
     std::uint64_t tiles_before = 0, tiles_after = 0, fresh_tiles = 0;
-    std::uint64_t refined = 0, kept = 0, absent = 0;
+    std::uint64_t changed = 0, kept = 0, absent = 0; // tiles re-triangulated (split or merged), left, absent
     std::uint64_t faces = 0, fresh_faces = 0, faces_added = 0;
     Timing refine, fresh;
     DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
@@ -90,9 +90,9 @@ CutMeasurement measure_cut(const Hierarchy& h, const std::function<Cut()>& make_
     return m;
 }
 
-// The base mesh refined to `finer` in place (refine_mesh) and, for comparison, `finer` meshed afresh;
-// distances of `probe` (points of the cloud) to both.
-// `update`: refine_mesh (a finer cut) or update_mesh (any cut, coarsened and refined).
+// The base mesh changed to `finer` in place and, for comparison, `finer` meshed afresh; distances of
+// `probe` (points of the cloud) to both. `any_cut`: update_mesh (coarsens and refines) instead of
+// refine_mesh (a finer cut).
 RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, const Cut& finer,
                                  const std::vector<Vec3>& probe, bool any_cut = false)
 {
@@ -101,7 +101,7 @@ RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, con
     MeshResult refined = base; // copied outside the timing: a caller refines its mesh in place
     LocalRefineStats stats;
     m.refine = time_call([&] { stats = any_cut ? update_mesh(h, refined, finer) : refine_mesh(h, refined, finer); });
-    m.refined = stats.refined + stats.coarsened;
+    m.changed = stats.refined + stats.coarsened;
     m.kept = stats.kept;
     m.absent = stats.absent;
     m.faces_added = stats.faces_added;
@@ -148,13 +148,10 @@ CutsMeasurement measure_cuts(std::size_t points, const std::filesystem::path& bu
                     inside.push_back(p);
             m.refines[0] = measure_refine(h, base, refine_cut(h, base.cut, kFocusBaseTolerance, {region}), inside);
         }
-        {
-            const MeshResult base = mesh_cut(h, cut_by_budget(h, 1000));
-            std::vector<Vec3> sample; // every 40th point
-            for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
-                sample.push_back(h.cloud.positions[i]);
-            m.refines[1] = measure_refine(h, base, cut_by_budget(h, 10000), sample);
-        }
+        std::vector<Vec3> sample; // every 40th point: the whole surface, for the budget and camera rows
+        for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
+            sample.push_back(h.cloud.positions[i]);
+        m.refines[1] = measure_refine(h, mesh_cut(h, cut_by_budget(h, 1000)), cut_by_budget(h, 10000), sample);
         {
             // A camera moved to the other side of the torus (update_mesh: coarser behind, finer in front).
             const BoundingBox box = h.bbox();
@@ -166,9 +163,6 @@ CutsMeasurement measure_cuts(std::size_t points, const std::filesystem::path& bu
                 return c;
             };
             const MeshResult base = mesh_cut(h, cut_for_camera(h, camera_at(0.7)));
-            std::vector<Vec3> sample; // every 40th point
-            for (std::size_t i = 0; i < h.cloud.positions.size(); i += 40)
-                sample.push_back(h.cloud.positions[i]);
             m.refines[2] = measure_refine(h, base, cut_for_camera(h, camera_at(-0.7)), sample, true);
         }
         {
@@ -232,7 +226,7 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
         const double rate = static_cast<double>(r.faces) / r.refine.cpu;
         t.rows.push_back({names[i],
                           with_commas(r.tiles_before) + " → " + with_commas(r.tiles_after) + " (" + with_commas(r.fresh_tiles) + ")",
-                          with_commas(r.refined) + " / " + with_commas(r.kept) + " / " + with_commas(r.absent),
+                          with_commas(r.changed) + " / " + with_commas(r.kept) + " / " + with_commas(r.absent),
                           with_commas(r.faces) + " (" + with_commas(r.fresh_faces) + ")", fixed(r.refine.cpu, 3),
                           fixed(r.fresh.cpu, 2), fixed(r.fresh.cpu / r.refine.cpu, 1) + "×",
                           with_commas(static_cast<std::uint64_t>(rate)) + " " + verdict(rate >= kMinTrianglesPerSecond),
