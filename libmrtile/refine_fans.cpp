@@ -21,19 +21,9 @@
 namespace mrt {
 namespace {
 
-// A tile's plane frame (node mean and PCA axes): fans are nearly flat in it, so a point's fan triangle
-// is the one its projection falls into, and deviations are measured along the normal.
-struct Frame
-{
-    Vec3 centre, u, v, n;
-    std::array<double, 2> uv(const Vec3& p) const
-    {
-        const Vec3 d = p - centre;
-        return {dot(d, u), dot(d, v)};
-    }
-    double height(const Vec3& p) const { return dot(p - centre, n); }
-};
-
+// Each fan is judged in its tile's plane frame (node mean and PCA axes, PlaneFrame): fans are nearly flat
+// in it, so a point's fan triangle is the one its projection falls into, and deviations are measured
+// along the normal.
 class FanRefiner
 {
 public:
@@ -73,13 +63,13 @@ private:
         }
     };
 
-    std::array<std::array<double, 2>, 3> corners_uv(const Frame& fr, Mesh::FaceHandle f, std::array<double, 3>* heights) const
+    std::array<std::array<double, 2>, 3> corners_uv(const PlaneFrame& fr, Mesh::FaceHandle f, std::array<double, 3>* heights) const
     {
         std::array<std::array<double, 2>, 3> out{};
         int k = 0;
         for (const Mesh::VertexHandle v : mesh_.fv_range(f)) {
             const Vec3 q = to_vec3(mesh_.point(v));
-            out[k] = fr.uv(q);
+            out[k] = fr.project(q);
             if (heights)
                 (*heights)[k] = fr.height(q);
             ++k;
@@ -88,7 +78,7 @@ private:
     }
 
     // The point of `points` farthest from face f along the normal (deviation -1 if none).
-    Worst worst_of(const Frame& fr, Mesh::FaceHandle f, const std::vector<std::uint32_t>& points) const
+    Worst worst_of(const PlaneFrame& fr, Mesh::FaceHandle f, const std::vector<std::uint32_t>& points) const
     {
         Worst w{-1.0, f.idx(), 0, version_[static_cast<std::size_t>(f.idx())]};
         std::array<double, 3> heights{};
@@ -96,7 +86,7 @@ private:
         for (std::uint32_t i : points) {
             const Vec3& p = h_.cloud.positions[i];
             std::array<double, 3> l{};
-            if (!barycentric(fr.uv(p), t, l))
+            if (!barycentric(fr.project(p), t, l))
                 continue;
             const double d = std::abs(fr.height(p) - (l[0] * heights[0] + l[1] * heights[1] + l[2] * heights[2]));
             if (d > w.deviation) {
@@ -109,13 +99,13 @@ private:
 
     // Distributes `points` over `faces` by their projection (a point on no face is dropped: it lies in
     // a gap or outside the fan).
-    void assign(const Frame& fr, const std::vector<Mesh::FaceHandle>& faces, const std::vector<std::uint32_t>& points)
+    void assign(const PlaneFrame& fr, const std::vector<Mesh::FaceHandle>& faces, const std::vector<std::uint32_t>& points)
     {
         std::vector<std::array<std::array<double, 2>, 3>> tris;
         for (const Mesh::FaceHandle f : faces)
             tris.push_back(corners_uv(fr, f, nullptr));
         for (std::uint32_t i : points) {
-            const auto q = fr.uv(h_.cloud.positions[i]);
+            const auto q = fr.project(h_.cloud.positions[i]);
             for (std::size_t k = 0; k < faces.size(); ++k) {
                 std::array<double, 3> l{};
                 if (barycentric(q, tris[k], l) && l[0] >= -1e-12 && l[1] >= -1e-12 && l[2] >= -1e-12) {
@@ -146,8 +136,8 @@ private:
         const double slack = options_.max_deviation * node.rms_plane_distance;
         if (!(slack > 0.0))
             return 0; // a flat tile: its fan is exact
-        Frame fr;
-        fr.centre = node.centre();
+        PlaneFrame fr;
+        fr.origin = node.centre();
         fr.n = node.frame.vectors[0];
         fr.u = node.frame.vectors[2];
         fr.v = cross(fr.n, fr.u);

@@ -48,17 +48,6 @@ double segment_distance2(const Point2& p, const Point2& a, const Point2& b)
     return ex * ex + ey * ey;
 }
 
-// The plane a region is re-triangulated in (see LocalRefiner::plane_of): u, v, n right-handed.
-struct Plane
-{
-    Vec3 origin, u, v, n;
-    Point2 project(const Vec3& p) const
-    {
-        const Vec3 d = p - origin;
-        return {dot(d, u), dot(d, v)};
-    }
-};
-
 // A point to insert: where it is, which descendant it belongs to, which input point it is (or -1).
 struct NewPoint
 {
@@ -223,7 +212,7 @@ private:
     bool replace_region(std::int32_t node, const std::vector<Tile>& tiles, const std::vector<Mesh::FaceHandle>& region,
                         const std::vector<Mesh::VertexHandle>& outline, LocalRefineStats& stats)
     {
-        const Plane plane = plane_of(node, region);
+        const PlaneFrame plane = plane_of(node, region);
         std::vector<Point2> polygon;
         polygon.reserve(outline.size());
         for (const auto v : outline)
@@ -356,7 +345,7 @@ private:
     // fit_vertices does for a whole mesh: interpolated input points leave a curved patch's chords
     // below it. The outline stays. Damped towards where each vertex started and bounded by half its
     // shortest edge, as FitOptions' defaults are.
-    void fit_heights(const Plane& plane, const std::vector<Point2>& polygon, const std::vector<Mesh::VertexHandle>& outline,
+    void fit_heights(const PlaneFrame& plane, const std::vector<Point2>& polygon, const std::vector<Mesh::VertexHandle>& outline,
                      const std::vector<Tile>& tiles, const std::vector<std::array<std::uint32_t, 3>>& triangles,
                      std::vector<NewPoint>& points) const
     {
@@ -365,11 +354,11 @@ private:
         std::vector<double> height(count);
         for (std::size_t k = 0; k < fixed; ++k) {
             uv[k] = polygon[k];
-            height[k] = dot(to_vec3(mesh_.point(outline[k])) - plane.origin, plane.n);
+            height[k] = plane.height(to_vec3(mesh_.point(outline[k])));
         }
         for (std::size_t k = fixed; k < count; ++k) {
             uv[k] = points[k - fixed].uv;
-            height[k] = dot(points[k - fixed].position - plane.origin, plane.n);
+            height[k] = plane.height(points[k - fixed].position);
         }
         // A grid of the triangles' boxes, about one triangle per cell, to find the triangle under a point.
         double lo_u = uv[0][0], hi_u = lo_u, lo_v = uv[0][1], hi_v = lo_v;
@@ -413,7 +402,7 @@ private:
                     if (!barycentric(p, {uv[triangles[t][0]], uv[triangles[t][1]], uv[triangles[t][2]]}, l) || l[0] < -1e-9 ||
                         l[1] < -1e-9 || l[2] < -1e-9)
                         continue;
-                    const double z = dot(q - plane.origin, plane.n);
+                    const double z = plane.height(q);
                     for (int r = 0; r < 3; ++r) {
                         rhs[t][static_cast<std::size_t>(r)] += l[static_cast<std::size_t>(r)] * z;
                         for (int k = 0; k < 3; ++k)
@@ -435,7 +424,7 @@ private:
                 const std::uint32_t k = triangles[t][static_cast<std::size_t>(r)];
                 incident[k].push_back({t, r});
                 const std::uint32_t next = triangles[t][static_cast<std::size_t>((r + 1) % 3)];
-                const double length = distance(position_of(plane, uv[k], height[k]), position_of(plane, uv[next], height[next]));
+                const double length = distance(plane.point(uv[k], height[k]), plane.point(uv[next], height[next]));
                 shortest[k] = std::min(shortest[k], length);
                 shortest[next] = std::min(shortest[next], length);
             }
@@ -459,12 +448,7 @@ private:
                 height[k] = std::clamp(sum / diagonal, start[k] - bound, start[k] + bound);
             }
         for (std::size_t k = fixed; k < count; ++k)
-            points[k - fixed].position = position_of(plane, uv[k], height[k]);
-    }
-
-    static Vec3 position_of(const Plane& plane, const Point2& uv, double height)
-    {
-        return plane.origin + plane.u * uv[0] + plane.v * uv[1] + plane.n * height;
+            points[k - fixed].position = plane.point(uv[k], height[k]);
     }
 
     // The node's fan (f:tile = node) and the faces between tiles (f:tile -1: gap faces, faces flipped
@@ -569,7 +553,7 @@ private:
     // area-weighted face normal (the node's PCA normal when the faces cancel out). The region's own
     // normal, not the node's: the strips around the fan belong to it too, and a plane that sees the
     // whole region face-on folds it least.
-    Plane plane_of(std::int32_t node, const std::vector<Mesh::FaceHandle>& region) const
+    PlaneFrame plane_of(std::int32_t node, const std::vector<Mesh::FaceHandle>& region) const
     {
         const Node& n = h_.nodes[static_cast<std::size_t>(node)];
         Vec3 faces{0, 0, 0};
@@ -602,7 +586,7 @@ private:
 
     // The pseudo-tile points (apex and hull) of `tiles` that lie inside the outline, apart from it
     // and from each other by LocalRefineOptions::min_separation of their tile's spacing.
-    std::vector<NewPoint> tile_points(const Plane& plane, const std::vector<Point2>& polygon,
+    std::vector<NewPoint> tile_points(const PlaneFrame& plane, const std::vector<Point2>& polygon,
                                             const std::vector<Tile>& tiles) const
     {
         std::vector<NewPoint> candidates;

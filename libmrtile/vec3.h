@@ -114,6 +114,20 @@ inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
     return std::max({corner(q, r, p), corner(r, p, q), corner(p, q, r)});
 }
 
+//! An orthonormal frame of a plane (origin, in-plane axes u and v, normal n): a point's coordinates in
+//! the plane, its height above it, and back. Fans and regions are judged in their tile's plane.
+struct PlaneFrame
+{
+    Vec3 origin, u, v, n;
+    std::array<double, 2> project(const Vec3& p) const
+    {
+        const Vec3 d = p - origin;
+        return {dot(d, u), dot(d, v)};
+    }
+    double height(const Vec3& p) const { return dot(p - origin, n); }
+    Vec3 point(const std::array<double, 2>& uv, double h) const { return origin + u * uv[0] + v * uv[1] + n * h; }
+};
+
 //! Barycentric coordinates `l` of the plane point q in the triangle t of the plane (l[k] weighs t[k]);
 //! false when the triangle has no area.
 inline bool barycentric(const std::array<double, 2>& q, const std::array<std::array<double, 2>, 3>& t, std::array<double, 3>& l)
