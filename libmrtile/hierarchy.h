@@ -130,7 +130,7 @@ void update_derived(Hierarchy& h);
 //! that says whether roughness rises with scale (curvature: 1.2–55 on every clean scan and CAD part measured) or
 //! falls (noise: 0.2–0.5). The floor is 3 × the leaves' median RMS plane distance (a 16-point leaf fits
 //! its plane to the noise: about half its σ), weighted from 0 at leaf roughness 0.2 to 1 at 0.4 and from
-//! 0 at a ratio of 1 to 1 at 0.6; clean regions get 0. A region under half the largest is judged at its
+//! 0 at a ratio of 1 to 1 at 0.7; clean regions get 0. A region under half the largest is judged at its
 //! parent's scale too, whichever is smoother (under noise of 1.5 spacings or more a region of 250 points
 //! is still blob-like itself). Noise of two spacings or more makes the region a blob as well: its first
 //! ancestor that is a slab (roughness under 0.35), if as thick as the region (RMS within 1.5×) and

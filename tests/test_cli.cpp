@@ -224,6 +224,13 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {"reconstruct " + in + " -o " + (dir / "x.glb").string() + " --format lod-glb --crs EPSG:32632", "no effect here"},
         {glb + " --store-levels", "this output is one mesh"},
         {"reconstruct " + in + " -o " + mesh + " --model " + model + " --store-levels", "this output is one mesh"},
+        // Cut options that another one chosen would ignore, and --no-quality on LOD sets (session 28
+        // review: all were accepted and had no effect).
+        {a + " --tiles 50 --focus 0,0,0,0.2", "excludes"},
+        {a + " --tau 0.01 --focus 0,0,0,0.2", "excludes"},
+        {a + " --camera 3,0,0:0,0,0:60:1080 --tolerance 0.001", "excludes"},
+        {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --no-quality", "--no-quality"},
+        {tiles + " --no-quality", "--no-quality"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);
@@ -1265,6 +1272,15 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_NE(cad.out.find("note: some points are rough (sharp edges or local noise): "), std::string::npos) << cad.out;
     EXPECT_EQ(cad.out.find("noisy"), std::string::npos) << cad.out;
     EXPECT_EQ(cad.out.find("--denoise on"), std::string::npos) << cad.out;
+    // Its LOD chain ends at that floor and says so; a chain of two levels ends above it, and does not
+    // (it did before session 28: any last level coarser than the floor passed the test).
+    ASSERT_EQ(mrtile("build " + std::string(MRTILE_SHARED_DATA) + "/fandisk.obj -o " + (dir / "fan.mrt").string(), dir).code, 0);
+    const Result all_levels = mrtile("lods " + (dir / "fan.mrt").string() + " -o " + (dir / "fan_all").string(), dir);
+    ASSERT_EQ(all_levels.code, 0) << all_levels.err;
+    EXPECT_NE(all_levels.out.find("the levels end at the noise floor"), std::string::npos) << all_levels.out;
+    const Result two_levels = mrtile("lods " + (dir / "fan.mrt").string() + " -o " + (dir / "fan_two").string() + " --levels 2", dir);
+    ASSERT_EQ(two_levels.code, 0) << two_levels.err;
+    EXPECT_EQ(two_levels.out.find("noise floor"), std::string::npos) << two_levels.out;
 
     // By default a sample this noisy is denoised first, and every output says so.
     const Result denoised = mrtile("reconstruct " + (dir / "noisy.xyz").string() + " -o " + (dir / "d.ply").string() +

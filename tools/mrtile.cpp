@@ -233,8 +233,9 @@ struct CutArgs
                       ->check(kNonEmpty);
         tol->excludes(t)->excludes(n);
         t->excludes(n);
-        c->excludes(f)->excludes(n)->excludes(t)->excludes(tri)->excludes(err);
-        f->excludes(tri);
+        // A focus refines a tolerance cut, and a camera makes its own: what they would ignore is refused.
+        c->excludes(f)->excludes(n)->excludes(t)->excludes(tri)->excludes(err)->excludes(tol);
+        f->excludes(tri)->excludes(n)->excludes(t);
         options = {tol, err, t, n, tri, f, c};
     }
 
@@ -884,7 +885,10 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
     if (set.levels.empty() || max_noise_floor(h) <= 0)
         return;
     const std::size_t finest = cut_by_tolerance(h, 0.0).size();
-    if (finest < h.leaf_count() && set.levels.back().cut.size() <= finest * 3 / 2) {
+    // At the floor: the last level has about the floor cut's tiles (small objects refined while meshing
+    // can add some; a set that stopped a level or more above has a half or less).
+    const std::size_t last = set.levels.back().cut.size();
+    if (finest < h.leaf_count() && 3 * last >= 2 * finest && 2 * last <= 3 * finest) {
         char what[160];
         std::snprintf(what, sizeof what, "the levels end at the noise floor (%zu tiles, not the %zu leaves)", finest,
                       h.leaf_count());
@@ -1201,6 +1205,10 @@ struct ProduceArgs
                              "a LOD set's levels are chosen by --levels or --lod-tolerances");
         if (exp.lod_set() && !mesh.stats_json.empty()) // lods has no --stats-json: its lods.json has the levels'
             throw UsageError("--stats-json: describes one mesh; not a LOD set");
+        if (lods_command && mesh.no_quality)
+            throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is higher ends the set)");
+        if (exp.lod_set() && mesh.no_quality)
+            throw UsageError("--no-quality: a LOD set's levels are not measured; it skips the measurement of one mesh");
     }
 
     //! `stored`: levels stored with the model (reused when made with the same options); with
