@@ -219,7 +219,6 @@ struct Separators
 };
 
 constexpr Separators kBlanks(" \t");
-constexpr Separators kColumnSeparators(" \t,;");
 
 // Splits a text line into tokens; a token starting with '#' ends the line (comment).
 class Tokens
@@ -249,6 +248,54 @@ private:
     const char* next_;
     const char* end_;
     const Separators* separators_;
+};
+
+// Splits a line of a column file into fields: a run of blanks separates two fields, and so does one
+// delimiter (',' or ';') with any blanks around it, so that two delimiters with nothing between them
+// enclose an empty field, as spreadsheets and pandas write a missing value or an unnamed index column
+// (",x,y,z"). Merged like blanks (until QA round 28), such fields moved every later value one column
+// to the left: pandas' CSV of a sphere was read as x = row number, y = x, z = y. A field starting with
+// '#' ends the line (comment); a delimiter ending the line ends it without a field after it.
+class Fields
+{
+public:
+    Fields(std::string_view line, const Separators& delimiters)
+        : next_(line.data()), end_(line.data() + line.size()), delimiters_(&delimiters)
+    {
+    }
+
+    bool next(std::string_view& field)
+    {
+        skip_blanks();
+        if (next_ == end_ || *next_ == '#') {
+            next_ = end_;
+            return false;
+        }
+        const char* start = next_;
+        if ((*delimiters_)(*next_)) {
+            ++next_; // nothing before this delimiter: an empty field
+            field = std::string_view(start, 0);
+            return true;
+        }
+        while (next_ != end_ && !kBlanks(*next_) && !(*delimiters_)(*next_))
+            ++next_;
+        field = std::string_view(start, static_cast<std::size_t>(next_ - start));
+        skip_blanks(); // the separator after the field: blanks, then at most one delimiter
+        if (next_ != end_ && (*delimiters_)(*next_))
+            ++next_;
+        return true;
+    }
+
+private:
+    void skip_blanks()
+    {
+        while (next_ != end_ && kBlanks(*next_))
+            ++next_;
+    }
+
+    const char* next_;
+    const char* end_;
+    const Separators* delimiters_;
 };
 
 enum class Parsed { number, not_a_number, not_finite };
@@ -360,7 +407,8 @@ std::uint8_t unit_to_byte(double v) { return static_cast<std::uint8_t>(std::lrou
 // ---------------------------------------------------------------------------------------------------
 // XYZ / PTS / TXT / CSV
 
-constexpr Separators kSemicolonSeparators(" \t;");
+constexpr Separators kCommaOrSemicolon(",;");
+constexpr Separators kSemicolon(";");
 
 // Where the coordinates are on a line of a column file, decided on its first content line: files come
 // from spreadsheets and scanner software whose conventions differ, and a misread layout would give a
@@ -376,7 +424,7 @@ struct ColumnLayout
     int columns_needed = 3;
     // "1,5;2,5;3,5" (a European spreadsheet's CSV): semicolons separate, commas are decimal points.
     bool decimal_comma = false;
-    const Separators* separators = &kColumnSeparators;
+    const Separators* delimiters = &kCommaOrSemicolon; // besides blanks; see Fields
 };
 
 std::string lower_name(std::string_view token)
@@ -400,7 +448,7 @@ void read_column_names(const Input& in, std::string_view line, bool keep_colors,
         line.remove_prefix(1);
     if (line.substr(0, 2) == "//")
         line.remove_prefix(2);
-    Tokens tokens(line, *layout.separators);
+    Fields tokens(line, *layout.delimiters);
     static const char* const kColorNames[3][2] = {{"r", "red"}, {"g", "green"}, {"b", "blue"}};
     std::array<int, 3> named = {-1, -1, -1};
     std::array<int, 3> color = {-1, -1, -1};
@@ -443,7 +491,7 @@ void read_column_names(const Input& in, std::string_view line, bool keep_colors,
 // Leica's PTS convention without a header: x y z intensity r g b, or x y z r g b.
 void read_pts_colors(std::string_view line, bool keep_colors, ColumnLayout& layout)
 {
-    Tokens tokens(line, *layout.separators);
+    Fields tokens(line, *layout.delimiters);
     std::string_view token;
     int count = 0;
     while (tokens.next(token))
@@ -465,13 +513,21 @@ bool color_byte(std::string_view token, std::uint8_t& byte)
     return true;
 }
 
-bool is_column_names(std::string_view first_token)
+// Whether a first line names the columns: it opens with CloudCompare's "//", or its first field that is
+// not empty (an unnamed index column leaves the first one empty) is a word.
+bool is_column_names(std::string_view line, const ColumnLayout& layout)
 {
-    double ignored = 0;
-    if (first_token.substr(0, 2) == "//")
+    Fields fields(line, *layout.delimiters);
+    std::string_view first;
+    while (fields.next(first) && first.empty()) {
+    }
+    if (first.empty())
+        return false;
+    if (first.substr(0, 2) == "//")
         return true;
-    const unsigned char c = static_cast<unsigned char>(first_token.front());
-    return parse_number(first_token, ignored) == Parsed::not_a_number && (std::isalpha(c) || c == '"');
+    double ignored = 0;
+    const unsigned char c = static_cast<unsigned char>(first.front());
+    return parse_number(first, ignored) == Parsed::not_a_number && (std::isalpha(c) || c == '"');
 }
 
 double column_number(const Input& in, std::string_view token, const ColumnLayout& layout)
@@ -502,19 +558,19 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
             for (Tokens words(line, kBlanks); words.next(token); ++tokens_seen)
                 content = line.substr(0, static_cast<std::size_t>(token.data() + token.size() - line.data()));
             if (content.find(';') != std::string_view::npos) {
-                layout.separators = &kSemicolonSeparators;
+                layout.delimiters = &kSemicolon;
                 layout.decimal_comma = true;
             }
             separators_known = tokens_seen > 1 || (tokens_seen == 1 && !parse_count(content.substr(content.find_first_not_of(" \t")), count));
         }
-        Tokens tokens(line, *layout.separators);
+        Fields tokens(line, *layout.delimiters);
         std::string_view token;
         if (!tokens.next(token))
             continue;
         // PTS files (and some XYZ exports) open with the point count on a line of its own, and a PTS file
         // of several scans repeats it before each scan.
         std::string_view second;
-        Tokens rest = tokens;
+        Fields rest = tokens;
         std::uint64_t count = 0;
         if ((first_content_line || pts) && !rest.next(second) && parse_count(token, count)) {
             first_content_line = false;
@@ -522,7 +578,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         }
         if (first_content_line) {
             first_content_line = false;
-            if (is_column_names(token)) {
+            if (is_column_names(line, layout)) {
                 read_column_names(in, line, options.keep_colors, layout);
                 layout_known = true;
                 continue;
@@ -553,8 +609,12 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
             }
         }
         Vec3 p;
-        for (int axis = 0; axis < 3; ++axis)
+        for (int axis = 0; axis < 3; ++axis) {
+            if (fields[axis].empty())
+                fail_line(in, std::string("no ") + static_cast<char>('x' + axis) + " value (column " +
+                                  std::to_string(layout.column[axis] + 1) + " is empty)");
             p[axis] = column_number(in, fields[axis], layout);
+        }
         check_max_points(in, cloud.positions.size() + 1, options);
         cloud.positions.push_back(p);
         if (has_all(layout.color) && layout.colors_named) {

@@ -419,6 +419,23 @@ TEST(ReadColumns, named_colour_columns_refuse_words_and_clamp)
     EXPECT_FALSE(read_points(word, no_colors).has_colors());
 }
 
+// Two delimiters with nothing between them are an empty field (a missing value, pandas' unnamed index
+// column): merged like blanks, they moved the later values one column left (QA round 28: pandas'
+// ",x,y,z" with row numbers was read as x = row number, y = x, z = y, without a word).
+TEST(ReadColumns, empty_fields_keep_their_column)
+{
+    expect_all_read_as_kpoints({
+        {"pandas.csv", ",x,y,z\n0,0.5,-1.25,2\n1,3,4.75,-5.5\n2,-0.125,0,8\n3,1,1,1\n"},
+        {"missing.csv", "id,x,y,z,intensity\n,0.5,-1.25,2,7\n,3,4.75,-5.5,\n, -0.125 , 0 ,8,\n,1,1,1,7,\n"},
+        {"eu_missing.csv", "id;X;Y;Z\n;0,5;-1,25;2\n;3;4,75;-5,5\n;-0,125;0;8\n;1;1;1\n"},
+    });
+    const fs::path dir = test_dir();
+    const fs::path no_y = write_file(dir / "no_y.csv", "x,y,z\n1,2,3\n4,,6\n");
+    expect_error<InvalidInput>([&] { read_points(no_y); }, {no_y.string(), "line 3: no y value (column 2 is empty)"});
+    const fs::path no_x = write_file(dir / "no_x.xyz", "1,2,3\n,5,6\n");
+    expect_error<InvalidInput>([&] { read_points(no_x); }, {no_x.string(), "line 2: no x value (column 1 is empty)"});
+}
+
 TEST(ReadObj, vertex_lines_only_and_colours)
 {
     const fs::path dir = test_dir();
