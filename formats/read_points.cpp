@@ -1357,6 +1357,7 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
 
 // Where the public header keeps what we read (the LAS specification's byte offsets).
 constexpr std::size_t kLasHeaderMin = 227; // LAS 1.0-1.2; 1.3 adds 8 bytes, 1.4 adds 148
+constexpr std::size_t kLasHeader13 = 235;
 constexpr std::size_t kLasHeader14 = 375;
 
 // Smallest point record of each point data format 0-10; records may carry extra bytes after it.
@@ -1466,14 +1467,28 @@ PointCloud read_las(Input& in, const ReadOptions& options)
         if (!std::isfinite(scale[axis]) || scale[axis] == 0 || !std::isfinite(offset[axis]))
             throw InvalidInput(in.name() + ": LAS scale or offset of " + std::string(1, static_cast<char>('x' + axis)) +
                                " is zero or not finite");
-    // LAS 1.4 keeps a 64-bit count (the 32-bit one is 0 for formats 6-10 and for large files).
-    if (major == 1 && minor >= 4 && header_size >= kLasHeader14) {
-        const char* extended = in.take(kLasHeader14 - kLasHeaderMin);
+    // LAS 1.3 and 1.4 say where waveform data and extended records start, after the points: data
+    // between the points' end and there, or the end of the file, is points the header does not count.
+    std::uint64_t waveform_start = 0, evlr_start = 0;
+    if (minor >= 3 && header_size >= kLasHeader13) {
+        const std::size_t extended_size = (minor >= 4 && header_size >= kLasHeader14 ? kLasHeader14 : kLasHeader13) -
+                                          kLasHeaderMin;
+        const char* extended = in.take(extended_size);
         if (!extended)
             throw IoError(in.name() + ": truncated: the LAS header ends early");
-        const std::uint64_t count64 = load<std::uint64_t>(extended + (247 - kLasHeaderMin), swap);
-        if (count64 != 0)
-            count = count64;
+        waveform_start = load<std::uint64_t>(extended, swap);
+        // LAS 1.4 keeps a 64-bit count; the legacy 32-bit one must be 0 (formats 6-10, more than 2^32
+        // points) or the same. Two different counts leave the file's extent unknown (QA round 28: a
+        // legacy 5,000 and a 64-bit 1,000 read 1,000 of the 5,000 points without a word).
+        if (extended_size == kLasHeader14 - kLasHeaderMin) {
+            evlr_start = load<std::uint64_t>(extended + (235 - kLasHeaderMin), swap);
+            const std::uint64_t count64 = load<std::uint64_t>(extended + (247 - kLasHeaderMin), swap);
+            if (count != 0 && count64 != 0 && count != count64)
+                throw InvalidInput(in.name() + ": malformed LAS 1.4 header: its legacy point count " + std::to_string(count) +
+                                   " differs from its 64-bit point count " + std::to_string(count64));
+            if (count64 != 0)
+                count = count64;
+        }
     }
     check_max_points(in, count, options);
     // Before allocating anything, check that an uncompressed file can hold what the header declares.
@@ -1526,6 +1541,23 @@ PointCloud read_las(Input& in, const ReadOptions& options)
             colors16.push_back(c);
         }
     }
+    // A point count lower than the file holds would read part of the cloud: refused like the PLY and
+    // PCD readers' data after the declared points (QA round 28: a legacy count of 1,000 read 1,000 of
+    // 5,000 points). What may follow the points starts where the header says; padding shorter than a
+    // point record is not data.
+    std::uint64_t next = 0; // where the next declared data starts; 0: nothing declared, the file's end
+    for (const std::uint64_t start : {waveform_start, evlr_start})
+        if (start >= in.offset() && (next == 0 || start < next))
+            next = start;
+    if ((next == 0 || next - in.offset() >= record_size) && in.request(record_size)) {
+        const std::uint64_t rest = next != 0 && in.file_size() > 0 ? std::min(next, in.file_size()) - in.offset()
+                                                                    : bytes_left(in);
+        throw InvalidInput(in.name() + ": " + std::to_string(rest) + " bytes after the " + std::to_string(count) +
+                           " points the header declares: the header does not describe the data");
+    }
+    if (count > 0 && cloud.positions.empty())
+        throw InvalidInput(in.name() + ": no points: all " + std::to_string(count) +
+                           " are withheld or classified as noise (classes 7 and 18), which are left out");
     // The specification asks for 16-bit colours, but many writers store 0-255 values: any value above
     // 255 means the file uses the full range.
     for (const auto& c : colors16)

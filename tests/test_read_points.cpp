@@ -1498,6 +1498,52 @@ TEST(ReadErrors, data_after_the_declared_pcd_points)
     EXPECT_EQ(read_points(write_file(dir / "blank_end.pcd", pcd_file("ascii") + "\n  \n# end\n")).size(), kPoints.size());
 }
 
+// A LAS header counting fewer points than the file holds read that many, without a word (QA round 28):
+// in a 1.0-1.2 file nothing follows the points, in 1.3 and 1.4 waveform data and extended records may,
+// where the header says they start; a 1.4 header whose two counts differ is refused.
+TEST(ReadErrors, data_after_the_declared_las_points)
+{
+    const fs::path dir = test_dir();
+    const auto patch = [](std::string bytes, std::size_t at, auto value) {
+        std::memcpy(&bytes[at], &value, sizeof value); // little-endian hosts, as the LAS files
+        return bytes;
+    };
+    LasFile v12; // format 3: 38-byte records with the 4 extra bytes
+    v12.declared = 2;
+    LasFile v14;
+    v14.minor = 4;
+    v14.format = 6;
+    const std::string full14 = v14.bytes();
+    const std::size_t points14 = full14.size();
+    LasFile v13;
+    v13.minor = 3;
+    v13.format = 1;
+    v13.declared = 3;
+    const std::vector<ReadErrorCase> cases = {
+        {"legacy.las", v12.bytes(), "76 bytes after the 2 points the header declares", false},
+        // 1.4: a 64-bit count of 1 under a legacy count of 4, and a 64-bit count of 3 alone.
+        {"counts.las", patch(patch(full14, 107, std::uint32_t{4}), 247, std::uint64_t{1}),
+         "legacy point count 4 differs from its 64-bit point count 1", false},
+        {"count64.las", patch(full14, 247, std::uint64_t{3}), "34 bytes after the 3 points", false},
+        // Extended records declared after a point the count leaves out.
+        {"evlr.las", patch(patch(full14, 247, std::uint64_t{3}), 235, std::uint64_t{points14}) + "evlr",
+         "34 bytes after the 3 points", false},
+        {"waveform.las", patch(v13.bytes(), 227, std::uint64_t{v13.bytes().size()}), "32 bytes after the 3 points", false},
+    };
+    expect_read_errors(dir, cases);
+    const fs::path gz = write_gz(dir / "legacy.las.gz", v12.bytes());
+    expect_error<InvalidInput>([&] { read_points(gz); }, {gz.string(), "76 bytes after the 2 points"});
+    // What the header declares after the points, and padding shorter than a record, are no points.
+    v13.declared = 0;
+    const std::string waveform = patch(v13.bytes(), 227, std::uint64_t{v13.bytes().size()}) + std::string(100, 'w');
+    expect_points(read_points(write_file(dir / "waveform_ok.las", waveform)), kPoints);
+    const std::string evlr = patch(full14, 235, std::uint64_t{points14}) + std::string(200, 'e');
+    expect_points(read_points(write_file(dir / "evlr_ok.las", evlr)), kPoints);
+    expect_points(read_points(write_file(dir / "padded.las", LasFile().bytes() + std::string(37, '\0'))), kPoints);
+    // A legacy count equal to the 64-bit one is what LAS 1.4 asks for formats 0-5.
+    expect_points(read_points(write_file(dir / "both.las", patch(full14, 107, std::uint32_t{4}))), kPoints);
+}
+
 // Two `vertex` elements (250 + 250 points, as two clouds run together) read as the first 250: the
 // second was skipped as an element the reader does not need. The header is refused, naming the line.
 TEST(ReadErrors, ply_declaring_the_vertex_element_twice)
