@@ -1714,6 +1714,12 @@ PcdHeader read_pcd_header(Input& in)
         if (f.name != "_")
             packed += f.size * f.count;
         values += f.count;
+        // A field read twice (two clouds' headers run together, a copy of x kept as "x"): which one the
+        // points are would be a guess (QA round 28: the second x, all zeros, flattened a sphere).
+        if ((f.name == "x" && h.x >= 0) || (f.name == "y" && h.y >= 0) || (f.name == "z" && h.z >= 0) ||
+            ((f.name == "rgb" || f.name == "rgba") && f.size == 4 && h.rgb >= 0))
+            throw InvalidInput(in.name() + ": malformed PCD header: two fields are named " + f.name +
+                               (f.name == "rgba" || f.name == "rgb" ? " (or rgb and rgba)" : ""));
         const int index = static_cast<int>(i);
         if (f.name == "x") h.x = index;
         if (f.name == "y") h.y = index;

@@ -903,6 +903,11 @@ TEST(ReadPcd, malformed_files_fail_cleanly)
         {"lzf_sizes.pcd", big_sizes, "unpacks to 4294967280 bytes", false},
         {"lzf_cut.pcd", compressed.substr(0, compressed.size() - 5), "ends early", true},
         {"lzf_nosizes.pcd", compressed.substr(0, compressed_data + 3), "no sizes", true},
+        // A field read twice: the second x (all zeros) flattened the cloud without a word (QA round 28).
+        {"two_x.pcd", "FIELDS x y z x\nSIZE 4 4 4 4\nTYPE F F F F\nWIDTH 2\nDATA ascii\n1 2 3 0\n4 5 6 0\n",
+         "two fields are named x", false},
+        {"two_rgb.pcd", "FIELDS x y z rgb rgba\nSIZE 4 4 4 4 4\nTYPE F F F U U\nWIDTH 1\nDATA ascii\n1 2 3 0 0\n",
+         "two fields are named rgba (or rgb and rgba)", false},
     };
     expect_read_errors(dir, cases);
     std::string fields = "FIELDS x y z";
