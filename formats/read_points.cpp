@@ -1308,16 +1308,24 @@ PointCloud read_ptx(Input& in, const ReadOptions& options)
                 const double dot = m[a][0] * m[b][0] + m[a][1] * m[b][1] + m[a][2] * m[b][2];
                 worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
             }
+        const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        const std::string matrix = in.name() + ": " + where + ": the registration matrix (line " +
+                                   std::to_string(matrix_line) + ") is not a rigid motion: ";
         if (!(worst <= 1e-3)) {
-            const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                               m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                               m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
             char detail[64];
             std::snprintf(detail, sizeof detail, "%.6g", det);
-            throw InvalidInput(in.name() + ": " + where + ": the registration matrix (line " +
-                               std::to_string(matrix_line) + ") is not a rigid motion: its rotation part is " +
-                               "not orthonormal (determinant " + detail + ")");
+            throw InvalidInput(matrix + "its rotation part is not orthonormal (determinant " + detail + ")");
         }
+        // Orthonormal with determinant -1 is a mirror image of the scan, and a last column other than
+        // 0 0 0 1 a projective or rescaled matrix: neither is a registration (both were read as given
+        // or ignored, QA round 28).
+        if (det < 0)
+            throw InvalidInput(matrix + "it mirrors the scan (determinant -1)");
+        if (!(std::abs(m[0][3]) <= 1e-6 && std::abs(m[1][3]) <= 1e-6 && std::abs(m[2][3]) <= 1e-6 &&
+              std::abs(m[3][3] - 1.0) <= 1e-6))
+            throw InvalidInput(matrix + "its last column is not 0 0 0 1");
         // The scanner stands at the registration's translation (the scan's own origin).
         cloud.viewpoint = Vec3{m[3][0], m[3][1], m[3][2]};
         const std::uint64_t count = size[0] * size[1];

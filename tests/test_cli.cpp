@@ -595,6 +595,11 @@ TEST(Cli, focus_outside_the_model_is_noted)
     const Result near = mrtile("mesh " + model + " -o " + (dir / "m.ply").string() + " --focus 1,0,0,0.3:0.0002", dir);
     EXPECT_EQ(near.code, 0) << near.err;
     EXPECT_EQ(near.out.find("does not meet"), std::string::npos) << near.out;
+    EXPECT_EQ(near.out.find("no point of the model"), std::string::npos) << near.out;
+    // Inside the sphere's hollow: within the model's box, but no point in it (QA round 28: no word).
+    const Result hollow = mrtile("mesh " + model + " -o " + (dir / "m.ply").string() + " --focus 0,0,0,0.5:0.0002", dir);
+    EXPECT_EQ(hollow.code, 0) << hollow.err;
+    EXPECT_NE(hollow.out.find("no point of the model lies in the sphere"), std::string::npos) << hollow.out;
 }
 
 // build → info --json (keys scripts depend on) → mesh --stats-json (keys) → identical rebuild.

@@ -1012,6 +1012,18 @@ TEST(ReadPtx, degenerate_registration_matrix_is_refused)
         const fs::path path = write_file(dir / c.name, c.body);
         expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), c.expect, "not orthonormal"});
     }
+    // A mirror (orthonormal, determinant -1) and a matrix whose last column is not 0 0 0 1 are no
+    // registration either (QA round 28: the first was applied, the second's column ignored).
+    const std::vector<Case> not_rigid = {
+        {"mirror.ptx", head + "-1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n" + points, "mirrors the scan"},
+        {"projective.ptx", head + "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 2\n" + points, "last column is not 0 0 0 1"},
+        {"skewed.ptx", head + "1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n" + points, "last column is not 0 0 0 1"},
+    };
+    for (const Case& c : not_rigid) {
+        SCOPED_TRACE(c.name);
+        const fs::path path = write_file(dir / c.name, c.body);
+        expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), "scan 1: the registration matrix (line 7)", c.expect});
+    }
     // 30 degrees about z with six digits (cos 0.866025, sin 0.5), as scanner software prints it.
     const PointCloud turned = read_points(write_file(
         dir / "turned.ptx", head + "0.866025 0.5 0 0\n-0.5 0.866025 0 0\n0 0 1 0\n10 20 30 1\n" + points));
