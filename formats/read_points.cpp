@@ -548,6 +548,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
     bool layout_known = false;
     std::string_view line;
     bool first_content_line = true;
+    bool header_possible = true; // on the first content line, or on the line after a leading point count
     bool separators_known = false;
     while (in.next_line(line)) {
         // The first line with data (not a comment, not a point count) says whether semicolons separate.
@@ -573,11 +574,14 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         Fields rest = tokens;
         std::uint64_t count = 0;
         if ((first_content_line || pts) && !rest.next(second) && parse_count(token, count)) {
+            // A header may follow the count ("3", then "x y z": it was read as a point, QA round 28).
+            header_possible = first_content_line;
             first_content_line = false;
             continue;
         }
-        if (first_content_line) {
-            first_content_line = false;
+        first_content_line = false;
+        if (header_possible) {
+            header_possible = false;
             if (is_column_names(line, layout)) {
                 read_column_names(in, line, options.keep_colors, layout);
                 layout_known = true;

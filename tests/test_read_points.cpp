@@ -322,6 +322,9 @@ TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
         // ... after a point count line, or a comment: the first line with data decides (both were
         // read with commas separating: (0, 5, -1) and so on; found by fuzzing).
         {"eu_count.pts", "4\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        // A header after the point count line (QA round 28: "'x' is not a number").
+        {"count_header.xyz", "4\nx y z\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n"},
+        {"count_named.csv", "4\nid,z,x,y\n0,2,0.5,-1.25\n1,-5.5,3,4.75\n2,8,-0.125,0\n3,1,1,1\n"},
         {"eu_comment.csv", "# exported from a spreadsheet\n\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
         // A semicolon in a comment says nothing about the data (it made commas decimal points).
         {"comment.csv", "# exported; metres\n0.5,-1.25,2\n3,4.75,-5.5\n-0.125,0,8\n1,1,1\n"},
