@@ -169,9 +169,14 @@ DracoEncoded encode_draco(const MeshBuffers& buffers, const DracoOptions& option
     if (!buffers.normals.empty())
         add_attribute(mesh, draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, false,
                       buffers.normals.data(), sizeof(float));
-    if (!buffers.colors.empty())
+    if (!buffers.colors.empty() && options.linear_colors) {
+        const std::vector<std::uint16_t> linear = linear_colors(buffers.colors);
+        add_attribute(mesh, draco::GeometryAttribute::COLOR, 4, draco::DT_UINT16, true, linear.data(),
+                      sizeof(std::uint16_t));
+    } else if (!buffers.colors.empty()) {
         add_attribute(mesh, draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true,
                       buffers.colors.data(), 1);
+    }
     if (metadata_origin) {
         auto metadata = std::make_unique<draco::GeometryMetadata>();
         metadata->AddEntryDoubleArray(kOriginEntry, {metadata_origin->x, metadata_origin->y, metadata_origin->z});
@@ -228,7 +233,11 @@ DracoDecoded decode_draco(const std::string& bytes, const std::string& what)
     DracoDecoded out;
     out.positions = read_attribute<float, 3>(*mesh, mesh->GetNamedAttribute(draco::GeometryAttribute::POSITION));
     out.normals = read_attribute<float, 3>(*mesh, mesh->GetNamedAttribute(draco::GeometryAttribute::NORMAL));
-    out.colors = read_attribute<std::uint8_t, 4>(*mesh, mesh->GetNamedAttribute(draco::GeometryAttribute::COLOR));
+    const draco::PointAttribute* color = mesh->GetNamedAttribute(draco::GeometryAttribute::COLOR);
+    if (color != nullptr && color->data_type() == draco::DT_UINT16)
+        out.linear_colors = read_attribute<std::uint16_t, 4>(*mesh, color);
+    else
+        out.colors = read_attribute<std::uint8_t, 4>(*mesh, color);
     out.indices.reserve(static_cast<std::size_t>(mesh->num_faces()) * 3);
     for (uint32_t f = 0; f < mesh->num_faces(); ++f)
         for (int k = 0; k < 3; ++k)

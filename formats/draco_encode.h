@@ -2,7 +2,8 @@
 //! \file draco_encode.h
 //! \brief Draco compression of meshes: bare .drc files and the payload of KHR_draco_mesh_compression.
 //! \details The only place that includes Draco headers (draco_encode.cpp). Positions are quantized
-//! (lossy); normals are octahedral-quantized; RGBA colours are stored as exact 8-bit values (Draco
+//! (lossy); normals are octahedral-quantized; RGBA colours are stored exactly, as the sRGB bytes
+//! (bare .drc, like PLY) or as glTF's 16-bit linear values (`DracoOptions::linear_colors`; Draco
 //! quantizes float attributes only, so there is no colour quantization setting).
 
 #include "formats/mesh_buffers.h"
@@ -38,6 +39,10 @@ struct DracoOptions
     int decoding_speed = 3; //!< 0 .. 10, as encoding_speed: what the encoder may trade for faster decoding
     //! Default: none, Draco quantizes on the mesh's own bounding cube.
     std::optional<QuantizationGrid> grid;
+    //! Colours as linear_colors (mesh_buffers.h): 16-bit normalized linear values, what glTF's COLOR_0
+    //! means (the glTF writer sets it); false keeps the sRGB bytes, as a bare .drc holds them (three.js
+    //! decodes a .drc's colours as sRGB, a glTF's as linear).
+    bool linear_colors = false;
 };
 
 //! \brief Writes `mesh` as a bare Draco file, in the mesh's own axes (no rotation).
@@ -76,7 +81,8 @@ struct DracoDecoded
 {
     std::vector<float> positions;        //!< xyz per point
     std::vector<float> normals;          //!< xyz per point, or empty
-    std::vector<std::uint8_t> colors;    //!< rgba per point, or empty
+    std::vector<std::uint8_t> colors;    //!< rgba per point stored as bytes (sRGB), or empty
+    std::vector<std::uint16_t> linear_colors; //!< rgba per point stored as 16-bit linear values, or empty
     std::vector<std::uint32_t> indices;  //!< three per face
     std::optional<Vec3> metadata_origin; //!< "mrtile_origin" if present
 };

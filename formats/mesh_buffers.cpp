@@ -177,4 +177,18 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
     return out;
 }
 
+std::vector<std::uint16_t> linear_colors(const std::vector<std::uint8_t>& srgb)
+{
+    std::array<std::uint16_t, 256> curve{};
+    for (std::size_t c = 0; c < curve.size(); ++c) {
+        const double e = static_cast<double>(c) / 255.0;
+        const double linear = e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
+        curve[c] = static_cast<std::uint16_t>(std::lround(linear * 65535.0));
+    }
+    std::vector<std::uint16_t> out(srgb.size());
+    for (std::size_t i = 0; i < srgb.size(); ++i)
+        out[i] = i % 4 == 3 ? static_cast<std::uint16_t>(srgb[i] * 257u) : curve[srgb[i]];
+    return out;
+}
+
 } // namespace mrt

@@ -50,7 +50,7 @@ struct MeshBuffers
     Vec3 offset;                       //!< output frame: position = float(frame(p) - offset)
     std::vector<float> positions;      //!< xyz per vertex
     std::vector<float> normals;        //!< unit xyz per vertex, or empty
-    std::vector<std::uint8_t> colors;  //!< rgba per vertex, or empty
+    std::vector<std::uint8_t> colors;  //!< rgba per vertex as the points gave them (sRGB bytes), or empty
     std::vector<std::uint32_t> indices; //!< three per triangle
     std::array<float, 3> min{};         //!< of positions
     std::array<float, 3> max{};
@@ -66,5 +66,12 @@ struct MeshBuffers
 //! \throw InvalidInput if the mesh has no (non-deleted) face, a used position is not finite, or a
 //! face refers to a deleted vertex.
 MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options = {});
+
+//! \brief sRGB-encoded rgba bytes (what PLY, LAS, PTX and the mesh's colours hold) as the 16-bit
+//! normalized *linear* values glTF's COLOR_0 means (glTF 2.0: vertex colours are linear multipliers of
+//! the base colour; 3D Tiles: point colours are sRGB and must be linearized in glTF). RGB through the
+//! exact sRGB decoding curve, alpha (coverage, not a colour) scaled as is. 16 bits, since 8-bit linear
+//! values merge the dark shades: sRGB 0-12 would become linear bytes 0-1.
+std::vector<std::uint16_t> linear_colors(const std::vector<std::uint8_t>& srgb);
 
 } // namespace mrt

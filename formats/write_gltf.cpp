@@ -25,7 +25,6 @@ namespace {
 using Json = nlohmann::ordered_json;
 
 // glTF enums (spec section 5): component types and buffer-view targets.
-constexpr int kUnsignedByte = 5121;
 constexpr int kUnsignedShort = 5123;
 constexpr int kUnsignedInt = 5125;
 constexpr int kFloat = 5126;
@@ -187,12 +186,16 @@ private:
                      {"componentType", kFloat},
                      {"count", n},
                      {"type", "VEC3"}});
-        if (!b.colors.empty())
-            attributes["COLOR_0"] = add_accessor(Json{{"bufferView", add_view(b.colors.data(), b.colors.size(), kArrayBuffer)},
-                                                      {"componentType", kUnsignedByte},
-                                                      {"normalized", true},
-                                                      {"count", n},
-                                                      {"type", "VEC4"}});
+        if (!b.colors.empty()) {
+            // COLOR_0 is linear in glTF; the mesh's colours are sRGB bytes (linear_colors).
+            const std::vector<std::uint16_t> linear = linear_colors(b.colors);
+            attributes["COLOR_0"] = add_accessor(
+                Json{{"bufferView", add_view(linear.data(), linear.size() * sizeof(std::uint16_t), kArrayBuffer)},
+                     {"componentType", kUnsignedShort},
+                     {"normalized", true},
+                     {"count", n},
+                     {"type", "VEC4"}});
+        }
         const int type = index_type(n);
         std::size_t view;
         if (type == kUnsignedShort) {
@@ -208,7 +211,9 @@ private:
 
     Json draco_primitive(const MeshBuffers& b)
     {
-        const DracoEncoded encoded = encode_draco(b, options_.draco_options);
+        DracoOptions draco_options = options_.draco_options;
+        draco_options.linear_colors = true; // COLOR_0 is linear in glTF
+        const DracoEncoded encoded = encode_draco(b, draco_options);
         use_extension(kDracoExtension, true);
         // Accessors without bufferView: the counts and bounds are those of the decoded Draco mesh.
         Json attributes, draco_attributes;
@@ -225,7 +230,7 @@ private:
         }
         if (encoded.color_id >= 0) {
             attributes["COLOR_0"] = add_accessor(Json{
-                {"componentType", kUnsignedByte}, {"normalized", true}, {"count", encoded.vertex_count}, {"type", "VEC4"}});
+                {"componentType", kUnsignedShort}, {"normalized", true}, {"count", encoded.vertex_count}, {"type", "VEC4"}});
             draco_attributes["COLOR_0"] = encoded.color_id;
         }
         const std::size_t indices = add_accessor(Json{{"componentType", index_type(encoded.vertex_count)},

@@ -13,6 +13,7 @@
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
+#include "formats/draco_encode.h"
 #include "formats/write_gltf.h"
 #include "libmrtile/errors.h"
 #include "mesh_fixtures.h"
@@ -21,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -250,9 +252,50 @@ TEST_F(GltfFiles, tinygltf_loads_and_reproduces_positions)
     const tinygltf::Model coloured = load("colors.glb");
     const tinygltf::Accessor& color =
         coloured.accessors.at(static_cast<std::size_t>(coloured.meshes[0].primitives[0].attributes.at("COLOR_0")));
-    EXPECT_EQ(color.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE);
+    EXPECT_EQ(color.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
     EXPECT_TRUE(color.normalized);
     EXPECT_EQ(color.type, TINYGLTF_TYPE_VEC4);
+}
+
+// glTF's COLOR_0 is linear; the mesh's colours are the points' sRGB bytes. QA round 28b: the bytes
+// were written as they were, so viewers (three.js, Blender, CesiumJS) showed sRGB grey 128 as 188.
+// Plain and Draco primitives hold 16-bit linear values (sRGB 128 -> 0.21586, 10 -> 0.0030353, alpha
+// scaled as is); a bare .drc keeps the bytes (test_draco_encode).
+TEST(WriteGltf, colours_are_linear_as_gltf_defines_them)
+{
+    Mesh mesh = uv_sphere(6, 12, 1.0, {}, true);
+    for (const auto v : mesh.vertices())
+        mesh.set_color(v, Mesh::Color(128, 10, 255, 200));
+    const std::vector<std::uint16_t> expected{14146, 199, 65535, 51400};
+    for (const bool draco : {false, true}) {
+        SCOPED_TRACE(draco ? "draco" : "plain");
+        GltfOptions options;
+        options.draco = draco;
+        const std::string bytes = glb_bytes(mesh, {}, options);
+        std::uint32_t json_length = 0, bin_length = 0;
+        std::memcpy(&json_length, bytes.data() + 12, 4);
+        const json doc = json::parse(bytes.substr(20, json_length));
+        std::memcpy(&bin_length, bytes.data() + 20 + json_length, 4);
+        const std::string bin = bytes.substr(20 + json_length + 8, bin_length);
+        const json& primitive = doc["meshes"][0]["primitives"][0];
+        const json& accessor = doc["accessors"][primitive["attributes"]["COLOR_0"].get<std::size_t>()];
+        EXPECT_EQ(accessor["componentType"], 5123); // UNSIGNED_SHORT
+        EXPECT_EQ(accessor["normalized"], true);
+        std::vector<std::uint16_t> values;
+        if (draco) {
+            const json& view = doc["bufferViews"][primitive["extensions"]["KHR_draco_mesh_compression"]["bufferView"].get<std::size_t>()];
+            const DracoDecoded d = decode_draco(bin.substr(view["byteOffset"], view["byteLength"]), "COLOR_0");
+            EXPECT_TRUE(d.colors.empty());
+            values = d.linear_colors;
+        } else {
+            const json& view = doc["bufferViews"][accessor["bufferView"].get<std::size_t>()];
+            values.resize(view["byteLength"].get<std::size_t>() / 2);
+            std::memcpy(values.data(), bin.data() + view["byteOffset"].get<std::size_t>(), values.size() * 2);
+        }
+        ASSERT_EQ(values.size(), 4 * mesh.n_vertices());
+        for (std::size_t i = 0; i < values.size(); ++i)
+            ASSERT_EQ(values[i], expected[i % 4]) << "value " << i;
+    }
 }
 
 // The z-up input is rotated into y-up: the origin (x, y, z) becomes the node translation (x, z, -y)
