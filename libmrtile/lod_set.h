@@ -31,7 +31,9 @@ namespace mrt {
 
 struct LodSetOptions
 {
-    //! Largest number of triangles in one tile (skirts included).
+    //! Largest number of triangles in one tile (skirts included). Exceeded only by a tile whose region
+    //! cannot be split at its level (a leaf, or a node whose children lie below the level's cut) and by
+    //! a root whose level 0 cannot be made as small (a level's faces of one cut node stay together).
     std::size_t max_tile_triangles = 65536;
     //! Triangles of level 0 (when no tolerances are given); 0 = max_tile_triangles. Level 0 is cut to
     //! three quarters of it, since a tileset's root must fit one tile (skirts included). A plain LOD chain (`mrtile lods`) starts coarser.
