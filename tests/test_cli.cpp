@@ -560,6 +560,27 @@ TEST(Cli, lods_replaces_its_directory_whole)
         EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
 }
 
+// Levels asked for that the hierarchy cannot give apart are named, not left out silently (QA round
+// 28b: --levels 6 wrote 4): a 4,000-point sphere has far fewer than 20 distinct halvings.
+TEST(Cli, lods_says_when_it_makes_fewer_levels_than_asked)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 4000);
+    const std::string model = (dir / "a.mrt").string();
+    ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + model, dir).code, 0);
+    Result r = mrtile("lods " + model + " -o " + (dir / "few").string() + " --levels 20", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::size_t files = 0;
+    for (const auto& e : fs::directory_iterator(dir / "few"))
+        files += e.path().extension() == ".ply" ? 1 : 0;
+    ASSERT_GT(files, 1u);
+    ASSERT_LT(files, 20u);
+    EXPECT_NE(r.out.find("note: 20 levels asked, "), std::string::npos) << r.out;
+    r = mrtile("lods " + model + " -o " + (dir / "two").string() + " --levels 2", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.find("levels asked"), std::string::npos) << r.out;
+}
+
 // export --store-levels rewrites the model: with its permissions kept (a private model came back
 // world-readable: QA), and not at all when the model is read-only (it was replaced).
 TEST(Cli, store_levels_keeps_the_models_permissions)

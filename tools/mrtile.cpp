@@ -911,6 +911,19 @@ void note_noise_floor(const Hierarchy& h, const LodSet& set)
     }
 }
 
+// Levels asked for (--levels N, --lod-tolerances) that the hierarchy cannot give apart: a level whose
+// cut is no finer than the one before is left out (below the build's tolerance every cut is the
+// leaves). Say so rather than write fewer levels silently (QA round 28b: --levels 6 gave 4).
+void note_fewer_levels(const Hierarchy& h, const LodSetOptions& options, const LodSet& set)
+{
+    const std::size_t asked = options.tolerances.empty() ? options.levels : options.tolerances.size();
+    if (asked == 0 || set.levels.size() >= asked)
+        return;
+    std::printf("note: %zu levels asked, %zu made: the others' cuts were no finer than the level before (the "
+                "finest cut has %zu tiles)\n",
+                asked, set.levels.size(), cut_by_tolerance(h, 0.0).size());
+}
+
 // A tileset without --enu is placed at its input coordinates, taken as ECEF metres. Input far from the
 // origin but not on the Earth's surface in ECEF (projected coordinates such as UTM, or a local survey
 // grid) would then float inside the globe of a web viewer: say how to place it.
@@ -1092,6 +1105,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     const LodSetOptions options = e.options(m);
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    note_fewer_levels(h, options, set);
     stored.store(set.levels);
     Vec3 origin = h.cloud.origin;
     std::optional<GeoPlacement> placed;
@@ -1128,6 +1142,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     options.tileset = false;
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    note_fewer_levels(h, options, set);
     stored.store(set.levels);
     std::vector<const Mesh*> fine_to_coarse;
     for (std::size_t l = set.levels.size(); l-- > 0;)
@@ -1151,6 +1166,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
     note_noise_floor(h, set);
+    note_fewer_levels(h, options, set);
     // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
     // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
     // of a scan are too fine for its sampling, the extra levels would only add faces.
