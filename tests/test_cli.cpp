@@ -220,8 +220,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format stl --up y", "--up y"},
         {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string() + " --format 3dtiles", "writes a directory"},
         {"build " + in + " -o " + (dir / "s.mrt").string() + " --skip-missing-scans", "no input is one"},
-        {"reconstruct " + in + " -o " + mesh + " --crs EPSG:32632", "no effect here"},
-        {"reconstruct " + in + " -o " + (dir / "x.glb").string() + " --format lod-glb --crs EPSG:32632", "no effect here"},
+        {"reconstruct " + in + " -o " + mesh + " --crs EPSG:32632 --height-field on", "no effect here"},
+        {"reconstruct " + in + " -o " + (dir / "x.glb").string() + " --format lod-glb --crs EPSG:32632 --height-field off", "no effect here"},
         {glb + " --store-levels", "this output is one mesh"},
         {"reconstruct " + in + " -o " + mesh + " --model " + model + " --store-levels", "this output is one mesh"},
         // Cut options that another one chosen would ignore, and --no-quality on LOD sets (session 28
@@ -940,6 +940,62 @@ TEST(Cli, stored_levels_make_the_same_tileset)
     EXPECT_NE(refused.err.find(long_model.filename().string()), std::string::npos) << refused.err;
     EXPECT_FALSE(fs::exists(dir / "i"));
     EXPECT_EQ(slurp(long_model), before);
+}
+
+// An airborne scene as plain XYZ (60 m of ground every 0.7 m, a 20 x 15 m roof 12 m up, a wall point
+// every 3 m): its CRS makes the automatic height-field mode take the steep tiles for walls and bridge
+// them, closing the footprint. `reconstruct --crs` onto a mesh file was refused as having "no effect
+// here" (QA round qa2), so the closed mesh took a --model or a separate build; now it is the mesh of
+// `build --crs` + `mesh`, byte for byte. With the mode given outright the CRS does nothing: refused.
+TEST(Cli, reconstruct_crs_shapes_a_height_field_mesh)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const auto fraction = [](double a) {
+        const double v = std::sin(a) * 43758.5453;
+        return v - std::floor(v);
+    };
+    std::string scene;
+    char line[96];
+    for (int j = 0; j < 86; ++j)
+        for (int i = 0; i < 86; ++i) {
+            const double x = (i + 0.7 * (fraction(i * 12.9898 + j * 78.233) - 0.5)) * 0.7;
+            const double y = (j + 0.7 * (fraction(i * 39.3468 + j * 11.135) - 0.5)) * 0.7;
+            const double roof = x >= 20 && x <= 40 && y >= 20 && y <= 35 ? 12.0 : 0.0;
+            std::snprintf(line, sizeof line, "%.3f %.3f %.3f\n", 500000 + x, 5000000 + y, 300 + 0.02 * x + roof);
+            scene += line;
+        }
+    for (int k = 0; k < 23; ++k) { // around the roof's outline
+        const double s = k * 3.0 + 1.0;
+        const double x = s < 20 ? 20 + s : s < 35 ? 40 : s < 55 ? 40 - (s - 35) : 20;
+        const double y = s < 20 ? 20 : s < 35 ? 20 + (s - 20) : s < 55 ? 35 : 35 - (s - 55);
+        std::snprintf(line, sizeof line, "%.3f %.3f %.3f\n", 500000 + x, 5000000 + y, 300 + 0.02 * x + 12.0 * fraction(k * 7.7));
+        scene += line;
+    }
+    write_text(dir / "air.xyz", scene);
+    const std::string in = (dir / "air.xyz").string();
+    const auto loops = [&](const std::string& stats) {
+        return nlohmann::json::parse(slurp(dir / stats))["boundary_loops"].get<int>();
+    };
+    for (const std::string tolerance : {"0.005", "0.002"}) {
+        SCOPED_TRACE(tolerance);
+        const Result placed = mrtile("reconstruct " + in + " -o " + (dir / "crs.ply").string() + " --crs EPSG:32632 --tolerance " +
+                                         tolerance + " --stats-json " + (dir / "crs.json").string(),
+                                     dir);
+        ASSERT_EQ(placed.code, 0) << placed.err;
+        ASSERT_EQ(mrtile("reconstruct " + in + " -o " + (dir / "plain.ply").string() + " --tolerance " + tolerance +
+                             " --stats-json " + (dir / "plain.json").string(),
+                         dir)
+                      .code,
+                  0);
+        EXPECT_EQ(loops("crs.json"), 1);   // the scene's border only
+        EXPECT_EQ(loops("plain.json"), 2); // meshed in 3D: the footprint stays open
+        ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "m.mrt").string() + " --crs EPSG:32632", dir).code, 0);
+        ASSERT_EQ(mrtile("mesh " + (dir / "m.mrt").string() + " -o " + (dir / "built.ply").string() + " --tolerance " + tolerance, dir).code, 0);
+        EXPECT_EQ(slurp(dir / "crs.ply"), slurp(dir / "built.ply"));
+    }
+    const Result forced = mrtile("reconstruct " + in + " -o " + (dir / "on.ply").string() + " --crs EPSG:32632 --height-field on", dir);
+    EXPECT_EQ(forced.code, 2);
+    EXPECT_NE(forced.err.find("no effect here"), std::string::npos) << forced.err;
 }
 
 // Input in UTM coordinates with its CRS (--crs here; a LAS file's own records the same way): the

@@ -1764,8 +1764,13 @@ int run(int argc, char** argv)
     if (*rec) {
         check_store(rec_store_levels, rec_args);
         check_build(rec_build, rec_in);
-        if (!rec_build.crs.empty() && rec_model.empty() && rec_args.exp.format != "3dtiles")
-            throw UsageError("--crs: places a 3D Tiles set on the globe or is stored with --model; it has no effect here");
+        // A CRS also shapes the mesh: in the automatic height-field mode a georeferenced cloud's steep
+        // tiles are walls, bridged from roof to ground (README: walls of a height field). Only a mode
+        // given outright leaves it nothing to do on a mesh that is not placed or stored (an airborne
+        // scene as plain XYZ was refused "no effect here", though with the CRS its footprints close).
+        if (!rec_build.crs.empty() && rec_model.empty() && rec_args.exp.format != "3dtiles" && rec_args.mesh.height_field != "auto")
+            throw UsageError("--crs: places a 3D Tiles set on the globe, is stored with --model, or chooses walls in the automatic "
+                             "--height-field mode; it has no effect here");
     }
     if (*build)
         check_outputs(build_in, {{build_out, Output::Kind::model}});
