@@ -593,9 +593,19 @@ void Front::grow()
         if (ct >= 0 && layout_.tiles[static_cast<std::size_t>(ct)].centre != kNone && !placed_[static_cast<std::size_t>(ct)]) {
             const Vec3 nt = face_normal(b, a, c);
             const auto t = static_cast<std::size_t>(ct);
-            place(static_cast<std::uint32_t>(ct), !orientation_.empty() && !projection_.used
-                                                      ? orientation_[t]
-                                                      : (dot(nt, tiles_[t].normal) >= 0 ? 1 : -1));
+            const int facing = dot(nt, tiles_[t].normal) >= 0 ? 1 : -1;
+            // A height field's fans face up the axis, but a face bridging a wall is nearly vertical and
+            // its normal can point away from a tile normal that also looks up: placed as that face
+            // had it, the fan was upside down (a ground tile beside a building with unsampled walls
+            // came out as a downward flap, cut off by a second loop). Such a face does not reach the
+            // tile: its neighbours on the ground do, or it is seeded facing up.
+            if (projection_.used && facing != seed_orientation(static_cast<std::uint32_t>(ct))) {
+                banned_[top.index] = true;
+                e.evaluated = false;
+                push_best(a, b);
+                continue;
+            }
+            place(static_cast<std::uint32_t>(ct), !orientation_.empty() && !projection_.used ? orientation_[t] : facing);
             if (!surface_.can_add(b, a, c))
                 continue; // cannot happen: the fan only touches its own points
         }
