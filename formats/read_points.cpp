@@ -2013,6 +2013,9 @@ PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOp
     }
     if (read == 0)
         throw IoError(name + ": none of the scans it lists exists");
+    // Each scan was checked alone; placed, they may lie farther apart than a mesh can span (a
+    // translation of 1e300 passed every check and failed in the build, naming no file).
+    validate(cloud, name);
     return cloud;
 }
 
@@ -2175,6 +2178,11 @@ PointCloud read_points(const std::vector<std::filesystem::path>& paths, const Re
     PointCloud cloud;
     for (const std::filesystem::path& path : paths)
         append_within_limit(cloud, read_points(path, options), options, path.string(), "the files");
+    // Each file was checked alone; together they may span more than a mesh can (one tile at 9e29,
+    // another at -9e29): refused here, naming the files, not by the build without a file name.
+    if (paths.size() > 1)
+        validate(cloud, paths.front().string() + " (and " + std::to_string(paths.size() - 1) + " more file" +
+                            (paths.size() > 2 ? "s" : "") + ")");
     recenter(cloud);
     return cloud;
 }

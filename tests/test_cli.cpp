@@ -1251,6 +1251,21 @@ TEST(Cli, several_point_files_are_one_cloud)
     EXPECT_EQ(bad.code, 1);
     EXPECT_NE(bad.err.find("bad.xyz: line 1"), std::string::npos) << bad.err;
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
+    // Files that together span more than a mesh can (QA round 29: "build_hierarchy: the points span",
+    // no file named) fail naming them, on reconstruct as on build.
+    write_text(dir / "east.xyz", "9e29 0 0\n9e29 1 0\n9e29 0 1\n");
+    write_text(dir / "west.xyz", "-9e29 0 0\n-9e29 1 0\n-9e29 0 1\n");
+    for (const char* cmd : {"reconstruct", "build"}) {
+        const fs::path out = dir / (std::string(cmd) == "build" ? "far.mrt" : "far.ply");
+        const Result far = mrtile(std::string(cmd) + " " + (dir / "east.xyz").string() + " " + (dir / "west.xyz").string() +
+                                      " -o " + out.string(),
+                                  dir);
+        EXPECT_EQ(far.code, 1) << cmd;
+        EXPECT_EQ(far.err, "mrtile: error: " + (dir / "east.xyz").string() +
+                               " (and 1 more file): the points span x from -9e+29 to 9e+29, more than the 1e30 units a "
+                               "mesh can have (a corrupt file, or stray points far from the rest: remove them)\n");
+        EXPECT_FALSE(fs::exists(out)) << cmd;
+    }
 }
 // coarser level to a finer one (levels that would not improve are not written).
 TEST(Cli, lods_on_the_bunny_are_consistent)

@@ -562,6 +562,13 @@ TEST(ReadPoints, several_files_merge_in_absolute_coordinates)
     ReadOptions few;
     few.max_points = 3;
     expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{a, b, c}, few); }, {c.string(), "max_points 3"});
+    // Each file within the span a mesh can have, together beyond it (QA round 29: refused by the build,
+    // naming no file): refused as read, naming the files.
+    const fs::path east = write_file(dir / "east.xyz", "9e29 0 0\n9e29 1 0\n9e29 0 1\n");
+    const fs::path west = write_file(dir / "west.xyz", "-9e29 0 0\n-9e29 1 0\n-9e29 0 1\n");
+    EXPECT_EQ(read_points(east).size(), 3u);
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{east, west}); },
+                               {east.string() + " (and 1 more file): the points span x from -9e+29 to 9e+29"});
 }
 
 TEST(ReadPoints, far_from_origin_keeps_full_precision)
@@ -1342,6 +1349,10 @@ TEST(ReadScanList, placement_paths_and_malformed_lists)
     skip.max_points = 3;
     const fs::path twice = write_file(dir / "twice.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/b.xyz 0 0 0 0 0 0 1\n");
     expect_error<InvalidInput>([&] { read_points(twice, skip); }, {twice.string(), "4 points", "max_points 3"});
+    // Scans placed farther apart than a mesh can span (QA round 29: a translation of 1e300 passed, and
+    // the build refused the cloud naming no file): refused, naming the list.
+    const fs::path far = write_file(dir / "far.conf", "bmesh scans/a.xyz 1e300 0 0 0 0 0 1\nbmesh scans/b.xyz 0 0 0 0 0 0 1\n");
+    expect_error<InvalidInput>([&] { read_points(far); }, {far.string() + ": the points span x from", "to 1e+300"});
 }
 
 TEST(ReadErrors, missing_file_directory_and_unknown_extension)

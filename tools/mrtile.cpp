@@ -1828,7 +1828,8 @@ int run(int argc, char** argv)
     if (*rec) {
         if (rec_store_levels && rec_model.empty())
             throw UsageError("--store-levels: needs --model M.mrt (the levels are stored in it)");
-        Hierarchy h = build_from_points(rec_in, rec_build, g);
+        Hierarchy h; // a library error about the points names the inputs, as on `build`
+        naming_input(inputs_name(rec_in), [&] { h = build_from_points(rec_in, rec_build, g); });
         apply_globals(h);
         LevelStore store;
         store.keep = rec_store_levels;
