@@ -192,6 +192,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --camera 3,0,0:0,0,0:0:1080", "field of view"},
         {a + " --camera 3,0,0:0,0,0:60:-5", "viewport height"},
         {a + " --camera 3,0,0:3,0,0:60:1080", "target must differ"},
+        // Finite, but their difference is not (QA round 29: exit 1 from the cut, after loading the model).
+        {a + " --camera 1e308,0,0:-1e308,0,0:60:1080", "too far apart"},
         {a + " --tiles 18446744073709551616", "--tiles"},
         {a + " --camera ''", "must not be empty"},
         {a + " --stats-json ''", "must not be empty"},

@@ -269,6 +269,10 @@ struct CutArgs
         cam.direction = Vec3{target[0], target[1], target[2]} - cam.position; // in view: what it looks at
         if (!(norm(cam.direction) > 0))
             throw UsageError("--camera: the target must differ from the position (it sets the view direction)");
+        // Finite coordinates can still be too far apart for their difference (1e308 and -1e308): the cut
+        // refused the infinite direction only after the model was loaded, as an error (exit 1).
+        if (!std::isfinite(norm(cam.direction)))
+            throw UsageError("--camera: the position and the target are too far apart (the view direction is not finite)");
         cam.fov_y_degrees = one(parts[2], "--camera fov");
         cam.viewport_height = one(parts[3], "--camera height");
         if (parts.size() == 5)
