@@ -458,6 +458,12 @@ void read_column_names(const Input& in, std::string_view line, bool keep_colors,
     for (int index = 0; tokens.next(token); ++index) {
         const std::string name = lower_name(token);
         for (int axis = 0; axis < 3; ++axis) {
+            // A coordinate named twice ("x,y,z,x": two exports' columns run together) leaves which
+            // column holds it a guess; the first was taken without a word (QA round 29), as PCD's
+            // fields were until QA round 28.
+            if (named[axis] >= 0 && name == std::string(1, static_cast<char>('x' + axis)))
+                fail_line(in, "the header names " + name + " twice (columns " + std::to_string(named[axis] + 1) + " and " +
+                                  std::to_string(index + 1) + "): which one holds the coordinate is a guess");
             if (named[axis] < 0 && name == std::string(1, static_cast<char>('x' + axis)))
                 named[axis] = index;
             if (color[axis] < 0 && (name == kColorNames[axis][0] || name == kColorNames[axis][1]))

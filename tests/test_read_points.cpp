@@ -384,6 +384,9 @@ TEST(ReadColumns, header_naming_only_some_coordinates_is_refused)
         {"xy_int.csv", "x,y,intensity\n" + rows, "the header names no z column (columns: x, y, intensity)"},
         {"cc.txt", "//X,Z,Intensity\n" + rows, "the header names no y column (columns: X, Z, Intensity)"},
         {"x_only.pts", "X Intensity Foo\n1 2 3\n", "line 1: the header names no y or z column"},
+        // A coordinate named twice: which column holds it is a guess (QA round 29: the first was read).
+        {"x_twice.csv", "x,y,z,x\n1,2,3,0\n", "line 1: the header names x twice (columns 1 and 4)"},
+        {"z_twice.txt", "//Z Y X z\n1 2 3 4\n", "line 1: the header names z twice (columns 1 and 4)"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
