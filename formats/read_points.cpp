@@ -1954,6 +1954,12 @@ PointCloud read_pcd(Input& in, const ReadOptions& options)
         packed.insert(packed.end(), chunk, chunk + step);
         left -= step;
     }
+    // Data after the compressed block, as after binary records (padding shorter than a point is not
+    // data): a second cloud run together with this one, or a header that does not describe the file.
+    // It was ignored without a word (QA round 29) though ASCII and binary data refuse it.
+    if (in.request(std::max<std::size_t>(h.packed_size, 1)))
+        throw InvalidInput(in.name() + ": " + std::to_string(bytes_left(in)) + " bytes after the compressed data of the " +
+                           std::to_string(h.points) + " points the header declares: the header does not describe the data");
     std::vector<unsigned char> data(uncompressed);
     if (!lzf_decompress(packed, data))
         throw InvalidInput(in.name() + ": corrupt compressed PCD data (not LZF, or not " + std::to_string(uncompressed) + " bytes)");

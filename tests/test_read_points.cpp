@@ -1524,11 +1524,18 @@ TEST(ReadErrors, data_after_the_declared_pcd_points)
         {"ascii.pcd", head + lines, "line 108: data after the 100 points the header declares", false},
         {"binary.pcd", binary + extra_record, "25 bytes after the 6 points the header declares", false},
         {"binary_more.pcd", binary + extra_record + extra_record + "\n", "51 bytes after the 6 points", false},
+        // After compressed data too (QA round 29: ignored).
+        {"compressed.pcd", pcd_file("binary_compressed") + extra_record,
+         "25 bytes after the compressed data of the 6 points the header declares", false},
     };
     expect_read_errors(dir, cases);
     const fs::path gz = write_gz(dir / "binary.pcd.gz", binary + extra_record);
     expect_error<InvalidInput>([&] { read_points(gz); }, {gz.string(), "25 bytes after the 6 points"});
     EXPECT_EQ(read_points(write_file(dir / "padded.pcd", binary + std::string(record - 1, '\0'))).size(), kPoints.size());
+    const std::size_t packed = record - 3; // the padding field "_" is not stored compressed
+    EXPECT_EQ(read_points(write_file(dir / "padded_compressed.pcd", pcd_file("binary_compressed") + std::string(packed - 1, '\0')))
+                  .size(),
+              kPoints.size());
     EXPECT_EQ(read_points(write_file(dir / "blank_end.pcd", pcd_file("ascii") + "\n  \n# end\n")).size(), kPoints.size());
 }
 
