@@ -560,6 +560,26 @@ TEST(Cli, lods_replaces_its_directory_whole)
     EXPECT_FALSE(fs::exists(dir / "chain" / "level2.ply"));
     for (const auto& e : fs::directory_iterator(dir))
         EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+    // A model inside the directory, named like what is written there, was deleted with the directory
+    // it was read from (QA round 29): a usage error now, for lods and for a tileset.
+    fs::create_directories(dir / "own_tiles" / "tiles");
+    fs::create_directories(dir / "own_chain");
+    const fs::path level = dir / "own_chain" / "level0.ply", tile = dir / "own_tiles" / "tiles" / "0.glb";
+    fs::copy_file(model, level);
+    fs::copy_file(model, tile);
+    const std::string before = slurp(model);
+    const std::string inside[] = {
+        "lods " + level.string() + " -o " + (dir / "own_chain").string() + " --format ply",
+        "export " + tile.string() + " -o " + (dir / "own_tiles").string() + "/ --format 3dtiles",
+    };
+    for (const std::string& args : inside) {
+        const Result in = mrtile(args, dir);
+        EXPECT_EQ(in.code, 2) << args;
+        EXPECT_NE(in.err.find("an input of this command, and is replaced as a whole"), std::string::npos) << in.err;
+        EXPECT_EQ(std::count(in.err.begin(), in.err.end(), '\n'), 1) << in.err;
+    }
+    EXPECT_EQ(slurp(level), before);
+    EXPECT_EQ(slurp(tile), before);
 }
 
 // Levels asked for that the hierarchy cannot give apart are named, not left out silently (QA round

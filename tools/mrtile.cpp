@@ -1515,6 +1515,22 @@ bool same_file(const fs::path& a, const fs::path& b)
     return !ec && ra == rb;
 }
 
+// Whether `file` lies inside the directory `dir` (at any depth), paths resolved as they would be opened.
+bool lies_inside(const fs::path& file, const fs::path& dir)
+{
+    std::error_code ec;
+    const fs::path f = fs::weakly_canonical(file, ec);
+    if (ec)
+        return false;
+    fs::path d = fs::weakly_canonical(dir, ec);
+    if (ec)
+        return false;
+    if (d.filename().empty()) // "DIR/"
+        d = d.parent_path();
+    const auto [end, unused] = std::mismatch(d.begin(), d.end(), f.begin(), f.end());
+    return end == d.end() && f != d;
+}
+
 // The files a command reads: its inputs, and the scans that scan lists among them name.
 std::vector<fs::path> read_files(const std::vector<fs::path>& inputs)
 {
@@ -1566,6 +1582,14 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
                 throw UsageError(o.path.string() + ": is also an input of this command" +
                                  (std::find(inputs.begin(), inputs.end(), in) == inputs.end() ? " (a scan its list names)" : "") +
                                  "; write to another file");
+        // A directory output is replaced as a whole: an input inside it that is named like what the
+        // command writes there (a model called tileset.json, level0.ply) was deleted with the old
+        // directory (QA round 29); other files already stop the command, naming the file.
+        if (o.kind == Output::Kind::tileset || o.kind == Output::Kind::directory)
+            for (const fs::path& in : read)
+                if (lies_inside(in, o.path))
+                    throw UsageError(o.path.string() + ": holds " + in.string() +
+                                     ", an input of this command, and is replaced as a whole; write elsewhere");
         if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
             throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
         if (o.kind == Output::Kind::mesh && !is_mesh_extension(lower_extension(o.path)))
