@@ -1273,6 +1273,13 @@ TEST(Cli, several_point_files_are_one_cloud)
     EXPECT_EQ(bad.code, 1);
     EXPECT_NE(bad.err.find("bad.xyz: line 1"), std::string::npos) << bad.err;
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
+    // The same file twice was read twice, every point doubled (QA round 29): a usage error.
+    for (const std::string& second : {(dir / "south.xyz").string(), (dir / "." / "south.xyz").string()}) {
+        const Result twice = mrtile("build " + (dir / "south.xyz").string() + " " + second + " -o " + (dir / "t.mrt").string(), dir);
+        EXPECT_EQ(twice.code, 2) << second;
+        EXPECT_NE(twice.err.find(second + ": given twice as an input"), std::string::npos) << twice.err;
+        EXPECT_FALSE(fs::exists(dir / "t.mrt"));
+    }
     // Files that together span more than a mesh can (QA round 29: "build_hierarchy: the points span",
     // no file named) fail naming them, on reconstruct as on build.
     write_text(dir / "east.xyz", "9e29 0 0\n9e29 1 0\n9e29 0 1\n");

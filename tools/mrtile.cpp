@@ -1572,6 +1572,13 @@ void check_lods_directory(const fs::path& dir)
 
 void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output>& outputs)
 {
+    // The same file twice (a shell glob and its own name, a link to it) would be read twice: every
+    // point doubled, merged as duplicates or kept twice with --keep-duplicates (QA round 29).
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (inputs[j] == inputs[i] || same_file(inputs[j], inputs[i]))
+                throw UsageError(inputs[i].string() + ": given twice as an input" +
+                                 (inputs[j] == inputs[i] ? std::string() : " (also as " + inputs[j].string() + ")"));
     const std::vector<fs::path> read = read_files(inputs);
     for (std::size_t i = 0; i < outputs.size(); ++i) {
         const Output& o = outputs[i];
