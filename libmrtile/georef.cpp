@@ -340,11 +340,20 @@ const WktNode* find_descendant(const WktNode& n, std::initializer_list<const cha
     return nullptr;
 }
 
+// Text of the input shown in a message or printed as a name: on one line, control characters (the line
+// breaks of a .prj file, a name split across lines) as blanks. An error quoting "hello\nworld" from a
+// .prj file took two lines (QA round 29), and errors are one line.
+std::string one_line(std::string text)
+{
+    std::replace_if(text.begin(), text.end(), [](char c) { return std::iscntrl(static_cast<unsigned char>(c)) != 0; }, ' ');
+    return text;
+}
+
 std::string name_of(const WktNode& n)
 {
     for (const WktAtom& a : n.atoms)
         if (a.quoted)
-            return a.text;
+            return one_line(a.text);
     return {};
 }
 
@@ -618,7 +627,7 @@ std::optional<ProjectedCrs> crs_from_epsg(int code)
 
 ProjectedCrs parse_crs(const std::string& text)
 {
-    const std::string t = trimmed(text);
+    const std::string t = one_line(trimmed(text));
     if (t.empty())
         throw InvalidInput("CRS is empty: give EPSG:<code> (e.g. EPSG:32633) or WKT");
     if (t.size() >= 5 && normalized_name(t.substr(0, 5)) == "epsg:") {

@@ -459,6 +459,15 @@ TEST(ParseCrs, MalformedWktThrows)
     // Every truncation of a valid WKT is refused cleanly.
     for (std::size_t n = 1; n < kWgs84Utm33.size(); ++n)
         parse_error(kWgs84Utm33.substr(0, n));
+
+    // Text quoted from the input stays on one line: a .prj file of two lines of words, a name broken
+    // across lines (QA round 29: the error took two lines).
+    for (const std::string& text : {std::string("hello\nworld\n"), std::string("EPSG:32\n633"),
+                                    std::string("PROJCS[\"bad\nname\",PROJECTION[\"Transverse_Mercator\"]]")}) {
+        const std::string error = parse_error(text);
+        EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    }
+    EXPECT_NE(parse_error("hello\nworld").find("\"hello world\""), std::string::npos);
 }
 
 } // namespace
