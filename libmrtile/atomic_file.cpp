@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <dirent.h>
+#include <functional>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
@@ -43,9 +44,21 @@ std::filesystem::path follow_links(const std::filesystem::path& path)
 
 std::filesystem::path temporary_name(const std::filesystem::path& path)
 {
-    std::filesystem::path temp = path;
-    temp += ".tmp." + std::to_string(static_cast<long>(::getpid()));
-    return temp;
+    const std::string suffix = ".tmp." + std::to_string(static_cast<long>(::getpid()));
+    const std::string name = path.filename().string();
+    // A name within the file system's 255 bytes can be too long with the suffix: a legal output of 250
+    // bytes failed with "File name too long" (QA round 29). Its temporary keeps what fits of the name,
+    // and a hash of the whole, so that two such outputs in one directory do not share a temporary.
+    constexpr std::size_t kNameMax = 255;
+    if (name.size() + suffix.size() <= kNameMax) {
+        std::filesystem::path temp = path;
+        temp += suffix;
+        return temp;
+    }
+    char hash[24];
+    std::snprintf(hash, sizeof hash, ".%016llx", static_cast<unsigned long long>(std::hash<std::string>{}(name)));
+    const std::string shortened = name.substr(0, kNameMax - suffix.size() - std::strlen(hash)) + hash + suffix;
+    return path.parent_path() / shortened;
 }
 
 // The temporaries a signal handler removes: fixed slots, so that the handler needs no allocation or

@@ -9,6 +9,7 @@
 
 #include <csignal>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -48,6 +49,23 @@ TEST(AtomicFile, outputs_are_checked_without_a_trace)
     }
     EXPECT_THROW(check_writable_directory(dir / "missing" / "tiles"), IoError);
     EXPECT_EQ(entries(dir), 0u);
+    // Names the file system takes, though not with ".tmp.<pid>" after them (QA round 29: "File name too
+    // long"); two that differ only in their last bytes are written side by side.
+    const std::string long_name(250, 'n');
+    check_writable_file(dir / (long_name + ".a"));
+    check_writable_directory(dir / (long_name + "_d"));
+    EXPECT_EQ(entries(dir), 0u);
+    {
+        AtomicFile a(dir / (long_name + ".a")), b(dir / (long_name + ".b"));
+        a.stream() << "a";
+        b.stream() << "b";
+        a.commit();
+        b.commit();
+    }
+    std::ifstream a(dir / (long_name + ".a")), b(dir / (long_name + ".b"));
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), "a");
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(b), {}), "b");
+    EXPECT_EQ(entries(dir), 2u);
 }
 
 // A file written over keeps its permissions (a private model stayed private only until the first

@@ -949,11 +949,12 @@ TEST(Cli, stored_levels_make_the_same_tileset)
     EXPECT_EQ(slurp(dir / "f" / "tileset.json"), slurp(dir / "g" / "tileset.json"));
     EXPECT_EQ(mrtile("reconstruct " + xyz.string() + " -o " + (dir / "h").string() + " --format 3dtiles --store-levels", dir).code, 2);
     EXPECT_FALSE(fs::exists(dir / "h"));
-    // A model that cannot be rewritten (here: its name leaves no room for the temporary file's suffix
-    // within the 255-byte name limit, which stops root too): exit 1 naming it, no tileset written, the
-    // model unchanged. The levels are stored before the tileset is written.
+    // A model that cannot be rewritten (here: read-only, which stops root too; a name leaving no room
+    // for ".tmp.PID" within 255 bytes did until QA round 29 gave such temporaries shorter names): exit 1
+    // naming it, no tileset written, the model unchanged. The levels are stored before the tileset is written.
     const fs::path long_model = dir / (std::string(251, 'm') + ".mrt");
     fs::copy_file(plain, long_model);
+    fs::permissions(long_model, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
     const std::string before = slurp(long_model);
     const Result refused = mrtile("export " + long_model.string() + " -o " + (dir / "i").string() +
                                       " --format 3dtiles --max-tile-triangles 3000 --store-levels", // levels meshed
