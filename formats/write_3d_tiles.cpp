@@ -165,7 +165,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
     // Built aside and swapped into place; on failure (or a signal) the half-built directory goes.
     const TemporaryDirectory temporary(dir);
     const fs::path& built = temporary.path();
-    ensure_directory(built / "tiles");
+    temporary.write([&] { ensure_directory(built / "tiles"); });
     // One float offset for every tile (unless a Draco grid sets one): a border vertex that two tiles
     // share is then stored as the same float in both. Per-file offsets (each tile's own centre) left
     // 749 of 992 shared vertices of two terrain tiles a float ulp apart (QA, session 19).
@@ -192,9 +192,11 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
             failures[t] = std::current_exception();
         }
     });
-    for (const std::exception_ptr& failure : failures)
-        if (failure)
-            std::rethrow_exception(failure);
+    temporary.write([&] {
+        for (const std::exception_ptr& failure : failures)
+            if (failure)
+                std::rethrow_exception(failure);
+    });
 
     Json root = tile_json(tiles, 0, options.gltf);
     std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -225,7 +227,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
     tileset["asset"] = Json{{"version", "1.1"}, {"generator", "libmrtile"}};
     tileset["geometricError"] = top_error;
     tileset["root"] = std::move(ordered_root);
-    write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n");
+    temporary.write([&] { write_file_atomically(built / "tileset.json", tileset.dump(1) + "\n"); });
     replace_directory(built, dir, "tileset");
 }
 

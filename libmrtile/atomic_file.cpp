@@ -167,7 +167,7 @@ void check_writable_directory(const std::filesystem::path& dir)
     const TemporaryDirectory probe(dir); // removed again
 }
 
-TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir) : path_(temporary_name(dir))
+TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir) : path_(temporary_name(dir)), dir_(dir)
 {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec); // a stale leftover of a killed run with the same pid
@@ -182,6 +182,20 @@ TemporaryDirectory::~TemporaryDirectory()
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
     forget_temporary(path_);
+}
+
+void TemporaryDirectory::write(const std::function<void()>& write) const
+{
+    try {
+        write();
+    } catch (const IoError& e) {
+        std::string message = e.what();
+        const std::string temporary = path_.string(), final = dir_.string();
+        for (std::size_t at = message.find(temporary); at != std::string::npos;
+             at = message.find(temporary, at + final.size()))
+            message.replace(at, temporary.size(), final);
+        throw IoError(message);
+    }
 }
 
 AtomicFile::AtomicFile(const std::filesystem::path& path)

@@ -69,8 +69,14 @@ public:
 
     const std::filesystem::path& path() const { return path_; }
 
+    //! \brief Runs `write`, which writes inside the directory; an IoError it throws is thrown again
+    //! naming the final directory instead of this one, which is gone when the message is read (a full
+    //! disk was reported as "OUT.tmp.PID/tiles/0.glb: write failed": QA round 29).
+    void write(const std::function<void()>& write) const;
+
 private:
     std::filesystem::path path_;
+    std::filesystem::path dir_;
 };
 
 //! \brief Puts the finished directory `built` (a TemporaryDirectory's) at `dir`, replacing an existing

@@ -68,6 +68,24 @@ TEST(AtomicFile, outputs_are_checked_without_a_trace)
     EXPECT_EQ(entries(dir), 2u);
 }
 
+// A write that fails inside a directory built aside names the file where the user will look for it:
+// the temporary directory is gone by then (QA round 29: "OUT.tmp.PID/tiles/0.glb: write failed" on a
+// full disk). Other errors pass as they are.
+TEST(AtomicFile, a_failed_write_in_a_temporary_directory_names_the_final_one)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    const TemporaryDirectory temporary(dir / "tiles");
+    try {
+        temporary.write([&] { throw IoError((temporary.path() / "t" / "0.glb").string() + ": write failed"); });
+        ADD_FAILURE() << "no exception";
+    } catch (const IoError& e) {
+        EXPECT_EQ(std::string(e.what()), (dir / "tiles" / "t" / "0.glb").string() + ": write failed");
+    }
+    EXPECT_THROW(temporary.write([] { throw InvalidInput("bad"); }), InvalidInput);
+    temporary.write([&] { write_text(temporary.path() / "ok.txt", "ok"); });
+    EXPECT_TRUE(fs::exists(temporary.path() / "ok.txt"));
+}
+
 // A file written over keeps its permissions (a private model stayed private only until the first
 // rewrite: QA), a new one gets the defaults, and a read-only file is not replaced.
 TEST(AtomicFile, a_replaced_file_keeps_its_permissions_and_read_only_files_stay)

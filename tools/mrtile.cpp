@@ -1192,7 +1192,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         const LodLevel& l = set.levels[level];
         const QualityReport& q = quality[level];
         const std::string name = "level" + std::to_string(level) + ext;
-        write_any_mesh(l.mesh, h.cloud.origin, built / name, o, dir / name);
+        temporary.write([&] { write_any_mesh(l.mesh, h.cloud.origin, built / name, o, dir / name); });
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
@@ -1202,7 +1202,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     }
     if (quality.size() < set.levels.size())
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
-    write_file_atomically(built / "lods.json", index.dump(2) + "\n");
+    temporary.write([&] { write_file_atomically(built / "lods.json", index.dump(2) + "\n"); });
     replace_directory(built, dir, "LOD chain");
     std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), quality.size(), seconds_since(start));
 }
