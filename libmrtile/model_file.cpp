@@ -731,6 +731,10 @@ std::string read_model_bytes(const std::filesystem::path& path)
         throw IoError(path.string() + ": no such file");
     if (std::filesystem::is_directory(path, ec))
         throw IoError(path.string() + ": is a directory, not a model file");
+    // A device or a pipe has no size to check the file against: "/dev/null: cannot read size
+    // (Operation not supported)" said what failed, not what was wrong (QA round 29).
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw IoError(path.string() + ": is not a regular file (a device, pipe or socket); a model is read from a file");
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw IoError(path.string() + ": cannot open for reading");

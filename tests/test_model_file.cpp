@@ -473,6 +473,14 @@ TEST(ModelFile, io_errors_name_the_path)
 {
     EXPECT_THROW(load_model(temp_dir() / "missing.mrt"), IoError);
     EXPECT_THROW(load_model(temp_dir()), IoError);
+    // A device is no model file; its size could not be read (QA round 29: "cannot read size
+    // (Operation not supported)").
+    try {
+        load_model("/dev/null");
+        ADD_FAILURE() << "/dev/null loaded";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("/dev/null: is not a regular file"), std::string::npos) << e.what();
+    }
     const fs::path bad = temp_dir() / "no_such_dir" / "x.mrt";
     try {
         save_model(sample(), bad);
