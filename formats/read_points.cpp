@@ -1156,9 +1156,16 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         if (layout.colors) {
             Rgba rgba{0, 0, 0, 255};
             for (int c = 0; c < 4; ++c)
-                if (layout.rgba[c] >= 0)
+                if (layout.rgba[c] >= 0) {
+                    // A binary float colour of NaN became an unspecified byte without a word (QA round
+                    // 29); in an ASCII file the same value is refused, as a coordinate is in both.
+                    if (!std::isfinite(v[layout.rgba[c]]))
+                        throw InvalidInput(in.name() + ": vertex " + std::to_string(cloud.positions.size() - 1) + ": its " +
+                                           vertex.properties[static_cast<std::size_t>(layout.rgba[c])].name +
+                                           " value is not a finite number");
                     rgba[static_cast<std::size_t>(c)] = channel_to_byte(
                         v[layout.rgba[c]], vertex.properties[static_cast<std::size_t>(layout.rgba[c])].type);
+                }
             cloud.colors.push_back(rgba);
         }
     };
