@@ -100,6 +100,13 @@ TEST(Cli, version_help_and_usage_errors)
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 0", dir).code, 2);
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --min-cluster 7", dir).code, 2); // leaves too small to mesh
     EXPECT_EQ(mrtile("build x.xyz -o y.mrt --tolerance 0.1 --tau 2", dir).code, 2);
+    // Empty paths are usage errors, before any work (QA round 29: exit 1 after it, or --model ignored).
+    for (const char* args : {"build x.xyz -o ''", "reconstruct x.xyz -o y.ply --model ''", "lods x.mrt -o ''",
+                             "export x.mrt -o '' --format 3dtiles", "demo -o ''", "info ''", "build '' -o y.mrt"}) {
+        r = mrtile(args, dir);
+        EXPECT_EQ(r.code, 2) << args;
+        EXPECT_NE(r.err.find("must not be empty"), std::string::npos) << args << ": " << r.err;
+    }
     // A usage error is one line too, naming the option.
     r = mrtile("mesh x.mrt -o y.ply --close-holes 3000", dir);
     EXPECT_EQ(r.code, 2);

@@ -74,7 +74,9 @@ CLI::Validator integer_check(unsigned long long lo, unsigned long long hi)
 // Whether an option appeared on the command line (its value alone cannot tell a default from a choice).
 bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
-// A text option given as "" would read as not given at all.
+// A text option given as "" would read as not given at all; a path given as "" passed every check and
+// failed after the work ("mrtile: error: : cannot rename temporary file into place", exit 1; `--model ''`
+// saved no model without a word: QA round 29).
 const CLI::Validator kNonEmpty(
     [](std::string& text) { return text.empty() ? std::string("must not be empty") : std::string(); }, "TEXT");
 
@@ -1639,8 +1641,8 @@ int run(int argc, char** argv)
     build->add_option("POINTS", build_in,
                       "point files (one or more, merged in absolute coordinates): .ply .las .ptx .pcd .xyz .pts .txt .csv "
                       ".obj .off, optionally .gz, or a .conf scan list")
-        ->required();
-    build->add_option("-o,--output", build_out, "model file to write (.mrt)")->required();
+        ->check(kNonEmpty)->required();
+    build->add_option("-o,--output", build_out, "model file to write (.mrt)")->check(kNonEmpty)->required();
     build_args.add(build, "");
     build->add_flag("--record-time", record_time, "store the build time in the model (the file then differs between runs)");
     bool store_levels = false;
@@ -1652,7 +1654,7 @@ int run(int argc, char** argv)
     auto* info = app.add_subcommand("info", "describe a .mrt model");
     fs::path info_in;
     bool info_json = false;
-    info->add_option("MODEL", info_in, "model file")->required();
+    info->add_option("MODEL", info_in, "model file")->check(kNonEmpty)->required();
     info->add_flag("--json", info_json, "one JSON object");
 
     // mesh
@@ -1661,8 +1663,8 @@ int run(int argc, char** argv)
     CutArgs mesh_cut_args;
     MeshArgs mesh_args;
     OutputArgs mesh_out_args;
-    mesh->add_option("MODEL", mesh_in, "model file")->required();
-    mesh->add_option("-o,--output", mesh_out, "mesh file: .ply .obj .off .stl .om .glb .gltf .drc")->required();
+    mesh->add_option("MODEL", mesh_in, "model file")->check(kNonEmpty)->required();
+    mesh->add_option("-o,--output", mesh_out, "mesh file: .ply .obj .off .stl .om .glb .gltf .drc")->check(kNonEmpty)->required();
     mesh_cut_args.add(mesh);
     mesh_args.add(mesh);
     mesh_out_args.add(mesh);
@@ -1673,9 +1675,9 @@ int run(int argc, char** argv)
     fs::path rec_out, rec_model;
     BuildArgs rec_build;
     ProduceArgs rec_args;
-    rec->add_option("POINTS", rec_in, "point files (one or more, merged)")->required();
-    rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->required();
-    rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file");
+    rec->add_option("POINTS", rec_in, "point files (one or more, merged)")->check(kNonEmpty)->required();
+    rec->add_option("-o,--output", rec_out, "mesh file, or a directory with --format 3dtiles")->check(kNonEmpty)->required();
+    rec->add_option("--model", rec_model, "also save the hierarchy to this .mrt file")->check(kNonEmpty);
     bool rec_store_levels = false;
     rec->add_flag("--store-levels", rec_store_levels,
                   "with --model and a LOD set (--format 3dtiles or lod-glb): also store the levels meshed here in "
@@ -1687,16 +1689,16 @@ int run(int argc, char** argv)
     auto* lods = app.add_subcommand("lods", "write one mesh per level of detail and a JSON index");
     fs::path lods_in, lods_out;
     ProduceArgs lods_args;
-    lods->add_option("MODEL", lods_in, "model file")->required();
-    lods->add_option("-o,--output", lods_out, "directory")->required();
+    lods->add_option("MODEL", lods_in, "model file")->check(kNonEmpty)->required();
+    lods->add_option("-o,--output", lods_out, "directory")->check(kNonEmpty)->required();
     lods_args.add(lods, false);
 
     // export
     auto* exp = app.add_subcommand("export", "export a model: 3D Tiles (directory) or one mesh file");
     fs::path exp_in, exp_out;
     ProduceArgs exp_args;
-    exp->add_option("MODEL", exp_in, "model file")->required();
-    exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->required();
+    exp->add_option("MODEL", exp_in, "model file")->check(kNonEmpty)->required();
+    exp->add_option("-o,--output", exp_out, "file (.glb .gltf .drc .ply ...) or directory for --format 3dtiles")->check(kNonEmpty)->required();
     exp_args.add(exp);
     std::string exp_crs;
     bool exp_store_levels = false;
@@ -1711,7 +1713,7 @@ int run(int argc, char** argv)
     // demo
     auto* demo = app.add_subcommand("demo", "the whole pipeline on a built-in genus-3 test shape");
     fs::path demo_out = "out/demo";
-    demo->add_option("-o,--output", demo_out, "output directory")->capture_default_str();
+    demo->add_option("-o,--output", demo_out, "output directory")->check(kNonEmpty)->capture_default_str();
 
     // One line, like every other error (CLI11's default adds a second "Run with --help" line).
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
