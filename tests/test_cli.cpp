@@ -587,6 +587,17 @@ TEST(Cli, lods_replaces_its_directory_whole)
     }
     EXPECT_EQ(slurp(level), before);
     EXPECT_EQ(slurp(tile), before);
+    // The working directory cannot be swapped for the output (QA round 29: the work done, then "Device or
+    // resource busy"): a usage error before any work. The command runs in an empty directory.
+    fs::create_directories(dir / "here");
+    for (const std::string& args : {"cd " + (dir / "here").string() + " && " + std::string(MRTILE_CLI) + " lods " + model + " -o .",
+                                    "cd " + (dir / "here").string() + " && " + std::string(MRTILE_CLI) + " export " + model +
+                                        " -o ./ --format 3dtiles"}) {
+        const int status = std::system((args + " >/dev/null 2>" + (dir / "here.err").string()).c_str());
+        EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2) << args;
+        EXPECT_NE(slurp(dir / "here.err").find("is the working directory or holds it"), std::string::npos) << slurp(dir / "here.err");
+    }
+    EXPECT_TRUE(fs::is_empty(dir / "here"));
 }
 
 // Levels asked for that the hierarchy cannot give apart are named, not left out silently (QA round

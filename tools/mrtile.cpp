@@ -1594,11 +1594,19 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
         // A directory output is replaced as a whole: an input inside it that is named like what the
         // command writes there (a model called tileset.json, level0.ply) was deleted with the old
         // directory (QA round 29); other files already stop the command, naming the file.
-        if (o.kind == Output::Kind::tileset || o.kind == Output::Kind::directory)
+        if (o.kind == Output::Kind::tileset || o.kind == Output::Kind::directory) {
             for (const fs::path& in : read)
                 if (lies_inside(in, o.path))
                     throw UsageError(o.path.string() + ": holds " + in.string() +
                                      ", an input of this command, and is replaced as a whole; write elsewhere");
+            // Nor can the working directory be swapped for another: "-o ." did all the work and then
+            // failed with "cannot replace the existing tileset (Device or resource busy)" (QA round 29).
+            std::error_code ec;
+            const fs::path here = fs::current_path(ec);
+            if (!ec && (same_file(here, o.path) || lies_inside(here, o.path)))
+                throw UsageError(o.path.string() + ": is the working directory or holds it, and is replaced as a whole; "
+                                                   "write to a directory of its own (e.g. -o tiles)");
+        }
         if (o.kind == Output::Kind::model && lower_extension(o.path) != ".mrt")
             throw UsageError(o.path.string() + ": a model file's name ends in .mrt");
         if (o.kind == Output::Kind::mesh && !is_mesh_extension(lower_extension(o.path)))
