@@ -1252,6 +1252,22 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
         padding += las_record("padding", 1, std::string(60000, 'p'));
     EXPECT_EQ(crs_of(keys + padding, 1 + static_cast<std::uint32_t>(padding.size() / (54 + 60000))), "EPSG:32633");
     EXPECT_EQ(crs_of(padding + keys + wkt_record, 2 + static_cast<std::uint32_t>(padding.size() / (54 + 60000)), 0x10), wkt);
+
+    // Files in two coordinate systems are not one cloud (QA round 29: merged, the CRS dropped, without a
+    // word); the same code, or a file without one between, merge as before.
+    const auto las_in = [&](const std::string& name, std::uint16_t code) {
+        LasFile f;
+        f.records = las_record("LASF_Projection", 34735, geo_keys({{3072, code}}));
+        f.record_count = 1;
+        return write_file(dir / name, f.bytes());
+    };
+    const fs::path zone32 = las_in("zone32.las", 32632), zone33 = las_in("zone33.las", 32633);
+    const fs::path also32 = las_in("also32.las", 32632), plain = write_file(dir / "plain.xyz", "500000 4100000 100\n");
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{zone32, plain, zone33}); },
+                               {zone33.string() + ": its coordinate system EPSG:32633 is not that of " + zone32.string() +
+                                " (EPSG:32632)"});
+    EXPECT_EQ(read_points(std::vector<fs::path>{zone32, plain, also32}).crs, "");
+    EXPECT_EQ(read_points(std::vector<fs::path>{zone32, also32}).crs, "EPSG:32632");
 }
 
 TEST(ReadLas, malformed_files_fail_cleanly)
