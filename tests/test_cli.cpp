@@ -1291,6 +1291,12 @@ TEST(Cli, several_point_files_are_one_cloud)
                               dir);
     EXPECT_EQ(bad.code, 1);
     EXPECT_NE(bad.err.find("bad.xyz: line 1"), std::string::npos) << bad.err;
+    // Named once (QA round 29: "north.csv (and 1 more file): .../bad.xyz: line 1" on build).
+    EXPECT_EQ(bad.err.rfind("mrtile: error: " + (dir / "bad.xyz").string() + ": line 1", 0), 0u) << bad.err;
+    const Result bad_build = mrtile("build " + (dir / "north.csv").string() + " " + (dir / "bad.xyz").string() + " -o " +
+                                        (dir / "n.mrt").string(),
+                                    dir);
+    EXPECT_EQ(bad_build.err.rfind("mrtile: error: " + (dir / "bad.xyz").string() + ": line 1", 0), 0u) << bad_build.err;
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
     // The same file twice was read twice, every point doubled (QA round 29): a usage error.
     for (const std::string& second : {(dir / "south.xyz").string(), (dir / "." / "south.xyz").string()}) {

@@ -1396,6 +1396,21 @@ void naming_input(const fs::path& input, Work work)
 {
     naming_input(input.string(), work);
 }
+// Several inputs: an error that names one of them already is left as it is ("b.xyz: line 1", not
+// "a.xyz (and 1 more file): b.xyz: line 1", as build and reconstruct put it until QA round 29).
+template <typename Work>
+void naming_input(const std::vector<fs::path>& inputs, Work work)
+{
+    try {
+        work();
+    } catch (const InvalidInput& e) {
+        const std::string what = e.what();
+        for (const fs::path& input : inputs)
+            if (what.rfind(input.string() + ":", 0) == 0)
+                throw;
+        naming_input(inputs_name(inputs), [&] { throw; }); // rethrown to be named by all the inputs
+    }
+}
 
 int run_info(const fs::path& model, bool json)
 {
@@ -1835,7 +1850,7 @@ int run(int argc, char** argv)
 
     if (*build) {
         Hierarchy h;
-        naming_input(inputs_name(build_in), [&] { h = build_from_points(build_in, build_args, g); });
+        naming_input(build_in, [&] { h = build_from_points(build_in, build_args, g); });
         SaveOptions s;
         s.record_build_time = record_time;
         StoredLevels stored;
@@ -1874,7 +1889,7 @@ int run(int argc, char** argv)
         if (rec_store_levels && rec_model.empty())
             throw UsageError("--store-levels: needs --model M.mrt (the levels are stored in it)");
         Hierarchy h; // a library error about the points names the inputs, as on `build`
-        naming_input(inputs_name(rec_in), [&] { h = build_from_points(rec_in, rec_build, g); });
+        naming_input(rec_in, [&] { h = build_from_points(rec_in, rec_build, g); });
         apply_globals(h);
         LevelStore store;
         store.keep = rec_store_levels;
