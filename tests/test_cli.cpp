@@ -212,6 +212,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --alpha 0", "--alpha"},
         {tiles + " --levels 2 --lod-tolerances 0.01,0.001", "excludes"},
         {tiles + " --lod-tolerances 0.001,0.01", "decrease"},
+        {tiles + " --lod-tolerances 0.01,,0.001", "'' is not a number"}, // an empty item was dropped (QA round 29)
+        {tiles + " --lod-tolerances 0.01,0.001,", "'' is not a number"},
         {tiles + " --max-tile-triangles 63", "--max-tile-triangles"},
         {tiles + " --tolerance 0.05", "cut options"},
         {tiles + " --enu 400,45,0", "--enu"},

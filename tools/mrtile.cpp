@@ -56,6 +56,21 @@ CLI::Validator number_check(bool allow_zero)
 const CLI::Validator kPositive = number_check(false);
 const CLI::Validator kNonNegative = number_check(true);
 
+// A comma-separated list of numbers >= 0, every item checked: CLI11's delimiter dropped empty items, so
+// "0.1,,0.05" passed as two tolerances (QA round 29).
+const CLI::Validator kNonNegativeList(
+    [](std::string& text) {
+        std::stringstream items(text + ",");
+        std::string item;
+        while (std::getline(items, item, ',')) {
+            std::string copy = item;
+            if (std::string why = kNonNegative(copy); !why.empty())
+                return why;
+        }
+        return std::string();
+    },
+    "NUMBER,NUMBER,...");
+
 // Whole numbers in [lo, hi], written as digits: CLI11 would let "-1" wrap and 2^64 saturate in a size_t.
 CLI::Validator integer_check(unsigned long long lo, unsigned long long hi)
 {
@@ -789,7 +804,7 @@ struct ExportArgs
 {
     std::string format;
     std::size_t max_tile_triangles = LodSetOptions{}.max_tile_triangles;
-    std::vector<double> tolerances;
+    std::string tolerance_list; // --lod-tolerances as given (checked by kNonNegativeList)
     std::size_t levels = 0;
     std::string enu;
     double geoid_height = 0.0;
@@ -820,9 +835,8 @@ struct ExportArgs
                                   ->capture_default_str());
         auto* l = cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)")
                       ->check(integer_check(1, kMaxLevels));
-        auto* t = cmd->add_option("--lod-tolerances", tolerances, "explicit level tolerances, coarse to fine")
-                      ->delimiter(',')
-                      ->check(kNonNegative);
+        auto* t = cmd->add_option("--lod-tolerances", tolerance_list, "explicit level tolerances, coarse to fine")
+                      ->check(kNonNegativeList);
         l->excludes(t);
         lod_options.push_back(l);
         lod_options.push_back(t);
@@ -835,6 +849,11 @@ struct ExportArgs
 
     //! Checks what can be checked before any work: the format against the output's name, options that
     //! the format ignores, --enu's numbers. `lods_command`: the `lods` command (mesh files only).
+    std::vector<double> tolerances() const
+    {
+        return tolerance_list.empty() ? std::vector<double>{} : parse_numbers(tolerance_list, ',', "--lod-tolerances");
+    }
+
     void validate(const fs::path& out, bool lods_command) const
     {
         const std::string ext = lower_extension(out);
@@ -855,6 +874,7 @@ struct ExportArgs
         if (format != "3dtiles" && (given(enu_option) || given(geoid_option)))
             throw UsageError(std::string(given(enu_option) ? "--enu" : "--geoid-height") +
                              ": places a 3D Tiles set on the globe; it has no effect on other formats");
+        const std::vector<double> tolerances = this->tolerances();
         for (std::size_t i = 1; i < tolerances.size(); ++i)
             if (!(tolerances[i] < tolerances[i - 1]))
                 throw UsageError("--lod-tolerances: must decrease strictly, coarse to fine");
@@ -881,7 +901,7 @@ struct ExportArgs
         LodSetOptions o;
         o.max_tile_triangles = max_tile_triangles;
         o.levels = levels;
-        o.tolerances = tolerances;
+        o.tolerances = tolerances();
         o.mesh = mesh_args.options();
         return o;
     }
@@ -985,7 +1005,7 @@ std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& 
         return std::string(number);
     };
     std::string tolerances;
-    for (double t : e.tolerances)
+    for (double t : e.tolerances())
         tolerances += (tolerances.empty() ? "" : ",") + real(t);
     return std::string("mrtile=") + MRTILE_VERSION + " max-tile-triangles=" + std::to_string(e.max_tile_triangles) + " levels=" + std::to_string(e.levels) +
            " lod-tolerances=" + tolerances + " below-noise=" + (g.below_noise ? "1" : "0") + " alpha=" + real(m.alpha) +
