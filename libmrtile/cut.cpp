@@ -52,6 +52,8 @@ double node_error(const Node& n) { return std::max(n.max_plane_distance, n.cover
 
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
 {
+    if (!refine)
+        throw InvalidInput("cut_by_predicate: the predicate is empty; pass a function that says whether to refine a node");
     Cut cut;
     if (h.nodes.empty())
         return cut;
@@ -91,6 +93,10 @@ Cut cut_by_budget(const Hierarchy& h, std::size_t tiles)
 {
     if (tiles == 0)
         throw InvalidInput("cut: a tile budget must be at least 1");
+    // No nodes (a default-constructed Hierarchy): no leaves, so the empty cut, as the other cuts give;
+    // the root was read out of bounds before.
+    if (h.nodes.empty())
+        return {};
     // Max-heap of refinable nodes by plane error; leaves wait in the cut.
     using Entry = std::pair<double, std::int32_t>;
     auto less = [](const Entry& a, const Entry& b) { return std::tie(a.first, b.second) < std::tie(b.first, a.second); };
@@ -267,9 +273,18 @@ double screen_space_error(const Node& node, const Camera& camera)
 
 bool in_view(const Node& node, const Camera& camera)
 {
-    const double length = norm(camera.direction);
-    if (!(length > 0))
-        return true;
+    // The direction may have any length (Camera::direction): one whose norm would overflow (1e300 made
+    // every node out of view) or underflow to 0 (1e-300 looked all around) is scaled by its largest
+    // coordinate first.
+    Vec3 direction = camera.direction;
+    double length = norm(direction);
+    if (!(length > 1e-150 && length < 1e150)) {
+        const double largest = std::max({std::abs(direction.x), std::abs(direction.y), std::abs(direction.z)});
+        if (!(largest > 0))
+            return true;
+        direction = direction / largest;
+        length = norm(direction);
+    }
     const Vec3 centre = (node.box.min + node.box.max) * 0.5;
     const double radius = 0.5 * norm(node.box.max - node.box.min);
     const Vec3 to = centre - camera.position;
@@ -280,7 +295,7 @@ bool in_view(const Node& node, const Camera& camera)
     // when the angle from the view axis exceeds the cone's half-angle by more than that.
     const double half_fov = radians(0.5 * camera.fov_y_degrees);
     const double half_cone = std::atan(std::tan(half_fov) * std::sqrt(1.0 + camera.aspect * camera.aspect));
-    const double off_axis = std::acos(std::clamp(dot(to, camera.direction) / (far * length), -1.0, 1.0));
+    const double off_axis = std::acos(std::clamp(dot(to, direction) / (far * length), -1.0, 1.0));
     return off_axis - std::asin(radius / far) <= half_cone;
 }
 

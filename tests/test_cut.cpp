@@ -285,6 +285,32 @@ TEST(Cut, predicate_cut)
     EXPECT_EQ(cut_by_predicate(h, [](const Hierarchy&, std::int32_t) { return false; }), Cut{0});
 }
 
+// QA round qa3: a default-constructed Hierarchy (no nodes) read the root out of bounds in the budget
+// cut; now every cut gives the empty cut for it. An empty predicate was a std::bad_function_call.
+TEST(Cut, empty_hierarchy_and_empty_predicate)
+{
+    const Hierarchy none;
+    EXPECT_TRUE(cut_by_budget(none, 10).empty());
+    EXPECT_TRUE(cut_by_tolerance(none, 0.01).empty());
+    EXPECT_THROW(cut_by_predicate(torus(), RefinePredicate{}), InvalidInput);
+}
+
+// QA round qa3: the camera's direction may have any length. One of 1e300 overflowed its norm and made
+// every node out of view (a coarser cut); one of 1e-300 underflowed to 0 and looked all around.
+TEST(Cut, camera_direction_of_any_length)
+{
+    const Hierarchy& h = torus();
+    Camera camera;
+    camera.position = {3, 0, 1};
+    camera.direction = {-3, 0.5, -1};
+    const Cut unit = cut_for_camera(h, camera);
+    for (const double scale : {1e300, 1e-300, 1e-160, 1e160}) {
+        Camera scaled = camera;
+        scaled.direction = camera.direction * scale;
+        EXPECT_EQ(cut_for_camera(h, scaled), unit) << scale;
+    }
+}
+
 // A sphere whose noise is one point spacing (30,000 points, σ = 0.02).
 const Hierarchy& noisy_sphere()
 {
