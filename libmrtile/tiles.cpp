@@ -164,6 +164,19 @@ std::uint32_t distinct_in_plane(const std::vector<Projected>& pts, double cell)
     return static_cast<std::uint32_t>(std::unique(cells.begin(), cells.end()) - cells.begin());
 }
 
+// TileOptions::plane_axis as a unit vector, or zero for none. An axis of any length counts: one whose
+// squared norm underflows (1e-300) was taken for none, one whose norm overflows (1e300) gave NaN
+// planes; such an axis is scaled by its largest coordinate first.
+Vec3 unit_plane_axis(const TileOptions& options)
+{
+    const Vec3& a = options.plane_axis;
+    const double n2 = squared_norm(a);
+    if (n2 > 1e-300 && n2 < 1e300)
+        return normalized(a);
+    const double largest = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
+    return largest > 0.0 ? normalized(a / largest) : Vec3{0, 0, 0};
+}
+
 // The tile of `node` built from the points `indices` (into h.cloud.positions).
 Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t* indices, std::size_t count,
                       const TileOptions& options)
@@ -174,9 +187,8 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
     t.centre = n.moments.mean;
     t.normal = n.frame.vectors[0];
     t.axis_u = n.frame.vectors[2];
-    if (squared_norm(options.plane_axis) > 0.0) {
+    if (const Vec3 axis = unit_plane_axis(options); squared_norm(axis) > 0.0) {
         // The given plane, its normal on the side of the PCA normal (which keeps its sign convention).
-        const Vec3 axis = normalized(options.plane_axis);
         t.normal = dot(axis, t.normal) < 0.0 ? -axis : axis;
         // The largest PCA axis laid into the plane, so that a tile whose own plane is that plane (a
         // flat one) keeps its frame exactly; a helper axis where it stands on the plane.
@@ -381,8 +393,7 @@ struct PartitionSpace
 PartitionSpace partition_space(const TileOptions& options)
 {
     PartitionSpace space;
-    if (squared_norm(options.plane_axis) > 0.0) {
-        const Vec3 axis = normalized(options.plane_axis);
+    if (const Vec3 axis = unit_plane_axis(options); squared_norm(axis) > 0.0) {
         space.flat = true;
         space.u = perpendicular_axis(axis);
         space.v = cross(axis, space.u);
@@ -462,8 +473,23 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
 
 } // namespace
 
+void check_tile_options(const TileOptions& options)
+{
+    // Finite too: an infinite tolerance dropped every hull point, and mesh_cut then blamed the cut
+    // ("no tile has three non-collinear points; choose a coarser cut").
+    if (!(options.collinear_tolerance >= 0.0) || !std::isfinite(options.collinear_tolerance))
+        throw InvalidInput("TileOptions::collinear_tolerance must be a finite number >= 0");
+    if (!(options.adjacency_factor >= 0.0))
+        throw InvalidInput("TileOptions::adjacency_factor must be >= 0");
+    if (!std::isfinite(options.plane_axis.x) || !std::isfinite(options.plane_axis.y) || !std::isfinite(options.plane_axis.z))
+        throw InvalidInput("TileOptions::plane_axis must be finite");
+}
+
 Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options)
 {
+    // Checked here too: refine_mesh builds its pseudo tiles with make_tile alone, and a NaN
+    // collinear_tolerance overflowed an integer in its hull (undefined behaviour).
+    check_tile_options(options);
     check_node(h, node);
     const Node& n = h.nodes[static_cast<std::size_t>(node)];
     const std::vector<std::uint32_t> indices = node_sample(h, n, options.max_points);
@@ -472,12 +498,7 @@ Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options
 
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options)
 {
-    if (!(options.collinear_tolerance >= 0.0))
-        throw InvalidInput("TileOptions::collinear_tolerance must be >= 0");
-    if (!(options.adjacency_factor >= 0.0))
-        throw InvalidInput("TileOptions::adjacency_factor must be >= 0");
-    if (!std::isfinite(options.plane_axis.x) || !std::isfinite(options.plane_axis.y) || !std::isfinite(options.plane_axis.z))
-        throw InvalidInput("TileOptions::plane_axis must be finite");
+    check_tile_options(options);
     for (std::int32_t node : cut)
         check_node(h, node);
     std::vector<Tile> tiles;

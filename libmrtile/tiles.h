@@ -103,6 +103,10 @@ struct Tile
     bool has_fan() const { return !fanless && boundary.size() >= 3; }
 };
 
+//! \throw InvalidInput unless collinear_tolerance is finite and >= 0, adjacency_factor >= 0 and plane_axis
+//! finite (make_tiles, make_tile and refine_mesh check it first).
+void check_tile_options(const TileOptions& options);
+
 //! \brief Builds the tile of every node of `cut`, in cut order.
 //! \throw InvalidInput if a cut entry is not a node id of `h` or names an empty node.
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options = {});
@@ -116,6 +120,7 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
                              const std::vector<bool>& fanless);
 
 //! Builds one tile from all of the node's points and its frame (no Voronoi partition; for tests).
+//! \throw InvalidInput as check_tile_options, or if `node` is not a node of `h`.
 Tile make_tile(const Hierarchy& h, std::int32_t node, const TileOptions& options = {});
 
 } // namespace mrt

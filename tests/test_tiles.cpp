@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <set>
 #include <utility>
@@ -297,6 +298,31 @@ TEST(Tiles, sampled_tile_keeps_the_border_of_its_node)
     EXPECT_EQ(a.boundary.size(), 4u);
     EXPECT_NEAR(a.area, b.area, 1e-12);
     EXPECT_NEAR(a.area, 1.0, 1e-12);
+}
+
+// QA round qa3: TileOptions::plane_axis of any non-zero length is the axis. One of 1e-300 (its squared
+// norm underflows) was taken for none, one of 1e300 (its norm overflows) made NaN planes and mesh_cut
+// blamed the cut; an infinite collinear_tolerance dropped every hull point the same way.
+TEST(Tiles, plane_axis_of_any_length_and_finite_collinear_tolerance)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const Cut cut = cut_by_tolerance(h, 0.02);
+    TileOptions unit;
+    unit.plane_axis = {0, 0, 1};
+    const std::vector<Tile> expected = make_tiles(h, cut, unit);
+    for (const double scale : {1e-300, 1e-160, 1e160, 1e300}) {
+        TileOptions scaled;
+        scaled.plane_axis = unit.plane_axis * scale;
+        const std::vector<Tile> tiles = make_tiles(h, cut, scaled);
+        ASSERT_EQ(tiles.size(), expected.size());
+        for (std::size_t k = 0; k < tiles.size(); ++k) {
+            EXPECT_EQ(tiles[k].normal.z, expected[k].normal.z) << scale;
+            EXPECT_EQ(tiles[k].boundary, expected[k].boundary) << scale;
+        }
+    }
+    TileOptions infinite;
+    infinite.collinear_tolerance = std::numeric_limits<double>::infinity();
+    EXPECT_THROW(make_tiles(h, cut, infinite), InvalidInput);
 }
 
 } // namespace
