@@ -214,13 +214,26 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
         throw InvalidInput(path.string() + ": the origin is not finite (every vertex would be)");
     std::string ext;
     const MeshFormat format = mesh_format(path, ext);
+    // As the glTF and Draco writers do (mesh_buffers.cpp): a NaN or infinite vertex was written as
+    // "nan" / "inf" text or bits, a file that viewers reject or show with a spike.
+    for (const auto v : mesh.vertices())
+        if (!is_finite(to_vec3(mesh.point(v))))
+            throw InvalidInput(path.string() + ": mesh vertex " + std::to_string(v.idx()) + " has a non-finite position");
 
     Mesh out(mesh);
     out.garbage_collection();
-    // Normals come from positions relative to the origin, where the cross products are accurate.
-    if (options.normals && options.recompute_normals) {
-        out.update_face_normals();
-        out.update_vertex_normals();
+    // Normals come from positions relative to the origin, where the cross products are accurate. A mesh
+    // whose normals the caller released (release_vertex_normals) has them requested on the copy and
+    // computed, whatever recompute_normals says: OpenMesh read a property that no longer existed (an
+    // assertion in a debug build, out of bounds in a release one).
+    if (options.normals) {
+        const bool stored = mesh.has_vertex_normals();
+        out.request_face_normals();
+        out.request_vertex_normals();
+        if (options.recompute_normals || !stored) {
+            out.update_face_normals();
+            out.update_vertex_normals();
+        }
     }
     // STL has only floats: far from the origin it keeps the positions relative to it (stl_is_relative).
     const bool relative = format == MeshFormat::stl && stl_is_relative(mesh, origin);

@@ -21,6 +21,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -321,6 +322,57 @@ TEST(WriteMesh, failures_name_the_path_and_leave_nothing_behind)
     tiles[0].box = BoundingBox{{-1, -1, -1}, {1, 1, 1}};
     EXPECT_THROW(write_3d_tiles(tiles, nan, dir / "nan_tiles", TilesetOptions{}), InvalidInput);
     EXPECT_EQ(directory_listing(dir), std::vector<std::string>{"taken.obj"});
+}
+
+// QA round qa3: a vertex the caller set to NaN or infinity was written as such into .ply, .obj, .off,
+// .stl and .om files (the glTF and Draco writers refused it); now every format refuses it, naming the
+// vertex, and writes nothing. A deleted vertex is not written, so it may be anything.
+TEST(WriteMesh, a_non_finite_vertex_is_refused_in_every_format)
+{
+    const fs::path dir = test_dir();
+    for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+        Mesh mesh = octahedron();
+        mesh.set_point(*mesh.vertices_begin(), Mesh::Point(bad, 0, 0));
+        for (const char* name : {"v.ply", "v.obj", "v.off", "v.stl", "v.om"}) {
+            try {
+                write_mesh(mesh, Vec3{}, dir / name);
+                ADD_FAILURE() << name << ": no exception";
+            } catch (const InvalidInput& e) {
+                EXPECT_NE(std::string(e.what()).find("vertex 0"), std::string::npos) << e.what();
+            }
+        }
+    }
+    EXPECT_TRUE(directory_listing(dir).empty());
+    Mesh deleted = octahedron();
+    deleted.delete_vertex(*deleted.vertices_begin(), false);
+    deleted.set_point(*deleted.vertices_begin(), Mesh::Point(std::nan(""), 0, 0));
+    EXPECT_NO_THROW(write_mesh(deleted, Vec3{}, dir / "deleted.ply"));
+}
+
+// QA round qa3: a mesh whose normals the caller released (release_vertex_normals, release_face_normals)
+// made write_mesh read the missing property (an OpenMesh assertion in a debug build). Now its normals
+// are computed on the copy as for any mesh: the files equal those of the mesh with its normals.
+TEST(WriteMesh, a_mesh_without_normal_properties_is_written_with_computed_normals)
+{
+    const fs::path dir = test_dir();
+    const Mesh with = octahedron();
+    Mesh without = with;
+    without.release_vertex_normals();
+    without.release_face_normals();
+    ASSERT_FALSE(without.has_vertex_normals());
+    const auto bytes = [](const fs::path& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    for (const std::string ext : {".ply", ".obj", ".off", ".stl", ".om"}) {
+        write_mesh(with, Vec3{}, dir / ("with" + ext));
+        write_mesh(without, Vec3{}, dir / ("without" + ext));
+        EXPECT_EQ(bytes(dir / ("with" + ext)), bytes(dir / ("without" + ext))) << ext;
+        WriteMeshOptions keep; // nothing to keep: computed all the same
+        keep.recompute_normals = false;
+        write_mesh(without, Vec3{}, dir / ("kept" + ext), keep);
+        EXPECT_EQ(bytes(dir / ("with" + ext)), bytes(dir / ("kept" + ext))) << ext;
+    }
 }
 
 } // namespace
