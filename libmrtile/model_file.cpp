@@ -491,6 +491,15 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
 std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
 {
     const std::size_t n = h.cloud.positions.size();
+    // What load_model refuses must not be written: a default-constructed Hierarchy made a file that
+    // saved without complaint and could not be loaded ("declared sizes ... do not fit the file").
+    if (n == 0 || h.nodes.empty())
+        throw InvalidInput("save_model: the hierarchy has no points or no nodes; build it with build_hierarchy or "
+                           "load it with load_model before saving");
+    if (h.input_index.size() != n || (h.cloud.has_colors() && h.cloud.colors.size() != n))
+        throw InvalidInput("save_model: the hierarchy's input_index (" + std::to_string(h.input_index.size()) +
+                           ") and colours (" + std::to_string(h.cloud.colors.size()) + ") must have one entry per point (" +
+                           std::to_string(n) + "; colours may be empty)");
     std::string out;
     out.reserve(kHeaderSize + n * (24 + 4 + (h.cloud.has_colors() ? 4 : 0)) + h.nodes.size() * kNodeSize + kTrailerSize);
     Writer w(out);

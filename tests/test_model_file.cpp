@@ -491,5 +491,23 @@ TEST(ModelFile, io_errors_name_the_path)
     EXPECT_FALSE(fs::exists(bad.parent_path()));
 }
 
+// QA round qa3: a default-constructed Hierarchy saved without a word into a file that load_model then
+// refused ("declared sizes ... do not fit the file"); so did one whose input_index or colours do not
+// match its points. Such a hierarchy is refused before anything is written.
+TEST(ModelFile, a_hierarchy_load_model_would_refuse_is_not_saved)
+{
+    const fs::path path = temp_dir() / "refused.mrt";
+    EXPECT_THROW(save_model(Hierarchy{}, path), InvalidInput);
+    EXPECT_FALSE(fs::exists(path));
+    Hierarchy short_index = sample();
+    short_index.input_index.pop_back();
+    EXPECT_THROW(serialize_model(short_index), InvalidInput);
+    Hierarchy few_colours = sample(true);
+    few_colours.cloud.colors.pop_back();
+    EXPECT_THROW(save_model(few_colours, path), InvalidInput);
+    EXPECT_FALSE(fs::exists(path));
+    EXPECT_NO_THROW(deserialize_model(serialize_model(sample(true)), "sample"));
+}
+
 } // namespace
 } // namespace mrt
