@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -51,8 +52,16 @@ void run_parallel(std::size_t count, std::size_t threads, const Work& work)
         }
     };
     std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < workers; ++t)
-        pool.emplace_back(worker);
+    // A thread the system cannot start (threads = 10000 past its limits) leaves the jobs to the threads
+    // that did start: a std::system_error here used to unwind past the joinable threads of `pool`,
+    // which is std::terminate. The result does not depend on the number of threads.
+    for (std::size_t t = 1; t < workers; ++t) {
+        try {
+            pool.emplace_back(worker);
+        } catch (const std::system_error&) {
+            break;
+        }
+    }
     worker();
     for (std::thread& t : pool)
         t.join();
