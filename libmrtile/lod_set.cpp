@@ -324,7 +324,10 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
     const std::size_t wanted = (o.levels > 0 ? o.levels : o.max_levels) - 1;
     double tol = first;
     while (t.size() < wanted) {
-        if (o.levels == 0 && cut_by_tolerance(h, tol).size() >= finest)
+        // Explicit levels too, once one is asked for: past a tolerance whose cut is the finest, every
+        // finer one gives that cut again and make_lod_levels skips it, so they end there. levels =
+        // SIZE_MAX halved the tolerance to 0 and then pushed zeros until memory ran out.
+        if ((o.levels == 0 || !t.empty()) && cut_by_tolerance(h, tol).size() >= finest)
             break;
         tol /= 2;
         t.push_back(tol);
@@ -407,8 +410,8 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
     std::vector<LodLevel> levels;
     std::vector<double> tolerances = o.tolerances;
     for (std::size_t i = 0; i < tolerances.size(); ++i)
-        if (!(tolerances[i] >= 0) || (i > 0 && !(tolerances[i] < tolerances[i - 1])))
-            throw InvalidInput("lods: tolerances must be >= 0 and strictly decreasing (coarse to fine)");
+        if (!(tolerances[i] >= 0) || !std::isfinite(tolerances[i]) || (i > 0 && !(tolerances[i] < tolerances[i - 1])))
+            throw InvalidInput("lods: tolerances must be finite, >= 0 and strictly decreasing (coarse to fine)");
     if (tolerances.empty()) {
         const Cut finest = cut_by_tolerance(h, 0.0);
         levels.push_back(first_level(h, o, finest));

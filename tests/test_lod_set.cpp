@@ -18,6 +18,7 @@
 #include <fstream>
 #include <limits>
 #include <set>
+#include <string>
 #include <sys/wait.h>
 
 namespace mrt {
@@ -82,6 +83,34 @@ TEST(LodSet, levels_are_consistent)
     no_levels.tileset = false;
     no_levels.max_levels = 0;
     EXPECT_THROW(make_lod_set(torus(), no_levels), InvalidInput);
+}
+
+// QA round qa3: an explicit level count past the leaves halved the tolerance to 0 and then pushed zero
+// tolerances until memory ran out (levels = SIZE_MAX never returned). Levels finer than the finest cut
+// are skipped anyway, so asking for any number past them gives the same levels.
+TEST(LodSet, a_huge_level_count_ends_at_the_finest_cut)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    LodSetOptions many, all;
+    many.tileset = all.tileset = false;
+    many.levels = 60;
+    all.levels = std::numeric_limits<std::size_t>::max();
+    const std::vector<LodLevel> a = make_lod_levels(h, many);
+    const std::vector<LodLevel> b = make_lod_levels(h, all);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        EXPECT_EQ(a[k].cut, b[k].cut);
+        EXPECT_EQ(a[k].tolerance, b[k].tolerance);
+    }
+    EXPECT_EQ(b.back().cut.size(), cut_by_tolerance(h, 0.0).size());
+    LodSetOptions infinite; // refused as the levels' own option, not by the cut it would reach
+    infinite.tolerances = {std::numeric_limits<double>::infinity(), 0.01};
+    try {
+        make_lod_levels(h, infinite);
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("lods: tolerances"), std::string::npos) << e.what();
+    }
 }
 
 // Unevenly sampled: a torus whose x < 0 half has a tenth of the points. Level 0 (a best-N cut) used to
