@@ -911,8 +911,11 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
 {
     if (!(options.max_tilt_degrees > 0.0 && options.max_tilt_degrees <= 90.0))
         throw InvalidInput("LocalRefineOptions::max_tilt_degrees must be in (0, 90]");
-    if (!(options.min_separation >= 0.0))
-        throw InvalidInput("LocalRefineOptions::min_separation must be >= 0");
+    // Finite too: an infinite separation left out every descendant's point, and a refined sphere of 322
+    // faces came back as 80 (the outlines alone, re-triangulated).
+    if (!(options.min_separation >= 0.0) || !std::isfinite(options.min_separation))
+        throw InvalidInput("LocalRefineOptions::min_separation must be a finite number >= 0");
+    check_tile_options(options.tiles);
     if (!OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(result.mesh, kFaceTile) ||
         !OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(result.mesh, kFaceGap) ||
         !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
@@ -921,6 +924,26 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     if (!is_partition(h, cut))
         throw InvalidInput(std::string(name) + ": the cut asked for is not a partition of the points");
     check_node_ids(h, result.cut);
+    // The mesh's own cut too: with a node listed twice or missing, the result's cut came out no
+    // partition (the duplicate's run meshed twice, the missing node's points in no tile) without a word.
+    if (!is_partition(h, result.cut))
+        throw InvalidInput(std::string(name) + ": result.cut is not a partition of the points; pass the MeshResult of "
+                           "mesh_cut (or of an earlier refine_mesh, coarsen_mesh or update_mesh) with its cut unchanged");
+    // And the mesh must be that cut's: every fan face names a node of it. A mesh of another cut (or
+    // model) put in result.mesh was patched where its tile ids happened to match and came back with
+    // result.cut claiming tiles it does not have.
+    std::vector<char> in_cut(h.nodes.size(), 0);
+    for (const std::int32_t node : result.cut)
+        in_cut[static_cast<std::size_t>(node)] = 1;
+    OpenMesh::FPropHandleT<int> tile;
+    result.mesh.get_property_handle(tile, kFaceTile);
+    for (const auto f : result.mesh.faces()) {
+        const int node = result.mesh.property(tile, f);
+        if (node >= 0 && (static_cast<std::size_t>(node) >= in_cut.size() || !in_cut[static_cast<std::size_t>(node)]))
+            throw InvalidInput(std::string(name) + ": face " + std::to_string(f.idx()) + " of result.mesh names tile " +
+                               std::to_string(node) + ", which is not a node of result.cut: the mesh and its cut do not "
+                               "belong together (pass the MeshResult of mesh_cut or of an earlier update unchanged)");
+    }
 }
 
 // The nodes of `cut` under `node` (all of its points), by first point; empty if `cut` is coarser there.

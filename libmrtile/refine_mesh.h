@@ -85,8 +85,8 @@ struct LocalRefineStats
 //! from at most TileOptions::max_points of its points), plus one pass over the mesh to find the changing
 //! tiles' faces and OpenMesh's garbage collection (6 tiles of a 148k-face mesh: 36 ms). Normals are
 //! recomputed where faces changed only. Deterministic.
-//! \throw InvalidInput if `finer` is not a partition of the points into nodes at or below result.cut's,
-//! or result.mesh lacks the v:cluster / f:tile / f:gap properties (mesh.h).
+//! \throw InvalidInput if `finer` or result.cut is not a partition of the points, `finer` has nodes above
+//! result.cut's, or result.mesh lacks the v:cluster / f:tile / f:gap properties (mesh.h).
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer,
                              const LocalRefineOptions& options = {});
 

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -433,6 +434,46 @@ TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
     bare.cut = base.cut;
     bare.mesh.add_vertex(Mesh::Point(0, 0, 0));
     EXPECT_THROW(refine_mesh(h, bare, base.cut), InvalidInput); // no tile ids
+}
+
+// QA round qa3: the mesh's own cut was checked for node ids only. Listed twice or missing a node, it
+// came back from refine_mesh no partition (the duplicate's descendants twice, or a node's points in no
+// tile) without a word. A NaN TileOptions::collinear_tolerance overflowed an integer in the pseudo
+// tiles' hulls (undefined behaviour), and an infinite min_separation left out every new point.
+TEST(RefineMesh, a_result_cut_that_is_no_partition_and_bad_tile_options_are_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    const Cut finer = cut_by_tolerance(h, 0.005);
+    std::vector<MeshResult> broken(3, base);
+    broken[0].cut.push_back(broken[0].cut.front());
+    broken[1].cut.pop_back();
+    broken[2].cut.clear();
+    for (MeshResult& r : broken) {
+        EXPECT_THROW(refine_mesh(h, r, finer), InvalidInput);
+        EXPECT_THROW(coarsen_mesh(h, r, cut_by_tolerance(h, 0.05)), InvalidInput);
+        EXPECT_THROW(update_mesh(h, r, finer), InvalidInput);
+    }
+    // A mesh of another cut, or of another model, under result.cut.
+    const Hierarchy other = build_hierarchy(shapes::torus(3000));
+    const MeshResult coarser = mesh_cut(h, cut_by_tolerance(h, 0.05));
+    const MeshResult elsewhere = mesh_cut(other, cut_by_tolerance(other, 0.02));
+    for (const Mesh* mesh : {&coarser.mesh, &elsewhere.mesh}) {
+        MeshResult r = base;
+        r.mesh = *mesh;
+        EXPECT_THROW(refine_mesh(h, r, finer), InvalidInput);
+        EXPECT_THROW(update_mesh(h, r, finer), InvalidInput);
+    }
+    LocalRefineOptions nan_hull;
+    nan_hull.tiles.collinear_tolerance = std::nan("");
+    LocalRefineOptions far_apart;
+    far_apart.min_separation = std::numeric_limits<double>::infinity();
+    for (const LocalRefineOptions& o : {nan_hull, far_apart}) {
+        MeshResult r = base;
+        EXPECT_THROW(refine_mesh(h, r, finer, o), InvalidInput);
+        EXPECT_EQ(r.cut, base.cut); // nothing changed
+        EXPECT_EQ(r.mesh.n_faces(), base.mesh.n_faces());
+    }
 }
 
 } // namespace
