@@ -7,12 +7,14 @@
 // sparse side of an uneven sample (range scans thin out with distance).
 #include "libmrtile/coverage_gap.h"
 
+#include "libmrtile/errors.h"
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace mrt {
@@ -548,6 +550,22 @@ std::size_t coverage_stride(std::size_t count, const CoverageOptions& options)
 double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, const CoverageOptions& options,
                     const std::vector<Vec3>& fill)
 {
+    // A NaN point, axis or option made the grid or the hole test NaN, and the gap came out 0 (no hole)
+    // without a word.
+    if (!(options.points_per_cell > 0.0) || !std::isfinite(options.points_per_cell) || !(options.min_radius_spacings >= 0.0) ||
+        !std::isfinite(options.min_radius_spacings) || !(options.min_missing_points >= 0.0) ||
+        !std::isfinite(options.min_missing_points) || !(options.sample_fraction >= 0.0 && options.sample_fraction <= 1.0) ||
+        !(options.max_island_share >= 0.0) || !std::isfinite(options.max_island_share) ||
+        !(options.min_sample_radius_spacings >= 0.0) || !std::isfinite(options.min_sample_radius_spacings))
+        throw InvalidInput("CoverageOptions: points_per_cell must be finite and > 0, sample_fraction in [0, 1], the other "
+                           "fields finite and >= 0");
+    if (!is_finite(axis_u) || !is_finite(axis_v))
+        throw InvalidInput("coverage_gap: the axes must be finite");
+    for (const std::vector<Vec3>* set : {&points, &fill})
+        for (std::size_t i = 0; i < set->size(); ++i)
+            if (!is_finite((*set)[i]))
+                throw InvalidInput(std::string("coverage_gap: ") + (set == &points ? "point " : "fill point ") +
+                                   std::to_string(i) + " is not finite");
     if (points.empty())
         return 0.0;
     std::vector<P2> pts, extra;

@@ -63,6 +63,7 @@ struct CoverageOptions
 //! other clusters near the plane: they occupy the grid but do not widen the hull (a cluster that is
 //! not convex has a hull reaching over its neighbours' points, which is no hole in the surface). All
 //! points given are judged: sample larger sets with coverage_stride.
+//! \throw InvalidInput if a point, fill point or axis is not finite, or an option is out of range.
 double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v,
                     const CoverageOptions& options = {}, const std::vector<Vec3>& fill = {});
 

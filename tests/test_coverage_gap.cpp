@@ -4,6 +4,7 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/coverage_gap.h"
 #include "libmrtile/cut.h"
+#include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
@@ -135,6 +136,26 @@ TEST(CoverageGap, a_round_hole_is_measured)
     }
     const PointCloud small = shapes::flat_plate(n, outside_holes({{0.45, 0.55, 2 * s}}));
     EXPECT_EQ(coverage_gap(small.positions, kU, kV), 0.0);
+}
+
+// QA round qa3: a NaN point or option made the gap 0 (no hole) without a word; now refused.
+TEST(CoverageGap, non_finite_points_and_options_are_refused)
+{
+    const PointCloud c = shapes::flat_plate(5000, outside_holes({{0.45, 0.55, 0.1}}));
+    std::vector<Vec3> nan_point = c.positions;
+    nan_point[7].y = std::nan("");
+    EXPECT_THROW(coverage_gap(nan_point, kU, kV), InvalidInput);
+    EXPECT_THROW(coverage_gap(c.positions, kU, kV, {}, nan_point), InvalidInput);
+    EXPECT_THROW(coverage_gap(c.positions, Vec3{std::nan(""), 0, 0}, kV), InvalidInput);
+    CoverageOptions nan_cell;
+    nan_cell.points_per_cell = std::nan("");
+    CoverageOptions nan_fraction;
+    nan_fraction.sample_fraction = std::nan("");
+    CoverageOptions negative;
+    negative.min_missing_points = -1;
+    for (const CoverageOptions& o : {nan_cell, nan_fraction, negative})
+        EXPECT_THROW(coverage_gap(c.positions, kU, kV, o), InvalidInput);
+    EXPECT_GT(coverage_gap(c.positions, kU, kV), 0.05);
 }
 
 // Points of other clusters in the hole fill it; a map locates the hole.
