@@ -76,8 +76,8 @@ struct MeshResult
 {
     Mesh mesh;
     SurfaceStats surface;
-    //! The cut meshed: the cut given, with the tiles of small separate objects refined
-    //! (MeshOptions::small_object_rounds). Pass it to measure_quality.
+    //! The cut meshed: the cut given (in point order, whatever order it was given in), with the tiles
+    //! of small separate objects refined (MeshOptions::small_object_rounds). Pass it to measure_quality.
     Cut cut;
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
@@ -186,9 +186,10 @@ inline constexpr double kSharpLoopDegrees = 110.0;
 //! locally as QualityReport::sharp_loops says.
 std::size_t count_sharp_loops(const Mesh& mesh, double degrees = kSharpLoopDegrees);
 
+//! \throw InvalidInput if `cut` is not a partition of the points or a vertex of `mesh` is not finite.
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);
 
-//! Paper eq. 4-6 for a cut (see QualityReport::e_rms).
+//! Paper eq. 4-6 for a cut (see QualityReport::e_rms). \throw InvalidInput if `cut` is not a partition.
 double e_rms(const Hierarchy& h, const Cut& cut);
 
 } // namespace mrt

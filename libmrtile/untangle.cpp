@@ -542,6 +542,17 @@ std::size_t remove_border_folds(Mesh& mesh, std::vector<std::pair<int, int>>& pa
 
 } // namespace
 
+void check_untangle_options(const UntangleOptions& options)
+{
+    // A NaN, negative or huge tests_per_face was converted to the work bound's integer (undefined
+    // behaviour), and NaN moves or turns refused or allowed every edit without a word.
+    if (options.max_rounds < 0 || !(options.max_move >= 0.0) || !std::isfinite(options.max_move) ||
+        !(options.max_turn_degrees >= 0.0 && options.max_turn_degrees <= 180.0) || !(options.tests_per_face >= 0.0) ||
+        !(options.tests_per_face <= 1e9) || (options.vertical && !(squared_norm(options.axis) > 0.0)))
+        throw InvalidInput("untangle: max_rounds must be >= 0 (0 = off), max_move >= 0 (finite), max_turn_degrees in [0, 180], "
+                           "tests_per_face in [0, 1e9], and a vertical untangling needs a non-zero axis");
+}
+
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
 {
     return untangle(mesh, options, self_intersecting_faces(mesh));
@@ -549,6 +560,7 @@ UntangleStats untangle(Mesh& mesh, const UntangleOptions& options)
 
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options, std::vector<std::pair<int, int>> pairs)
 {
+    check_untangle_options(options);
     const auto faces = static_cast<int>(mesh.n_faces());
     for (const auto& [a, b] : pairs)
         if (a < 0 || b < 0 || a >= faces || b >= faces || a == b)

@@ -57,10 +57,15 @@ struct UntangleStats
     std::size_t removed_faces = 0; //!< border gap faces removed (UntangleOptions::remove_border_folds)
 };
 
+//! \throw InvalidInput unless max_rounds >= 0, max_move >= 0 and finite, max_turn_degrees in [0, 180],
+//! tests_per_face in [0, 1e9] and, with `vertical`, the axis is non-zero (untangle and mesh_cut check it
+//! first, whether or not the mesh crosses itself).
+void check_untangle_options(const UntangleOptions& options);
+
 //! \brief Lowers the self-intersections of `mesh` (self_intersecting_faces in mesh_stats.h) by local
 //! edge flips and vertex moves. Deterministic. A flip across two tiles marks both faces as gap faces
 //! (f:tile -1, f:gap true), as fit_vertices does. Vertex and face normals of changed faces are updated.
-//! \throw InvalidInput if the mesh is not a manifold triangle mesh.
+//! \throw InvalidInput if the mesh is not a manifold triangle mesh, or as check_untangle_options.
 UntangleStats untangle(Mesh& mesh, const UntangleOptions& options = {});
 
 //! The same, from the mesh's intersecting pairs as self_intersecting_faces gives them (a caller that

@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <tuple>
@@ -700,6 +702,72 @@ TEST(Reconstruct, options_and_cuts_out_of_range_are_refused)
     const MeshResult r = mesh_cut(h, cut);
     EXPECT_THROW(e_rms(h, Cut{-3, 1000000}), InvalidInput);
     EXPECT_THROW(measure_quality(h, Cut{static_cast<std::int32_t>(h.nodes.size())}, r.mesh), InvalidInput);
+}
+
+// QA round qa3: untangling options were taken without a check (mesh_cut calls untangle only when
+// max_rounds > 0 and the mesh crosses itself; a NaN tests_per_face was converted to an integer, which
+// is undefined), and a NaN or negative max_flip_angle_degrees was taken as well. An empty hierarchy
+// read its root out of bounds in mesh_to_triangle_count, and an empty cut_at was a bad_function_call.
+TEST(Reconstruct, untangle_and_flip_options_out_of_range_are_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const Cut cut = cut_by_tolerance(h, 0.02);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<MeshOptions> bad(7);
+    bad[0].untangle.max_rounds = -1;
+    bad[1].untangle.tests_per_face = nan;
+    bad[2].untangle.tests_per_face = -1;
+    bad[3].untangle.max_move = nan;
+    bad[4].untangle.max_turn_degrees = nan;
+    bad[5].fit.max_flip_angle_degrees = nan;
+    bad[6].fit.max_flip_angle_degrees = -5;
+    for (const MeshOptions& o : bad)
+        EXPECT_THROW(mesh_cut(h, cut, o), InvalidInput);
+    EXPECT_THROW(check_untangle_options(bad[1].untangle), InvalidInput);
+    EXPECT_NO_THROW(check_untangle_options(UntangleOptions{}));
+    MeshOptions off;
+    off.untangle.max_rounds = 0;
+    EXPECT_NO_THROW(mesh_cut(h, cut, off));
+    EXPECT_THROW(mesh_to_triangle_count(Hierarchy{}, 100), InvalidInput);
+    EXPECT_THROW(mesh_mended(h, std::function<Cut(int)>{}), InvalidInput);
+}
+
+// QA round qa3: measure_quality and e_rms checked the cut's node ids only: a node listed twice counted
+// its points twice (3,078 points of 3,000) and E_RMS came out wrong without a word. A mesh vertex set
+// to NaN reached CGAL, which threw its own precondition exception.
+TEST(Reconstruct, quality_of_a_cut_that_is_no_partition_or_a_non_finite_mesh_is_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    Cut twice = r.cut;
+    twice.push_back(twice.front());
+    Cut missing = r.cut;
+    missing.pop_back();
+    for (const Cut& bad : {twice, missing}) {
+        EXPECT_THROW(measure_quality(h, bad, r.mesh), InvalidInput);
+        EXPECT_THROW(e_rms(h, bad), InvalidInput);
+    }
+    Mesh nan_vertex = r.mesh;
+    nan_vertex.set_point(*nan_vertex.vertices_begin(), Mesh::Point(std::nan(""), 0, 0));
+    EXPECT_THROW(measure_quality(h, r.cut, nan_vertex), InvalidInput);
+    EXPECT_EQ(measure_quality(h, r.cut, r.mesh).points, h.cloud.size());
+}
+
+// QA round qa3: a cut is a set of nodes, but the same cut in another order gave another mesh (a sphere's
+// 0.02 cut reversed: 338 faces instead of 322) and result.cut in that order. Now meshed in point order.
+TEST(Reconstruct, a_cut_in_any_order_gives_the_same_mesh)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const Cut cut = cut_by_tolerance(h, 0.02);
+    Cut reversed = cut;
+    std::reverse(reversed.begin(), reversed.end());
+    const MeshResult a = mesh_cut(h, cut);
+    const MeshResult b = mesh_cut(h, reversed);
+    EXPECT_EQ(a.cut, b.cut);
+    ASSERT_EQ(a.mesh.n_vertices(), b.mesh.n_vertices());
+    ASSERT_EQ(a.mesh.n_faces(), b.mesh.n_faces());
+    for (const auto v : a.mesh.vertices())
+        EXPECT_EQ(a.mesh.point(v), b.mesh.point(v));
 }
 
 // A height field with a loop inside its outline: a slit where two tilted tiles overlap seen along the
