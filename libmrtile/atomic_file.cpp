@@ -115,6 +115,15 @@ extern "C" void remove_temporaries_and_die(int signal)
     ::raise(signal);
 }
 
+// An empty path names no file: the temporary was made as ".tmp.<pid>" in the working directory and
+// the rename failed with ": cannot rename temporary file into place", naming nothing.
+const std::filesystem::path& named(const std::filesystem::path& path, const char* what)
+{
+    if (path.empty())
+        throw IoError(std::string("an empty path was given for the ") + what + " to write; name it");
+    return path;
+}
+
 } // namespace
 
 void remember_temporary(const std::filesystem::path& path)
@@ -167,7 +176,8 @@ void check_writable_directory(const std::filesystem::path& dir)
     const TemporaryDirectory probe(dir); // removed again
 }
 
-TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir) : path_(temporary_name(dir)), dir_(dir)
+TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir)
+    : path_(temporary_name(named(dir, "directory"))), dir_(dir)
 {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec); // a stale leftover of a killed run with the same pid
@@ -199,7 +209,7 @@ void TemporaryDirectory::write(const std::function<void()>& write) const
 }
 
 AtomicFile::AtomicFile(const std::filesystem::path& path)
-    : path_(path), target_(follow_links(path)), temp_(temporary_name(target_))
+    : path_(named(path, "file")), target_(follow_links(path)), temp_(temporary_name(target_))
 {
     // Renaming over a file needs only the directory's permission: a file made read-only (no write
     // bit for anyone, or none for this user) would be replaced all the same.

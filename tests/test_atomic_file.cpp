@@ -9,10 +9,12 @@
 
 #include <csignal>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace mrt {
 namespace {
@@ -84,6 +86,22 @@ TEST(AtomicFile, a_failed_write_in_a_temporary_directory_names_the_final_one)
     EXPECT_THROW(temporary.write([] { throw InvalidInput("bad"); }), InvalidInput);
     temporary.write([&] { write_text(temporary.path() / "ok.txt", "ok"); });
     EXPECT_TRUE(fs::exists(temporary.path() / "ok.txt"));
+}
+
+// QA round qa3: save_model(h, "") and every writer given an empty path made their temporary file in
+// the working directory and failed with ": cannot rename temporary file into place". Now an IoError
+// that says the path is empty, before anything is made.
+TEST(AtomicFile, an_empty_path_is_refused_before_anything_is_made)
+{
+    for (const auto& make : std::vector<std::function<void()>>{[] { AtomicFile file(""); },
+                                                              [] { TemporaryDirectory dir(""); }}) {
+        try {
+            make();
+            ADD_FAILURE() << "no exception";
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("empty path"), std::string::npos) << e.what();
+        }
+    }
 }
 
 // A file written over keeps its permissions (a private model stayed private only until the first
