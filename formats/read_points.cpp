@@ -1,6 +1,6 @@
 // Point input (formats/): the method starts from an unorganized point set (paper §3), which arrives as
-// a scan file. Parsers stream through a buffered reader (zlib's gzread, which also reads uncompressed
-// files directly) so that a large scan never sits in memory twice, and they distrust every count a
+// a scan file. Parsers stream through a buffered reader (zlib's inflate for gzip files, which it tells
+// by their magic bytes) so that a large scan never sits in memory twice, and they distrust every count a
 // header declares: a corrupt or hostile file ends in a one-line error, never a crash, hang or an
 // allocation sized by a number the file made up.
 #include "formats/read_points.h"
@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -66,19 +67,24 @@ public:
         if (fs::is_directory(status))
             throw IoError(name_ + ": is a directory, not a point file");
         errno = 0;
-        file_ = gzopen(path.c_str(), "rb");
+        file_.reset(std::fopen(path.c_str(), "rb"));
         if (!file_)
-            throw IoError(name_ + ": cannot open (" +
-                          (errno ? std::strerror(errno) : "out of memory") + ")");
-        gzbuffer(file_, kBufferSize);
-        // The size bounds what an uncompressed file can hold (checked against header counts).
-        if (gzdirect(file_) && fs::is_regular_file(status)) {
+            throw IoError(name_ + ": cannot open (" + (errno ? std::strerror(errno) : "unknown error") + ")");
+        // gzip's magic bytes make a compressed file, whatever its name (as gzopen read them).
+        compressed_ = request_raw(2) && static_cast<unsigned char>(raw_[raw_begin_]) == 0x1f &&
+                      static_cast<unsigned char>(raw_[raw_begin_ + 1]) == 0x8b;
+        if (compressed_) {
+            stream_ = std::make_unique<Inflater>();
+            if (inflateInit2(&stream_->z, 16 + MAX_WBITS) != Z_OK)
+                throw IoError(name_ + ": cannot start decompressing (out of memory)");
+            stream_->ready = true;
+        } else if (fs::is_regular_file(status)) {
+            // The size bounds what an uncompressed file can hold (checked against header counts).
             const auto size = fs::file_size(path, ec);
             if (!ec)
                 file_size_ = size;
         }
     }
-    ~Input() { gzclose(file_); }
     Input(const Input&) = delete;
     Input& operator=(const Input&) = delete;
 
@@ -171,32 +177,119 @@ public:
     }
 
 private:
-    void fill()
+    // Makes at least n bytes of the file itself available at raw_[raw_begin_]; false if it ends first.
+    bool request_raw(std::size_t n)
     {
-        const std::size_t room = std::min<std::size_t>(buffer_.size() - end_, INT_MAX / 2);
-        const int got = gzread(file_, buffer_.data() + end_, static_cast<unsigned>(room));
-        if (got < 0) {
-            int code = 0;
-            const char* message = gzerror(file_, &code);
-            if (code == Z_ERRNO)
-                throw IoError(name_ + ": read error (" + std::strerror(errno) + ")");
-            throw IoError(name_ + ": truncated or corrupt compressed data (" +
-                          (message ? message : "zlib error") + ")");
+        if (raw_end_ - raw_begin_ >= n)
+            return true;
+        if (raw_.empty())
+            raw_.resize(kBufferSize);
+        std::memmove(raw_.data(), raw_.data() + raw_begin_, raw_end_ - raw_begin_);
+        raw_end_ -= raw_begin_;
+        raw_begin_ = 0;
+        while (raw_end_ < n && !raw_eof_) {
+            const std::size_t got = std::fread(raw_.data() + raw_end_, 1, raw_.size() - raw_end_, file_.get());
+            if (got == 0) {
+                if (std::ferror(file_.get()))
+                    throw IoError(name_ + ": read error (" + std::strerror(errno) + ")");
+                raw_eof_ = true;
+            }
+            raw_end_ += got;
         }
-        if (got == 0) {
-            // A gzip stream cut short reads as a plain end of input; only gzerror tells them apart.
-            int code = Z_OK;
-            const char* message = gzerror(file_, &code);
-            if (code != Z_OK)
-                throw IoError(name_ + ": truncated or corrupt compressed data (" +
-                              (message ? message : "zlib error") + ")");
-            eof_ = true;
-        }
-        end_ += static_cast<std::size_t>(got);
+        return raw_end_ - raw_begin_ >= n;
     }
 
+    void fill()
+    {
+        const std::size_t room = buffer_.size() - end_;
+        std::size_t got = 0;
+        if (!compressed_ && raw_begin_ < raw_end_) { // the bytes read to tell whether it is compressed
+            got = std::min(room, raw_end_ - raw_begin_);
+            std::memcpy(buffer_.data() + end_, raw_.data() + raw_begin_, got);
+            raw_begin_ += got;
+        } else if (!compressed_ && !raw_eof_) {
+            got = std::fread(buffer_.data() + end_, 1, room, file_.get());
+            if (got == 0 && std::ferror(file_.get()))
+                throw IoError(name_ + ": read error (" + std::strerror(errno) + ")");
+        } else if (compressed_) {
+            got = inflate_into(buffer_.data() + end_, room);
+        }
+        if (got == 0)
+            eof_ = true;
+        end_ += got;
+    }
+
+    // Decompresses up to `room` bytes into `out`; 0 only at the end of the last gzip member. Members
+    // written one after another are one stream (as gzip -d reads them); anything else after a member
+    // is refused: zlib's gzread ignored it, so a file with a damaged or foreign tail read as complete.
+    std::size_t inflate_into(char* out, std::size_t room)
+    {
+        z_stream& z = stream_->z;
+        z.next_out = reinterpret_cast<Bytef*>(out);
+        z.avail_out = static_cast<uInt>(std::min<std::size_t>(room, UINT_MAX));
+        while (z.avail_out > 0 && !stream_done_) {
+            if (member_done_) {
+                // Another member, the end of the file, or junk.
+                if (!request_raw(1)) {
+                    stream_done_ = true;
+                    break;
+                }
+                if (!request_raw(2) || static_cast<unsigned char>(raw_[raw_begin_]) != 0x1f ||
+                    static_cast<unsigned char>(raw_[raw_begin_ + 1]) != 0x8b)
+                    throw IoError(name_ + ": data after the end of the gzip stream (at byte " +
+                                  std::to_string(compressed_offset_) +
+                                  "; not another gzip member): the file is damaged or has something appended");
+                inflateReset(&z);
+                member_done_ = false;
+            }
+            if (raw_begin_ == raw_end_ && !request_raw(1))
+                throw IoError(name_ + ": truncated compressed data (the file ends inside the gzip stream)");
+            z.next_in = reinterpret_cast<Bytef*>(raw_.data() + raw_begin_);
+            z.avail_in = static_cast<uInt>(std::min<std::size_t>(raw_end_ - raw_begin_, UINT_MAX));
+            const uInt before = z.avail_in;
+            const int status = inflate(&z, Z_NO_FLUSH);
+            raw_begin_ += before - z.avail_in;
+            compressed_offset_ += before - z.avail_in;
+            if (status == Z_STREAM_END)
+                member_done_ = true;
+            else if (status == Z_MEM_ERROR)
+                throw IoError(name_ + ": out of memory while decompressing");
+            else if (status != Z_OK && status != Z_BUF_ERROR)
+                throw IoError(name_ + ": corrupt compressed data (" + (z.msg ? z.msg : "zlib error") + ")");
+        }
+        return room - z.avail_out;
+    }
+
+    // zlib's stream state, released however the Input ends (a constructor that throws included).
+    struct Inflater
+    {
+        z_stream z{};
+        bool ready = false;
+        Inflater() = default;
+        Inflater(const Inflater&) = delete;
+        Inflater& operator=(const Inflater&) = delete;
+        ~Inflater()
+        {
+            if (ready)
+                inflateEnd(&z);
+        }
+    };
+
     std::string name_;
-    gzFile file_ = nullptr;
+    struct FileCloser
+    {
+        void operator()(std::FILE* f) const { std::fclose(f); }
+    };
+    std::unique_ptr<std::FILE, FileCloser> file_;
+    std::vector<char> raw_; // bytes of the file not yet decompressed (or copied)
+    std::size_t raw_begin_ = 0;
+    std::size_t raw_end_ = 0;
+    bool raw_eof_ = false;
+    bool compressed_ = false;
+    std::unique_ptr<Inflater> stream_;
+    bool member_done_ = false;          // a gzip member ended: another may follow
+    bool stream_done_ = false;          // the last member ended with the file
+    std::uint64_t compressed_offset_ = 0; // bytes of the file decompressed so far
     std::vector<char> buffer_;
     std::size_t begin_ = 0;
     std::size_t end_ = 0;

@@ -1736,13 +1736,36 @@ TEST(ReadErrors, max_points_is_honoured)
     EXPECT_EQ(read_points(xyz, options).size(), 4u);
 }
 
+// QA round qa-left: zlib's gzread ignored whatever followed the last gzip member, so a file with junk
+// appended (or a damaged tail that no longer starts a member) read as complete. Members one after
+// another are still one stream, as gzip -d reads them, split anywhere (here inside a number).
+TEST(ReadErrors, gzip_members_concatenated_and_junk_after_the_last)
+{
+    const fs::path dir = test_dir();
+    const std::string first = read_bytes(write_gz(dir / "first.gz", "0.5 -1.25 2\n3 4.7"));
+    const std::string second = read_bytes(write_gz(dir / "second.gz", "5 -5.5\n-0.125 0 8\n1 1 1\n"));
+    expect_points(read_points(write_file(dir / "two.xyz.gz", first + second)), kPoints);
+    expect_points(read_points(write_file(dir / "three.xyz.gz", first + read_bytes(write_gz(dir / "empty.gz", "")) + second)),
+                  kPoints);
+    const fs::path junk = write_file(dir / "junk.xyz.gz", first + second + "trailing junk\n");
+    expect_error<IoError>([&] { read_points(junk); },
+                          {junk.string(), "data after the end of the gzip stream", "at byte " + std::to_string(first.size() + second.size())});
+    const fs::path one_byte = write_file(dir / "byte.xyz.gz", first + second + std::string(1, '\0'));
+    expect_error<IoError>([&] { read_points(one_byte); }, {one_byte.string(), "data after the end of the gzip stream"});
+    // A second member cut short, or a header of one followed by no deflate data.
+    const fs::path cut = write_file(dir / "cut.xyz.gz", first + second.substr(0, second.size() - 4));
+    expect_error<IoError>([&] { read_points(cut); }, {cut.string(), "truncated compressed data"});
+    const fs::path bad = write_file(dir / "bad.xyz.gz", first + std::string("\x1f\x8b\x08\x00garbage", 11));
+    expect_error<IoError>([&] { read_points(bad); }, {bad.string(), "compressed data"});
+}
+
 TEST(ReadErrors, corrupt_gzip_and_overlong_lines)
 {
     const fs::path dir = test_dir();
     const fs::path gz = write_gz(dir / "a.xyz.gz", std::string(200000, '1') + " 2 3\n");
     const std::string bytes = read_bytes(gz);
     const fs::path cut = write_file(dir / "cut.xyz.gz", bytes.substr(0, bytes.size() / 2));
-    expect_error<IoError>([&] { read_points(cut); }, {cut.string(), "truncated or corrupt"});
+    expect_error<IoError>([&] { read_points(cut); }, {cut.string(), "truncated compressed data"});
     const fs::path line = write_file(dir / "line.xyz", "1 2 3\n" + std::string(3 << 20, '7'));
     expect_error<InvalidInput>([&] { read_points(line); }, {line.string(), "line 2", "longer than"});
 }
