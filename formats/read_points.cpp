@@ -989,7 +989,13 @@ struct PlyHeader
 PlyHeader read_ply_header(Input& in)
 {
     std::string_view line;
-    if (!in.next_line(line) || line != "ply")
+    // "ply" up to trailing blanks, as every other header line is read: "ply \n" (a writer's trailing
+    // space) and "ply\r\r\n" were refused as no PLY file, though rply, tinyply and plyfile read them.
+    constexpr const char* kBlankChars = " \t\r\v\f";
+    if (in.next_line(line) && line.substr(0, 4) == "ply\r" && line.find_first_not_of(kBlankChars, 3) != std::string_view::npos)
+        throw InvalidInput(in.name() + ": its lines end in a carriage return alone (classic Mac OS text); convert them "
+                                       "to line feeds (\\n or \\r\\n)");
+    if (line.substr(0, 3) != "ply" || line.find_first_not_of(kBlankChars, 3) != std::string_view::npos)
         throw InvalidInput(in.name() + ": not a PLY file (no 'ply' on the first line)");
     PlyHeader header;
     bool have_format = false;

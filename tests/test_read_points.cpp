@@ -296,6 +296,29 @@ TEST(ReadPly, crlf_header_and_minimal_file)
     expect_points(read_points(write_file(dir / "crlf.ply", h + b.data)), kPoints);
 }
 
+// QA round qa-left: a first line "ply " (a trailing blank) or "ply\t" was "not a PLY file", though
+// every other header line is read up to trailing blanks, and rply, tinyply and plyfile read them. A
+// header whose lines end in a carriage return alone is refused, saying so.
+TEST(ReadPly, first_line_with_trailing_blanks)
+{
+    const fs::path dir = test_dir();
+    const std::string rest = "format ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    for (const std::string first : {"ply \n", "ply\t\n", "ply\r\r\n", "ply \r\n"}) {
+        SCOPED_TRACE(first);
+        expect_points(read_points(write_file(dir / "blank.ply", first + rest)), kPoints);
+    }
+    for (const std::string first : {"plyx\n", " ply\n", "ply 1\n", "PLY\n"}) {
+        SCOPED_TRACE(first);
+        const fs::path path = write_file(dir / "not.ply", first + rest);
+        expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), "not a PLY file"});
+    }
+    std::string mac = "ply\r" + rest;
+    std::replace(mac.begin(), mac.end(), '\n', '\r');
+    const fs::path path = write_file(dir / "mac.ply", mac);
+    expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), "carriage return alone"});
+}
+
 // Writes each (name, content) file and expects it to read as kPoints.
 void expect_all_read_as_kpoints(const std::vector<std::pair<std::string, std::string>>& files)
 {
