@@ -6,6 +6,7 @@
 #include "formats/read_points.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/georef.h"
 
 #include <zlib.h>
 
@@ -2295,19 +2296,20 @@ PointCloud read_points(const std::vector<std::filesystem::path>& paths, const Re
         throw InvalidInput("read_points: no point file given");
     PointCloud cloud;
     // Files in two coordinate systems (lidar tiles of UTM zones 32 and 33) were merged as if in one,
-    // their coordinate system dropped, and the cloud was wrong without a word (QA round 29). Two EPSG
-    // codes that differ are refused; other spellings (WKT) may name one system two ways, and the
-    // merged cloud keeps no coordinate system then, as before.
+    // their coordinate system dropped, and the cloud was wrong without a word (QA round 29). Systems
+    // that certainly differ are refused (crs_differ: two EPSG codes, or an EPSG code and the WKT of
+    // another system); spellings it cannot tell apart may name one system, and the merged cloud keeps
+    // no coordinate system then, as before.
     std::string crs, crs_file; // the first coordinate system a file names, and that file
     for (const std::filesystem::path& path : paths) {
         PointCloud part = read_points(path, options);
         if (!part.crs.empty() && crs.empty()) {
             crs = part.crs;
             crs_file = path.string();
-        } else if (!part.crs.empty() && part.crs != crs && part.crs.rfind("EPSG:", 0) == 0 && crs.rfind("EPSG:", 0) == 0) {
-            throw InvalidInput(path.string() + ": its coordinate system " + part.crs + " is not that of " + crs_file + " (" +
-                               crs + "): points in different coordinate systems cannot be merged; reproject them to "
-                               "one first (pdal translate, las2las)");
+        } else if (!part.crs.empty() && part.crs != crs && crs_differ(part.crs, crs)) {
+            throw InvalidInput(path.string() + ": its coordinate system " + crs_label(part.crs) + " is not that of " +
+                               crs_file + " (" + crs_label(crs) + "): points in different coordinate systems cannot be "
+                               "merged; reproject them to one first (pdal translate, las2las)");
         }
         append_within_limit(cloud, std::move(part), options, path.string(), "the files");
     }

@@ -655,6 +655,67 @@ ProjectedCrs parse_crs(const std::string& text)
                        "EPSG:32633)");
 }
 
+namespace {
+
+// The code of "EPSG:N" (any case, blanks around N), else -1.
+int epsg_text_code(const std::string& text)
+{
+    const std::string t = trimmed(text);
+    return t.size() > 5 && normalized_name(t.substr(0, 5)) == "epsg:" ? parse_code(trimmed(t.substr(5))) : -1;
+}
+
+std::optional<ProjectedCrs> try_parse_crs(const std::string& text)
+{
+    try {
+        return parse_crs(text);
+    } catch (const InvalidInput&) {
+        return std::nullopt;
+    }
+}
+
+bool nearly_equal(double a, double b, double relative)
+{
+    return std::fabs(a - b) <= relative * std::max({std::fabs(a), std::fabs(b), 1.0});
+}
+
+} // namespace
+
+bool crs_differ(const std::string& a, const std::string& b)
+{
+    const int code_a = epsg_text_code(a), code_b = epsg_text_code(b);
+    if (code_a >= 0 && code_b >= 0)
+        return code_a != code_b;
+    const std::optional<ProjectedCrs> pa = try_parse_crs(a), pb = try_parse_crs(b);
+    if (!pa || !pb)
+        return false;
+    if (pa->epsg > 0 && pb->epsg > 0)
+        return pa->epsg != pb->epsg;
+    // A WKT without a known EPSG id: compared by what places the points. WKT writers round to about
+    // 12 digits (the degree's 0.0174532925199433); the parameters of two systems differ far more
+    // (GRS80's and WGS 84's inverse flattening in the sixth decimal, zones by 6 degrees).
+    const TransverseMercator& x = pa->projection;
+    const TransverseMercator& y = pb->projection;
+    constexpr double kRounding = 1e-10;
+    return !nearly_equal(x.ellipsoid.a, y.ellipsoid.a, kRounding) ||
+           !nearly_equal(x.ellipsoid.inverse_flattening, y.ellipsoid.inverse_flattening, kRounding) ||
+           !nearly_equal(wrap_degrees(x.central_meridian_deg - y.central_meridian_deg), 0.0, kRounding) ||
+           !nearly_equal(x.latitude_of_origin_deg, y.latitude_of_origin_deg, kRounding) ||
+           !nearly_equal(x.scale_factor, y.scale_factor, kRounding) ||
+           !nearly_equal(x.unit_to_metre, y.unit_to_metre, kRounding) ||
+           !nearly_equal(x.false_easting * x.unit_to_metre, y.false_easting * y.unit_to_metre, kRounding) ||
+           !nearly_equal(x.false_northing * x.unit_to_metre, y.false_northing * y.unit_to_metre, kRounding);
+}
+
+std::string crs_label(const std::string& text)
+{
+    if (epsg_text_code(text) >= 0)
+        return trimmed(text);
+    if (const std::optional<ProjectedCrs> c = try_parse_crs(text))
+        return c->name + (c->epsg > 0 ? " (EPSG:" + std::to_string(c->epsg) + ")" : std::string());
+    const std::string t = one_line(trimmed(text));
+    return t.size() > 60 ? t.substr(0, 57) + "..." : t;
+}
+
 Geodetic projected_to_geodetic(const TransverseMercator& tm, double easting, double northing, double height)
 {
     check_projection(tm, "projected_to_geodetic");

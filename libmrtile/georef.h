@@ -75,6 +75,19 @@ std::optional<ProjectedCrs> crs_from_epsg(int code);
 //! projected CRS (...)", the datum or projection name, the character where the WKT breaks).
 ProjectedCrs parse_crs(const std::string& text);
 
+//! \brief Whether two CRS texts (EPSG:N or WKT, as PointCloud::crs holds them) certainly name two
+//! different coordinate systems.
+//! \details Two EPSG:N texts differ when their codes do. Otherwise only what parse_crs reads is compared:
+//! the EPSG codes when both resolve to one, else the projection, ellipsoid and unit (to rounding a WKT
+//! writer may apply). Texts parse_crs refuses (another projection, a geographic CRS) and systems that
+//! differ in the datum alone (NAD83 and ETRS89, both on GRS80) are not told apart: false, never a
+//! refusal of two spellings of one system.
+bool crs_differ(const std::string& a, const std::string& b);
+
+//! A CRS text shortened for a one-line message: EPSG:N as it is; WKT as "WGS 84 / UTM zone 33N
+//! (EPSG:32633)" when parse_crs reads it, otherwise its first 60 characters on one line.
+std::string crs_label(const std::string& text);
+
 //! \brief Inverse projection: (easting, northing) in the CRS unit, height in the CRS unit → geodetic
 //! (longitude in [-180, 180], height in metres, taken as ellipsoidal).
 //! \throw InvalidInput if the coordinates are so far outside the projection that it has no inverse

@@ -470,5 +470,44 @@ TEST(ParseCrs, MalformedWktThrows)
     EXPECT_NE(parse_error("hello\nworld").find("\"hello world\""), std::string::npos);
 }
 
+// QA round qa-left: files in EPSG:32633 and in the WKT of another system merged without a word (only two
+// EPSG codes were compared). crs_differ tells systems apart by code, else by projection, ellipsoid and
+// unit; two spellings of one system, or systems it cannot read, never differ.
+TEST(CrsDiffer, CodesWktAndUnreadableSystems)
+{
+    const std::string utm32_no_id = [] {
+        std::string wkt = kWgs84Utm33NoId;
+        wkt.replace(wkt.find("zone 33N"), 8, "zone 32N");
+        wkt.replace(wkt.find("\"central_meridian\",15"), 21, "\"central_meridian\",9");
+        return wkt;
+    }();
+    // One system, spelled as a code, as WKT with its id, as WKT without it, in WKT2.
+    for (const std::string& same : {std::string("EPSG:32633"), std::string("epsg: 32633"), kWgs84Utm33, kWgs84Utm33NoId})
+        for (const std::string& other : {std::string("EPSG:32633"), kWgs84Utm33, kWgs84Utm33NoId}) {
+            EXPECT_FALSE(crs_differ(same, other)) << same << " | " << other;
+            EXPECT_FALSE(crs_differ(other, same)) << same << " | " << other;
+        }
+    EXPECT_FALSE(crs_differ("EPSG:25832", etrs89_utm32_wkt2(false)));
+    EXPECT_FALSE(crs_differ(etrs89_utm32_wkt2(true), etrs89_utm32_wkt2(false)));
+    // Another zone, another ellipsoid (WGS 84 vs GRS80 in the same zone), another code.
+    EXPECT_TRUE(crs_differ("EPSG:32632", kWgs84Utm33NoId));
+    EXPECT_TRUE(crs_differ(kWgs84Utm33NoId, utm32_no_id));
+    EXPECT_FALSE(crs_differ("EPSG:32632", utm32_no_id));
+    EXPECT_TRUE(crs_differ("EPSG:32632", etrs89_utm32_wkt2(false)));
+    EXPECT_TRUE(crs_differ(kWgs84Utm33, etrs89_utm32_wkt2(true)));
+    EXPECT_TRUE(crs_differ("EPSG:2264", "EPSG:2263")); // codes compare even when unsupported
+    // What parse_crs cannot read is not compared beyond its code: a Lambert WKT, a geographic code.
+    const std::string lambert = R"wkt(PROJCS["x",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]]],)wkt"
+                                R"wkt(PROJECTION["Lambert_Conformal_Conic_2SP"]])wkt";
+    EXPECT_FALSE(crs_differ(lambert, "EPSG:32633"));
+    EXPECT_FALSE(crs_differ("EPSG:4326", kWgs84Utm33NoId));
+    // Labels for messages: codes as written, WKT by name and code, one line.
+    EXPECT_EQ(crs_label("EPSG:32632"), "EPSG:32632");
+    EXPECT_EQ(crs_label(kWgs84Utm33), "WGS 84 / UTM zone 33N (EPSG:32633)");
+    EXPECT_EQ(crs_label(kWgs84Utm33NoId), "WGS 84 / UTM zone 33N");
+    EXPECT_EQ(crs_label("PROJCS[\"a\nb\"," + std::string(100, 'x')).find('\n'), std::string::npos);
+    EXPECT_EQ(crs_label("PROJCS[\"a\nb\"," + std::string(100, 'x')).size(), 60u);
+}
+
 } // namespace
 } // namespace mrt

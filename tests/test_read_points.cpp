@@ -1293,6 +1293,42 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
     EXPECT_EQ(read_points(std::vector<fs::path>{zone32, also32}).crs, "EPSG:32632");
 }
 
+// QA round qa-left: a file in EPSG:32633 and one whose WKT is of another system (UTM zone 32N, no EPSG
+// id) merged without a word, the CRS dropped: only two EPSG codes were compared. The WKT of the same
+// system as the code still merges, as does WKT the reader cannot compare (a Lambert projection).
+TEST(ReadLas, wkt_of_another_coordinate_system_is_not_merged)
+{
+    const fs::path dir = test_dir();
+    const auto utm_wkt = [](int zone, int meridian) {
+        return "PROJCS[\"WGS 84 / UTM zone " + std::to_string(zone) + "N\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\","
+               "SPHEROID[\"WGS 84\",6378137,298.257223563]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433]],"
+               "PROJECTION[\"Transverse_Mercator\"],PARAMETER[\"latitude_of_origin\",0],PARAMETER[\"central_meridian\"," +
+               std::to_string(meridian) + "],PARAMETER[\"scale_factor\",0.9996],PARAMETER[\"false_easting\",500000],"
+               "PARAMETER[\"false_northing\",0],UNIT[\"metre\",1]]";
+    };
+    const auto las_with = [&](const std::string& name, const std::string& records) {
+        LasFile f;
+        f.records = records;
+        f.record_count = 1;
+        return write_file(dir / name, f.bytes());
+    };
+    const auto wkt_las = [&](const std::string& name, const std::string& wkt) {
+        return las_with(name, las_record("LASF_Projection", 2112, wkt + std::string(1, '\0')));
+    };
+    const fs::path code33 = las_with("code33.las", las_record("LASF_Projection", 34735, geo_keys({{3072, 32633}})));
+    const fs::path wkt32 = wkt_las("wkt32.las", utm_wkt(32, 9)), wkt33 = wkt_las("wkt33.las", utm_wkt(33, 15));
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{code33, wkt32}); },
+                               {wkt32.string() + ": its coordinate system WGS 84 / UTM zone 32N is not that of " +
+                                    code33.string() + " (EPSG:32633)",
+                                "reproject"});
+    expect_error<InvalidInput>([&] { read_points(std::vector<fs::path>{wkt32, code33}); },
+                               {code33.string() + ": its coordinate system EPSG:32633 is not that of " + wkt32.string() +
+                                " (WGS 84 / UTM zone 32N)"});
+    EXPECT_EQ(read_points(std::vector<fs::path>{code33, wkt33}).size(), 2 * kPoints.size());
+    const fs::path lambert = wkt_las("lambert.las", "PROJCS[\"x\",PROJECTION[\"Lambert_Conformal_Conic_2SP\"]]");
+    EXPECT_EQ(read_points(std::vector<fs::path>{code33, lambert}).size(), 2 * kPoints.size());
+}
+
 TEST(ReadLas, malformed_files_fail_cleanly)
 {
     const fs::path dir = test_dir();
