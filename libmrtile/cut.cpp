@@ -152,6 +152,39 @@ void check_node_ids(const Hierarchy& h, const Cut& cut)
             throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
 }
 
+void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what)
+{
+    for (std::int32_t id : cut)
+        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
+            throw InvalidInput(what + ": node id " + std::to_string(id) + " of the cut is not in the hierarchy");
+    // Nodes own contiguous point ranges and nest as the tree does: in range order (a node before those
+    // inside it), a frontier's ranges follow one another from the first point to the last.
+    Cut order = cut;
+    std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+        const Node& na = h.nodes[static_cast<std::size_t>(a)];
+        const Node& nb = h.nodes[static_cast<std::size_t>(b)];
+        return std::make_tuple(na.begin, nb.end, a) < std::make_tuple(nb.begin, na.end, b);
+    });
+    const auto points = [](std::uint32_t begin, std::uint32_t end) {
+        return "points " + std::to_string(begin) + " to " + std::to_string(end - 1);
+    };
+    std::uint32_t next = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        const Node& n = h.nodes[static_cast<std::size_t>(order[i])];
+        if (i > 0 && order[i] == order[i - 1])
+            throw InvalidInput(what + ": node " + std::to_string(order[i]) + " is listed twice in the cut");
+        if (n.begin < next)
+            throw InvalidInput(what + ": node " + std::to_string(order[i]) + " of the cut lies inside node " +
+                               std::to_string(order[i - 1]) + " of it (a cut holds each point once)");
+        if (n.begin > next)
+            throw InvalidInput(what + ": " + points(next, n.begin) + " are in no node of the cut (a subtree is missing)");
+        next = n.end;
+    }
+    if (next < h.cloud.size())
+        throw InvalidInput(what + ": " + points(next, static_cast<std::uint32_t>(h.cloud.size())) +
+                           " are in no node of the cut (a subtree is missing)");
+}
+
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions)
 {
     check_tolerance(base_tolerance, "base tolerance");
@@ -198,7 +231,9 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
     check_tolerance(base_tolerance, "base tolerance");
     for (const FocusRegion& r : regions)
         check_region(r);
-    check_node_ids(h, cut);
+    // A cut that is no frontier was refined as given: a node listed twice came out twice, a node
+    // inside another was kept beside it, and the result was no cut either.
+    check_cut(h, cut, "refine_cut");
     const double side = h.scale;
     Cut out;
     std::vector<std::int32_t> stack;
@@ -230,7 +265,7 @@ Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, d
 {
     check_tolerance(tolerance, "tolerance");
     check_region(region);
-    check_node_ids(h, cut);
+    check_cut(h, cut, "coarsen_cut");
     const double limit = tolerance * h.scale;
     // For each cut node, its highest ancestor (or itself) inside the region and flat enough; a chain
     // qualifies only as long as every node on it does (a parent is never flatter-tested past a failure).

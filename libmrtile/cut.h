@@ -77,19 +77,25 @@ void check_region(const FocusRegion& region);
 //! \throw InvalidInput naming the first node id of `cut` that is not in the hierarchy.
 void check_node_ids(const Hierarchy& h, const Cut& cut);
 
+//! \brief Checks that `cut` is a frontier of the tree: each point in exactly one of its nodes (in any order).
+//! \throw InvalidInput starting with `what` and naming what is wrong: a node id not in the hierarchy, a
+//! node listed twice, a node inside another node of the cut, or points in no node of it (a missing subtree).
+void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what);
+
 //! Every node meeting a region is refined to the smallest tolerance of the regions it meets; every
 //! other node to `base_tolerance`. Nodes of cut_by_tolerance(h, base_tolerance) that meet no region
 //! are in the result unchanged.
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions);
 
-//! Incremental refinement: every node of `cut` that meets a region is replaced by its subtree's
-//! frontier under the same rule as cut_by_regions (the smallest tolerance of the regions a node meets,
-//! else `base_tolerance`); nodes meeting no region are kept. Cost: the nodes visited under the refined
-//! nodes only. refine_cut(cut_by_tolerance(h, base), base, regions) == cut_by_regions(h, base, regions)
-//! when every region's tolerance is at most base.
+//! Incremental refinement: every node of `cut` (a frontier: check_cut) that meets a region is replaced
+//! by its subtree's frontier under the same rule as cut_by_regions (the smallest tolerance of the
+//! regions a node meets, else `base_tolerance`); nodes meeting no region are kept. Cost: a sort of the
+//! cut (check_cut) and the nodes visited under the refined nodes only.
+//! refine_cut(cut_by_tolerance(h, base), base, regions) == cut_by_regions(h, base, regions) when every
+//! region's tolerance is at most base.
 Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const std::vector<FocusRegion>& regions);
 
-//! Incremental coarsening: groups of cut nodes are replaced by their highest common ancestor whose box
+//! Incremental coarsening (`cut` a frontier: check_cut): groups of cut nodes are replaced by their highest common ancestor whose box
 //! lies inside `region` and that meets the rule of cut_by_tolerance at `tolerance`.
 //! Nodes not inside the region never change.
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance);

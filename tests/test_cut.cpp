@@ -7,6 +7,7 @@
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
 #include "formats/read_points.h"
+#include "tests/error_message.h"
 
 #include <gtest/gtest.h>
 
@@ -378,6 +379,58 @@ TEST(Cut, tolerance_region_and_camera_cuts_stop_at_the_noise_floor)
     Hierarchy unfloored = h;
     clear_noise_floor(unfloored);
     EXPECT_EQ(cut_by_tolerance(unfloored, 0.0).size(), h.leaf_count());
+}
+
+// QA round qa-left: refine_cut and coarsen_cut checked only that the node ids exist. A node listed twice
+// came out twice, a node beside its own ancestor was kept, and the result was no cut. A cut that is no
+// frontier is refused now, naming the node or the points that are wrong.
+TEST(Cut, refine_and_coarsen_refuse_a_cut_that_is_no_frontier)
+{
+    const Hierarchy& h = torus();
+    const Cut base = cut_by_tolerance(h, 0.01);
+    ASSERT_GT(base.size(), 3u);
+    FocusRegion everywhere;
+    everywhere.radius = 100.0;
+    everywhere.tolerance = 0.005;
+    const auto node = [&](std::int32_t id) { return h.nodes[static_cast<std::size_t>(id)]; };
+    const auto points = [](std::uint32_t first, std::uint32_t last) {
+        return "points " + std::to_string(first) + " to " + std::to_string(last) +
+               " are in no node of the cut (a subtree is missing)";
+    };
+    Cut twice = base;
+    twice.push_back(base[3]);
+    const std::int32_t parent = node(base[0]).parent;
+    ASSERT_GE(parent, 0);
+    Cut nested = base;
+    nested.push_back(parent);
+    Cut missing = base;
+    missing.erase(missing.begin() + 2);
+    // The node holding the last point: its range ends the cut.
+    const auto last = std::find_if(base.begin(), base.end(), [&](std::int32_t id) { return node(id).end == h.cloud.size(); });
+    ASSERT_NE(last, base.end());
+    Cut no_end = base;
+    no_end.erase(no_end.begin() + (last - base.begin()));
+    const std::vector<std::pair<Cut, std::string>> cases = {
+        {twice, "node " + std::to_string(base[3]) + " is listed twice in the cut"},
+        {nested, "node " + std::to_string(base[0]) + " of the cut lies inside node " + std::to_string(parent) +
+                     " of it (a cut holds each point once)"},
+        {missing, points(node(base[2]).begin, node(base[2]).end - 1)},
+        {no_end, points(node(*last).begin, static_cast<std::uint32_t>(h.cloud.size() - 1))},
+        {Cut{}, points(0, static_cast<std::uint32_t>(h.cloud.size() - 1))},
+        {Cut{0, -1}, "node id -1 of the cut is not in the hierarchy"},
+    };
+    for (const auto& [cut, expected] : cases) {
+        SCOPED_TRACE(expected);
+        EXPECT_FALSE(is_partition(h, cut));
+        EXPECT_EQ(testing::error_message([&] { refine_cut(h, cut, 0.01, {everywhere}); }), "refine_cut: " + expected);
+        EXPECT_EQ(testing::error_message([&] { coarsen_cut(h, cut, everywhere, 0.05); }), "coarsen_cut: " + expected);
+    }
+    // Any order of a frontier is one.
+    Cut reversed = base;
+    std::reverse(reversed.begin(), reversed.end());
+    EXPECT_NO_THROW(check_cut(h, reversed, "x"));
+    EXPECT_TRUE(is_partition(h, refine_cut(h, reversed, 0.01, {everywhere})));
+    EXPECT_TRUE(is_partition(h, coarsen_cut(h, reversed, everywhere, 0.05)));
 }
 
 } // namespace
