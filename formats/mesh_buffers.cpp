@@ -47,8 +47,15 @@ Vec3 from_output_frame(const Vec3& v, UpAxis up)
     return up == UpAxis::Z ? Vec3{v.x, -v.z, v.y} : v;
 }
 
+void check_up_axis(UpAxis up)
+{
+    if (up != UpAxis::Y && up != UpAxis::Z)
+        throw InvalidInput("up_axis " + std::to_string(static_cast<int>(up)) + " is neither UpAxis::Y nor UpAxis::Z");
+}
+
 MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options)
 {
+    check_up_axis(options.up_axis);
     constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
     const bool has_status = mesh.has_vertex_status() && mesh.has_face_status();
     auto face_deleted = [&](Mesh::FaceHandle f) { return has_status && mesh.status(f).deleted(); };

@@ -24,6 +24,9 @@ enum class UpAxis
     Z, //!< input is z-up: (x, y, z) -> (x, z, -y)
 };
 
+//! \throw InvalidInput unless `up` is UpAxis::Y or UpAxis::Z (static_cast<UpAxis>(42) was taken for Y).
+void check_up_axis(UpAxis up);
+
 //! Maps a point or direction of the input frame into the output (glTF) frame.
 Vec3 to_output_frame(const Vec3& v, UpAxis up);
 //! Inverse of to_output_frame.

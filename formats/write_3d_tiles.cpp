@@ -155,6 +155,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
     validate_tree(tiles);
     if (!is_finite(origin))
         throw InvalidInput(dir.string() + ": the tileset origin is not finite");
+    check_up_axis(options.gltf.up_axis);
     const UpAxis up = options.gltf.up_axis;
     if (options.root_transform)
         for (const double v : *options.root_transform)

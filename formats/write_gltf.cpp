@@ -46,7 +46,7 @@ Json float_array(const std::array<float, 3>& v)
 class GltfBuilder
 {
 public:
-    explicit GltfBuilder(const GltfOptions& options) : options_(options) {}
+    explicit GltfBuilder(const GltfOptions& options) : options_(options) { check_up_axis(options.up_axis); }
 
     //! Adds a node showing `mesh`; returns its index. The node is not put in the scene.
     std::size_t add_mesh_node(const Mesh& mesh, const Vec3& origin, const std::string& name)

@@ -772,6 +772,10 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
 {
     const auto start = std::chrono::steady_clock::now();
     using Denoise = BuildOptions::Denoise;
+    // An enum cast from an integer (static_cast<Denoise>(42)) was taken for Auto.
+    if (options.denoise != Denoise::Auto && options.denoise != Denoise::Off && options.denoise != Denoise::On)
+        throw InvalidInput("build_hierarchy: BuildOptions::denoise " + std::to_string(static_cast<int>(options.denoise)) +
+                           " is none of Auto, Off, On");
     // The points to denoise, without duplicates (a point repeated is its own nearest neighbours), and
     // where each came from in the input (empty: the same index).
     std::vector<std::uint32_t> to_input;

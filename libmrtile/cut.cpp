@@ -136,6 +136,10 @@ bool intersects(const Node& node, const FocusRegion& region)
 
 void check_region(const FocusRegion& r)
 {
+    // A shape cast from an integer (static_cast<Shape>(42)) was met as a sphere, its radius unchecked.
+    if (r.shape != FocusRegion::Shape::Sphere && r.shape != FocusRegion::Shape::Box)
+        throw InvalidInput("cut: a focus region's shape " + std::to_string(static_cast<int>(r.shape)) +
+                           " is neither Sphere nor Box");
     check_tolerance(r.tolerance, "region tolerance");
     if (r.shape == FocusRegion::Shape::Sphere && (!(r.radius >= 0) || !std::isfinite(r.radius) || !is_finite(r.centre)))
         throw InvalidInput("cut: a focus sphere needs a finite centre and a finite radius >= 0");

@@ -400,6 +400,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     // Before any work: mesh_cut untangles only when max_rounds > 0 and the mesh crosses itself, so bad
     // untangling options were otherwise taken without a word.
     check_untangle_options(options.untangle);
+    check_surface_options(options.surface);
     const auto start = std::chrono::steady_clock::now();
     MeshResult result;
     result.cut = cut;

@@ -246,17 +246,49 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
 
 std::vector<bool> surrounded_tiles(const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
+    check_surface_options(options);
     return interior_tiles(tiles, options.interior_gap_degrees);
 }
 
 HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
+    check_surface_options(options);
     const Projection p = choose_projection(h, tiles, options);
     HeightFieldChoice choice;
     choice.used = p.used;
     choice.axis = p.axis;
     choice.steep = p.steep;
     return choice;
+}
+
+void check_surface_options(const SurfaceOptions& options)
+{
+    if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
+        !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || std::isnan(options.split_length) ||
+        !(options.max_gap_width >= 0.0) || !(options.collapse_tolerance >= 0.0) || !(options.strip_tolerance >= 0.0))
+        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width, collapse_tolerance, strip_tolerance must be >= 0 and alpha_factor, "
+                           "split_factor > 0");
+    // Angles above what they measure (a tilt of 200 degrees, a turn of 1000) were taken, meaning "no
+    // limit" or, through the cosine, another limit than the one written.
+    const auto check_angle = [](double degrees, int most, const char* name) {
+        if (!(degrees > 0.0 && degrees <= most)) {
+            char got[32];
+            std::snprintf(got, sizeof got, "%g", degrees);
+            throw InvalidInput(std::string("SurfaceOptions::") + name + " must be in (0, " + std::to_string(most) +
+                               "] degrees, got " + got);
+        }
+    };
+    check_angle(options.max_tilt_degrees, 90, "max_tilt_degrees");
+    check_angle(options.max_turn_degrees, 180, "max_turn_degrees");
+    check_angle(options.interior_gap_degrees, 360, "interior_gap_degrees");
+    // An enum cast from an integer (static_cast<HeightField>(42)) was taken for Auto.
+    if (options.height_field != HeightField::Auto && options.height_field != HeightField::On &&
+        options.height_field != HeightField::Off)
+        throw InvalidInput("SurfaceOptions::height_field " + std::to_string(static_cast<int>(options.height_field)) +
+                           " is none of Auto, On, Off");
+    if (options.close_holes > kMaxCloseHoles)
+        throw InvalidInput("SurfaceOptions::close_holes: at most " + std::to_string(kMaxCloseHoles) +
+                           " edges (a hole's fill costs the cube of its edges)");
 }
 
 void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mesh, const SurfaceOptions& options,
@@ -267,15 +299,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     const auto start = std::chrono::steady_clock::now();
     if (given.empty())
         throw InvalidInput("build_surface: the cut has no tiles");
-    if (!(options.alpha >= 0.0) || !(options.alpha_factor > 0.0) || !(options.split_factor > 0.0) ||
-        !(options.hole_factor >= 0.0) || !(options.step_height >= 0.0) || !(options.max_turn_degrees > 0.0) ||
-        !(options.max_tilt_degrees > 0.0) || std::isnan(options.split_length) || !(options.interior_gap_degrees > 0.0) ||
-        !(options.max_gap_width >= 0.0) || !(options.collapse_tolerance >= 0.0) || !(options.strip_tolerance >= 0.0))
-        throw InvalidInput("SurfaceOptions: alpha, step_height, hole_factor, max_gap_width, collapse_tolerance, strip_tolerance must be >= 0 and alpha_factor, "
-                           "split_factor, max_turn_degrees, max_tilt_degrees, interior_gap_degrees > 0");
-    if (options.close_holes > kMaxCloseHoles)
-        throw InvalidInput("SurfaceOptions::close_holes: at most " + std::to_string(kMaxCloseHoles) +
-                           " edges (a hole's fill costs the cube of its edges)");
+    check_surface_options(options);
     // A line or a point spans no surface whatever tiles its cut has: points on a line stored as floats
     // are off it by their rounding, enough for a fan of zero-area faces (QA, session 17: 225 of them).
     // The spread across the line is judged against the scale, which far strays do not set (a stray

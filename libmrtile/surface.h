@@ -158,6 +158,13 @@ HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile
 //! holes among such tiles (they are gaps between tiles, not the sample's own holes).
 std::vector<bool> surrounded_tiles(const std::vector<Tile>& tiles, const SurfaceOptions& options = {});
 
+//! \brief Checks the options build_surface takes (mesh_cut too, before any work).
+//! \throw InvalidInput naming the option and its allowed range: a negative or NaN length or factor,
+//! height_field none of the enum's values, max_tilt_degrees outside (0, 90] (a tile normal's angle to
+//! the axis), max_turn_degrees outside (0, 180] (a turn across an edge), interior_gap_degrees outside
+//! (0, 360] (a sector seen from a tile's centre), close_holes above kMaxCloseHoles.
+void check_surface_options(const SurfaceOptions& options);
+
 //! \brief Meshes the tiles of a cut (from make_tiles) into an oriented 2-manifold.
 //! \details Deterministic. Closed components are oriented outward (positive signed volume); open ones
 //! face h.cloud.viewpoint when it is set (the scanner's position: a scan's mesh faces its scanner,

@@ -418,5 +418,19 @@ TEST(ClusterTree, tolerance_scale_leaves_out_far_strays)
     EXPECT_EQ(tolerance_scale({}), 0.0);
 }
 
+// QA round qa-left: BuildOptions::denoise cast from an integer (static_cast<Denoise>(42)) was taken for
+// Auto.
+TEST(ClusterTree, unknown_denoise_is_refused)
+{
+    BuildOptions options;
+    options.denoise = static_cast<BuildOptions::Denoise>(42);
+    try {
+        build_hierarchy(shapes::sphere(500), options);
+        ADD_FAILURE() << "denoise 42 was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), "build_hierarchy: BuildOptions::denoise 42 is none of Auto, Off, On");
+    }
+}
+
 } // namespace
 } // namespace mrt

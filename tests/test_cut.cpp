@@ -274,6 +274,20 @@ TEST(Cut, bad_node_ids_and_regions_are_refused)
     EXPECT_THROW(coarsen_cut(h, cut_by_tolerance(h, 0.01), nan_centre, 0.01), InvalidInput);
 }
 
+// QA round qa-left: a focus region's shape cast from an integer (static_cast<Shape>(42)) was met as a
+// sphere, its radius unchecked.
+TEST(Cut, unknown_region_shape_is_refused)
+{
+    const Hierarchy& h = torus();
+    FocusRegion odd;
+    odd.shape = static_cast<FocusRegion::Shape>(42);
+    odd.radius = -1.0;
+    const std::string message = "cut: a focus region's shape 42 is neither Sphere nor Box";
+    EXPECT_EQ(testing::error_message([&] { check_region(odd); }), message);
+    EXPECT_EQ(testing::error_message([&] { cut_by_regions(h, 0.01, {odd}); }), message);
+    EXPECT_EQ(testing::error_message([&] { refine_cut(h, cut_by_tolerance(h, 0.01), 0.01, {odd}); }), message);
+}
+
 TEST(Cut, predicate_cut)
 {
     const Hierarchy& h = torus();

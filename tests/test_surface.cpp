@@ -6,6 +6,7 @@
 #include "libmrtile/surface.h"
 
 #include "cut_fixtures.h"
+#include "tests/error_message.h"
 #include "formats/read_points.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
@@ -602,6 +603,49 @@ TEST(Surface, real_cuts_of_a_height_field_have_one_border_loop)
             EXPECT_EQ(r.topo.components, 1u);
             EXPECT_EQ(r.topo.genus, 0);
         }
+}
+
+// QA round qa-left: angles above what they measure (a tilt of 200 degrees, a turn of 1000) and a
+// height_field cast from an integer (static_cast<HeightField>(42), taken for Auto) were accepted by
+// build_surface and mesh_cut. check_surface_options names the option and its range; the limits pass.
+TEST(Surface, angles_out_of_their_range_and_unknown_enums_are_refused)
+{
+    const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(800), 20);
+    const std::vector<Tile> tiles = make_tiles(fc.hierarchy, fc.cut);
+    struct Case
+    {
+        double SurfaceOptions::*field;
+        double value;
+        std::string message; // "" = accepted
+    };
+    const std::vector<Case> cases = {
+        {&SurfaceOptions::max_tilt_degrees, 90.0, ""},
+        {&SurfaceOptions::max_tilt_degrees, 91.0, "SurfaceOptions::max_tilt_degrees must be in (0, 90] degrees, got 91"},
+        {&SurfaceOptions::max_tilt_degrees, 0.0, "SurfaceOptions::max_tilt_degrees must be in (0, 90] degrees, got 0"},
+        {&SurfaceOptions::max_turn_degrees, 180.0, ""},
+        {&SurfaceOptions::max_turn_degrees, 1000.0, "SurfaceOptions::max_turn_degrees must be in (0, 180] degrees, got 1000"},
+        {&SurfaceOptions::max_turn_degrees, std::nan(""), "SurfaceOptions::max_turn_degrees must be in (0, 180] degrees, got nan"},
+        {&SurfaceOptions::interior_gap_degrees, 360.0, ""},
+        {&SurfaceOptions::interior_gap_degrees, 361.0, "SurfaceOptions::interior_gap_degrees must be in (0, 360] degrees, got 361"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.message);
+        SurfaceOptions options;
+        options.*(c.field) = c.value;
+        EXPECT_EQ(testing::error_message([&] { check_surface_options(options); }), c.message);
+        if (!c.message.empty()) {
+            EXPECT_EQ(testing::error_message([&] { build_surface(fc.hierarchy, tiles, options); }), c.message);
+            MeshOptions mesh_options;
+            mesh_options.surface = options;
+            EXPECT_EQ(testing::error_message([&] { mesh_cut(fc.hierarchy, fc.cut, mesh_options); }), c.message);
+        }
+    }
+    SurfaceOptions unknown;
+    unknown.height_field = static_cast<HeightField>(42);
+    const std::string message = "SurfaceOptions::height_field 42 is none of Auto, On, Off";
+    EXPECT_EQ(testing::error_message([&] { check_surface_options(unknown); }), message);
+    EXPECT_EQ(testing::error_message([&] { build_surface(fc.hierarchy, tiles, unknown); }), message);
+    EXPECT_EQ(testing::error_message([&] { choose_height_field(fc.hierarchy, tiles, unknown); }), message);
 }
 
 } // namespace

@@ -349,6 +349,34 @@ TEST(WriteMesh, a_non_finite_vertex_is_refused_in_every_format)
     EXPECT_NO_THROW(write_mesh(deleted, Vec3{}, dir / "deleted.ply"));
 }
 
+// QA round qa-left: GltfOptions::up_axis cast from an integer (static_cast<UpAxis>(42)) was taken for Y.
+TEST(WriteMesh, unknown_up_axis_is_refused)
+{
+    const fs::path dir = test_dir();
+    const Mesh mesh = octahedron();
+    GltfOptions options;
+    options.up_axis = static_cast<UpAxis>(42);
+    const std::string message = "up_axis 42 is neither UpAxis::Y nor UpAxis::Z";
+    try {
+        write_gltf(mesh, Vec3{}, dir / "odd.glb", options);
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), message);
+    }
+    TilesetOptions tileset;
+    tileset.gltf = options;
+    TilesetTile root;
+    root.mesh = &mesh;
+    root.box = BoundingBox{{-1, -1, -1}, {1, 1, 1}};
+    try {
+        write_3d_tiles({root}, Vec3{}, dir / "odd_tiles", tileset);
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), message);
+    }
+    EXPECT_TRUE(directory_listing(dir).empty());
+}
+
 // QA round qa3: a mesh whose normals the caller released (release_vertex_normals, release_face_normals)
 // made write_mesh read the missing property (an OpenMesh assertion in a debug build). Now its normals
 // are computed on the copy as for any mesh: the files equal those of the mesh with its normals.
