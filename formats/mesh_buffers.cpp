@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -123,6 +124,13 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
         const Vec3 local = frame_positions[i] - out.offset;
         for (int k = 0; k < 3; ++k) {
             const float value = static_cast<float>(local[k]);
+            // A vertex farther than 3.4e38 from the offset became an infinite float in the file.
+            if (!std::isfinite(value)) {
+                char distance[32];
+                std::snprintf(distance, sizeof distance, "%.6g", local[k]);
+                throw InvalidInput("mesh: vertex " + std::to_string(used[i].idx()) + " lies " + distance +
+                                   " from the offset along an axis, beyond the 3.4e38 a 32-bit float can store");
+            }
             const auto ku = static_cast<std::size_t>(k);
             out.positions[i * 3 + ku] = value;
             out.min[ku] = std::min(out.min[ku], value);

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 
 namespace mrt {
@@ -86,7 +87,8 @@ bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, doubl
         first = false;
     }
     const double extent = (hi - lo).norm();
-    return largest * std::ldexp(1.0, -24) > fraction * extent;
+    // Beyond the largest float a coordinate is no float at all (1e39 was written as inf).
+    return largest * std::ldexp(1.0, -24) > fraction * extent || largest > std::numeric_limits<float>::max();
 }
 
 // Little-endian bytes of a value, whatever the host.
@@ -241,6 +243,19 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
     if (!relative)
         for (const auto v : out.vertices())
             out.set_point(v, out.point(v) + shift);
+    // Finite vertices and origin can still sum to infinity (1e308 + 1e308), and STL's floats end at
+    // 3.4e38: such a vertex was written as "inf" or infinite bits.
+    const double largest = format == MeshFormat::stl ? std::numeric_limits<float>::max() : std::numeric_limits<double>::max();
+    for (const auto v : out.vertices()) {
+        const Mesh::Point p = out.point(v);
+        if (!(std::abs(p[0]) <= largest && std::abs(p[1]) <= largest && std::abs(p[2]) <= largest)) {
+            char where[96];
+            std::snprintf(where, sizeof where, "(%.6g, %.6g, %.6g)", p[0], p[1], p[2]);
+            throw InvalidInput(path.string() + ": mesh vertex " + std::to_string(v.idx()) + " lies at " + where +
+                               (relative ? " from the origin" : "") + ", beyond the largest " +
+                               (format == MeshFormat::stl ? "32-bit float STL can store (3.4e38)" : "double (1.8e308)"));
+        }
+    }
 
     const bool colors = options.colors && out.has_vertex_colors() && format != MeshFormat::obj;
     if ((format == MeshFormat::ply || format == MeshFormat::obj || format == MeshFormat::off) && needs_doubles(out)) {

@@ -19,8 +19,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
@@ -401,6 +403,57 @@ TEST(WriteMesh, a_mesh_without_normal_properties_is_written_with_computed_normal
         write_mesh(without, Vec3{}, dir / ("kept" + ext), keep);
         EXPECT_EQ(bytes(dir / ("with" + ext)), bytes(dir / ("kept" + ext))) << ext;
     }
+}
+
+// QA round qa-left: a vertex finite as a double but beyond the largest float (1e39) was written as inf
+// into PLY (float properties), STL and glTF. PLY, OBJ and OFF keep doubles now; STL and glTF, which
+// have only floats, refuse it naming the vertex (and the file); so does a vertex whose sum with the
+// origin overflows a double. Nothing is left behind.
+TEST(WriteMesh, a_vertex_beyond_the_float_range_is_kept_as_double_or_refused)
+{
+    const fs::path dir = test_dir();
+    Mesh mesh = octahedron();
+    mesh.set_point(*mesh.vertices_begin(), Mesh::Point(1e39, 0, 0));
+    for (const char* name : {"big.ply", "big.obj", "big.off"}) {
+        SCOPED_TRACE(name);
+        write_mesh(mesh, Vec3{}, dir / name);
+        std::ifstream in(dir / name, std::ios::binary);
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        EXPECT_EQ(text.find("inf"), std::string::npos);
+        char exact[32]; // the text formats' doubles round-trip
+        std::snprintf(exact, sizeof exact, "%.17g", 1e39);
+        EXPECT_NE(text.find(name == std::string("big.ply") ? "property double x" : exact), std::string::npos) << text;
+        fs::remove(dir / name);
+    }
+    try {
+        write_mesh(mesh, Vec3{}, dir / "big.stl");
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), (dir / "big.stl").string() +
+                                             ": mesh vertex 0 lies at (1e+39, 0, 0) from the origin, beyond the largest 32-bit float "
+                                             "STL can store (3.4e38)");
+    }
+    GltfOptions at_zero; // an offset of 0: vertex 0 alone is beyond the float range from it
+    at_zero.offset = Vec3{0, 0, 0};
+    for (const char* name : {"big.glb", "big.gltf"}) {
+        try {
+            write_gltf(mesh, Vec3{}, dir / name, at_zero);
+            ADD_FAILURE() << name << ": no exception";
+        } catch (const InvalidInput& e) {
+            EXPECT_EQ(std::string(e.what()), "mesh: vertex 0 lies 1e+39 from the offset along an axis, beyond the 3.4e38 "
+                                             "a 32-bit float can store");
+        }
+    }
+    Mesh far = octahedron();
+    far.set_point(*far.vertices_begin(), Mesh::Point(1e308, 0, 0));
+    try {
+        write_mesh(far, Vec3{1e308, 0, 0}, dir / "sum.ply");
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), (dir / "sum.ply").string() +
+                                             ": mesh vertex 0 lies at (inf, 0, 0), beyond the largest double (1.8e308)");
+    }
+    EXPECT_TRUE(directory_listing(dir).empty());
 }
 
 } // namespace
