@@ -794,6 +794,10 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
     for (const auto v : mesh.vertices())
         if (!is_finite(to_vec3(mesh.point(v))))
             throw InvalidInput("measure_quality: mesh vertex " + std::to_string(v.idx()) + " has a NaN or infinite coordinate");
+    // A mesh without faces has no distance to the points: its report said 0 (every point on the mesh),
+    // the best score there is, and the CLI prints distances as measured.
+    if (mesh.faces().begin() == mesh.faces().end()) // deleted faces are skipped
+        throw InvalidInput("measure_quality: the mesh has no faces, so no distance of the points to it can be measured");
     q.topology = topology_stats(mesh);
     // A hierarchy just built from denoised points still has the points read: the distances are to them.
     const std::vector<Vec3>& points = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;

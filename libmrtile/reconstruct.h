@@ -186,7 +186,8 @@ inline constexpr double kSharpLoopDegrees = 110.0;
 //! locally as QualityReport::sharp_loops says.
 std::size_t count_sharp_loops(const Mesh& mesh, double degrees = kSharpLoopDegrees);
 
-//! \throw InvalidInput if `cut` is not a partition of the points or a vertex of `mesh` is not finite.
+//! \throw InvalidInput if `cut` is not a partition of the points, a vertex of `mesh` is not finite, or
+//! `mesh` has no faces (no distance to it exists; mesh_cut never returns such a mesh).
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);
 
 //! Paper eq. 4-6 for a cut (see QualityReport::e_rms). \throw InvalidInput if `cut` is not a partition.

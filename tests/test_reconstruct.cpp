@@ -753,6 +753,34 @@ TEST(Reconstruct, quality_of_a_cut_that_is_no_partition_or_a_non_finite_mesh_is_
     EXPECT_EQ(measure_quality(h, r.cut, r.mesh).points, h.cloud.size());
 }
 
+// QA round qa-left: measure_quality of a mesh without faces reported every distance as 0, the best score
+// there is (the CLI prints what it measures). It is refused; so is a mesh whose faces are all deleted.
+TEST(Reconstruct, quality_of_a_mesh_without_faces_is_refused)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    const std::string message =
+        "measure_quality: the mesh has no faces, so no distance of the points to it can be measured";
+    Mesh points_only;
+    points_only.add_vertex(Mesh::Point(0, 0, 0));
+    Mesh deleted = r.mesh;
+    deleted.request_face_status();
+    deleted.request_edge_status();
+    deleted.request_vertex_status();
+    for (const auto f : r.mesh.faces())
+        deleted.delete_face(f, false);
+    const Mesh empty;
+    for (const Mesh* mesh : std::vector<const Mesh*>{&points_only, &deleted, &empty}) {
+        try {
+            measure_quality(h, r.cut, *mesh);
+            ADD_FAILURE() << "no exception";
+        } catch (const InvalidInput& e) {
+            EXPECT_EQ(std::string(e.what()), message);
+        }
+    }
+    EXPECT_GT(measure_quality(h, r.cut, r.mesh).point_to_mesh.max, 0.0);
+}
+
 // QA round qa3: a cut is a set of nodes, but the same cut in another order gave another mesh (a sphere's
 // 0.02 cut reversed: 338 faces instead of 322) and result.cut in that order. Now meshed in point order.
 TEST(Reconstruct, a_cut_in_any_order_gives_the_same_mesh)
