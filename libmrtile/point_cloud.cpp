@@ -132,6 +132,15 @@ void validate(const PointCloud& cloud, const std::string& what)
         throw InvalidInput(what + ": the points span " + range + ", more than the 1e30 units a mesh can have (a corrupt "
                            "file, or stray points far from the rest: remove them)");
     }
+    // A sphere 1e-200 across was refused as "collinear or coincident", one 1e-100 across as "every piece
+    // is a small detached island", and one 1e-160 across gave NaN distances: the scale was the cause.
+    if (side > 0.0 && side < kMinExtent) {
+        char size[64];
+        std::snprintf(size, sizeof size, "%.6g", side);
+        throw InvalidInput(what + ": the points span at most " + size + " units (the largest side of their box), less "
+                           "than the 1e-30 a mesh can have (32-bit floats and squared distances lose their digits): "
+                           "scale them up");
+    }
 }
 
 namespace {

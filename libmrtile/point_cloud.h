@@ -104,10 +104,14 @@ inline std::size_t sample_stride(std::size_t count, std::size_t max_points)
 
 //! The largest extent (bounding-box side) a cloud may have, in its units.
 inline constexpr double kMaxExtent = 1e30;
+//! The smallest non-zero extent a cloud may have: 32-bit floats (glTF, STL) keep their 24 bits down to
+//! 1.2e-38 only, so a mesh 1e-30 across keeps about a millionth of its extent; the squares of far
+//! smaller ones underflow in the build (1e-80 and less: no surface was left).
+inline constexpr double kMinExtent = 1e-30;
 
 //! \brief Checks a cloud before building a hierarchy.
 //! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with
-//! its index), if the points span more than kMaxExtent, if colours do not match positions, or if the
+//! its index), if the points span more than kMaxExtent or less than kMinExtent (but not 0), if colours do not match positions, or if the
 //! cloud is empty.
 void validate(const PointCloud& cloud, const std::string& what);
 

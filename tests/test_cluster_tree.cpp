@@ -300,6 +300,27 @@ TEST(ClusterTree, absurd_extents_are_refused_and_far_strays_keep_the_rest_exact)
     EXPECT_NEAR(h.scale, bounding_box(sphere).largest_side(), 1e-6); // the stray does not set the scale
 }
 
+// QA round qa-left: a cloud under 1e-30 across was refused as "collinear or coincident" (1e-200), left
+// "no surface" (1e-100) or gave NaN distances (1e-160): the scale is named now. 1e-30 itself builds.
+TEST(ClusterTree, clouds_too_small_to_mesh_are_refused_as_such)
+{
+    for (const double radius : {1e-100, 1e-200, 1e-31}) {
+        PointCloud tiny = shapes::sphere(500, radius);
+        try {
+            build_hierarchy(tiny);
+            ADD_FAILURE() << radius << " was accepted";
+        } catch (const InvalidInput& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("less than the 1e-30 a mesh can have"), std::string::npos) << what;
+            EXPECT_EQ(what.find("collinear"), std::string::npos) << what;
+        }
+    }
+    EXPECT_EQ(build_hierarchy(shapes::sphere(500, 1e-30)).cloud.size(), 500u);
+    PointCloud one_point;
+    one_point.positions = {{1e-200, 0, 0}, {1e-200, 0, 0}};
+    EXPECT_NO_THROW(build_hierarchy(one_point)); // coincident points span 0: not a matter of scale
+}
+
 // Far from the origin (UTM-like coordinates, recentred), the hierarchy is the one built near the origin.
 TEST(ClusterTree, far_from_origin_matches_near_origin)
 {
