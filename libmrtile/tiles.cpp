@@ -30,6 +30,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <set>
 #include <string>
 #include <tuple>
 
@@ -40,6 +41,9 @@ namespace {
 // surface when it lies farther from the tile's plane than this many times the larger of the node's own
 // largest plane distance and the tile's point spacing.
 constexpr double kForeignPlaneFactor = 4.0;
+
+// At most this many hull points make a tile's outline (see thinned_hull).
+constexpr std::size_t kMaxHullPoints = 128;
 
 struct Projected
 {
@@ -149,6 +153,50 @@ std::vector<std::uint32_t> convex_hull(std::vector<Projected>& pts, double toler
     return out;
 }
 
+// Thins a counter-clockwise convex hull to at most `most` vertices by dropping, again and again, the
+// vertex whose triangle with its two neighbours has the least area (Visvalingam), which keeps the
+// polygon convex and changes its outline least. A tile's fan has one face per hull vertex, and every
+// face of a fan shares the apex, so their boxes all meet and the self-intersection tests of a mesh cost
+// the square of the largest fan: points along a convex curve are all hull points (QA round qa-adv: a
+// circle of 40,000 points gave tiles of 500 hull points and took 96 s to mesh, 100,000 points over 120 s,
+// a coarse cut one tile of every point). Surface tiles have a few dozen hull points (the bunny and Igea
+// at every cut: fan apexes of valence 36 at most), so a bound far above that changes no such mesh.
+std::vector<std::uint32_t> thinned_hull(const std::vector<std::uint32_t>& hull, const std::vector<Projected>& at,
+                                        std::size_t most)
+{
+    const std::size_t m = hull.size();
+    if (m <= most || most < 3)
+        return hull;
+    std::vector<std::size_t> prev(m), next(m);
+    for (std::size_t i = 0; i < m; ++i) {
+        prev[i] = (i + m - 1) % m;
+        next[i] = (i + 1) % m;
+    }
+    auto area = [&](std::size_t i) { return turn(at[prev[i]], at[i], at[next[i]]); };
+    std::set<std::pair<double, std::size_t>> queue; // (twice the area, hull position): ties by position
+    std::vector<double> key(m);
+    for (std::size_t i = 0; i < m; ++i)
+        queue.insert({key[i] = area(i), i});
+    std::vector<bool> kept(m, true);
+    for (std::size_t left = m; left > most; --left) {
+        const std::size_t i = queue.begin()->second;
+        queue.erase(queue.begin());
+        kept[i] = false;
+        next[prev[i]] = next[i];
+        prev[next[i]] = prev[i];
+        for (const std::size_t j : {prev[i], next[i]}) {
+            queue.erase({key[j], j});
+            queue.insert({key[j] = area(j), j});
+        }
+    }
+    std::vector<std::uint32_t> out;
+    out.reserve(most);
+    for (std::size_t i = 0; i < m; ++i)
+        if (kept[i])
+            out.push_back(hull[i]);
+    return out;
+}
+
 // Points of `pts` that lie apart: those in one cell of a grid of side `cell` in the plane count once
 // (cells are a bound, not a metric: two points a hair apart across a cell border count twice, which
 // only a clump straddling a border does, and the clumps this is for are far smaller than a cell).
@@ -222,6 +270,15 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
             t.apex = t.centre + t.normal * (height / static_cast<double>(used));
     }
     t.boundary = convex_hull(pts, options.collinear_tolerance);
+    if (t.boundary.size() > kMaxHullPoints) {
+        std::vector<Projected> at;
+        at.reserve(t.boundary.size());
+        for (const std::uint32_t i : t.boundary) {
+            const Vec3 d = h.cloud.positions[i] - t.centre;
+            at.push_back({dot(d, t.axis_u), dot(d, t.axis_v), i});
+        }
+        t.boundary = thinned_hull(t.boundary, at, kMaxHullPoints);
+    }
     if (t.has_fan() && options.fit_apex) {
         std::vector<double> heights(pts.size());
         for (std::size_t k = 0; k < pts.size(); ++k)
