@@ -307,8 +307,15 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     const Eigen3x3& whole = h.nodes.front().frame; // values: sums of squares over the points
     const double points = static_cast<double>(std::max<std::size_t>(1, h.nodes.front().count()));
     const double least_spread = 1e-6 * (h.scale > 0 ? h.scale : std::sqrt(whole.values[2] / points));
-    if (!(whole.values[1] / points > least_spread * least_spread))
-        throw InvalidInput("the points are collinear or coincident: they span no surface to mesh");
+    if (!(whole.values[1] / points > least_spread * least_spread)) {
+        // Say how close to a line: objects a million times their size apart fail the same test (QA round
+        // qa-adv: two unit spheres 1e6 apart were called collinear, which left the user guessing).
+        char scale[32];
+        std::snprintf(scale, sizeof scale, "%.6g", h.scale);
+        throw InvalidInput(std::string("the points are collinear or coincident within a millionth of their extent (") +
+                           scale + "): they span no surface to mesh (objects farther apart than a million times "
+                           "their size are meshed one at a time)");
+    }
     std::size_t fan_tiles = 0;
     for (const Tile& t : given) {
         if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())

@@ -157,6 +157,26 @@ TEST(Reconstruct, a_stray_1e20_away_still_leaves_a_surface_to_mesh)
     }
 }
 
+// Two unit spheres 1e7 apart are collinear within a millionth of their extent, which the test above
+// refuses like a line: the error says so and names the extent (QA round qa-adv: it said only
+// "collinear or coincident", of two spheres).
+TEST(Reconstruct, objects_a_million_sizes_apart_are_refused_naming_the_extent)
+{
+    PointCloud cloud = shapes::sphere(2000);
+    const std::size_t n = cloud.positions.size();
+    for (std::size_t i = 0; i < n; ++i)
+        cloud.positions.push_back(cloud.positions[i] + Vec3{1e7, 0, 0});
+    const Hierarchy h = build_hierarchy(cloud);
+    try {
+        mesh_cut(h, cut_by_tolerance(h, 0.002));
+        FAIL() << "meshed";
+    } catch (const InvalidInput& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("within a millionth of their extent (1e+07)"), std::string::npos) << what;
+        EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+}
+
 // A sphere with noise of one point spacing meshed at a tolerance below its noise: the cut stops at
 // the noise floor and the mesh is a closed sphere whose vertices lie within about the noise of the
 // true surface. Below the floor (as before it existed), the same cut broke into 60-80 pieces.
