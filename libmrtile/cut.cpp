@@ -28,13 +28,20 @@ double distance_to_box(const Vec3& p, const BoundingBox& b)
     return norm(d);
 }
 
+// Whether a node's points lie along one line: across the line they spread under a thirtieth of their
+// spread along it (eigenvalues 900 apart), and they are 8 or more (the fewest a leaf holds by choice:
+// one or two stray points are no line, and are split off as before).
+bool is_line(const Node& n) { return n.count() >= 8 && n.frame.values[1] <= n.frame.values[2] / 900.0; }
+
 // The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above
 // `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h), or its
 // tile reaches farther than `limit` over a hole or notch of the surface, farther than its points lie
-// from its plane (Node::coverage_gap; holes are no noise, so no floor).
-bool rougher_than(const Node& n, double limit)
+// from its plane (Node::coverage_gap; holes are no noise, so no floor); and it does not split into a
+// line (splits_into_lines: cut.h).
+bool rougher_than(const Hierarchy& h, const Node& n, double limit)
 {
-    return n.rms_plane_distance > std::max(limit, n.noise_floor) || (n.coverage_gap > limit && gap_dominates(n));
+    return (n.rms_plane_distance > std::max(limit, n.noise_floor) || (n.coverage_gap > limit && gap_dominates(n))) &&
+           !splits_into_lines(h, n);
 }
 
 // What the budget cut refines by: the plane error λ_min, or, where the gap dominates, the node's
@@ -49,6 +56,13 @@ double budget_error(const Node& n)
 } // namespace
 
 double node_error(const Node& n) { return std::max(n.max_plane_distance, n.coverage_gap); }
+
+bool splits_into_lines(const Hierarchy& h, const Node& n)
+{
+    if (n.is_leaf() || is_line(n))
+        return false;
+    return is_line(h.nodes[static_cast<std::size_t>(n.left)]) || is_line(h.nodes[static_cast<std::size_t>(n.right)]);
+}
 
 Cut cut_by_predicate(const Hierarchy& h, const RefinePredicate& refine)
 {
@@ -77,7 +91,7 @@ Cut cut_by_tolerance(const Hierarchy& h, double tolerance)
     check_tolerance(tolerance, "tolerance");
     const double limit = tolerance * h.scale;
     return cut_by_predicate(h, [limit](const Hierarchy& hh, std::int32_t id) {
-        return rougher_than(hh.nodes[static_cast<std::size_t>(id)], limit);
+        return rougher_than(hh, hh.nodes[static_cast<std::size_t>(id)], limit);
     });
 }
 
@@ -201,7 +215,7 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
         for (const FocusRegion& r : regions)
             if (intersects(n, r))
                 tolerance = std::min(tolerance, r.tolerance);
-        return rougher_than(n, tolerance * side);
+        return rougher_than(hh, n, tolerance * side);
     });
 }
 
@@ -254,7 +268,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
             const std::int32_t k = stack.back();
             stack.pop_back();
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!n.is_leaf() && rougher_than(n, region_tolerance(n, base_tolerance, regions) * side)) {
+            if (!n.is_leaf() && rougher_than(h, n, region_tolerance(n, base_tolerance, regions) * side)) {
                 stack.push_back(n.right);
                 stack.push_back(n.left);
             } else {
@@ -278,7 +292,7 @@ Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, d
         std::int32_t best = cut[i];
         for (std::int32_t k = cut[i]; k >= 0; k = h.nodes[static_cast<std::size_t>(k)].parent) {
             const Node& n = h.nodes[static_cast<std::size_t>(k)];
-            if (!box_inside(n.box, region) || rougher_than(n, limit))
+            if (!box_inside(n.box, region) || rougher_than(h, n, limit))
                 break;
             best = k;
         }
@@ -348,7 +362,7 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
         const double error = screen_space_error(n, camera);
-        if (!(error > camera.max_pixel_error) || !rougher_than(n, 0.0))
+        if (!(error > camera.max_pixel_error) || !rougher_than(hh, n, 0.0))
             return false;
         return error > camera.max_pixel_error * camera.out_of_view_factor || in_view(n, camera);
     });

@@ -142,4 +142,13 @@ double cut_plane_error(const Hierarchy& h, const Cut& cut);
 //! True when the nodes of `cut` partition the points (each point in exactly one node).
 bool is_partition(const Hierarchy& h, const Cut& cut);
 
+//! \brief Whether `n` spreads over a surface while a child of it lies along one line (across the line
+//! its 8 or more points spread under a thirtieth of their spread along it).
+//! \details A stretch of a single scan line fits every plane through it, so its plane distance says
+//! nothing and its tile is a sliver with no surface: where a scan's lines lie farther apart than a
+//! leaf runs along one (30 points along a line per spacing across), the cuts by tolerance, region and
+//! camera stop at such a node whatever its plane distance (a terrain scanned 30:1 at tolerance 0.002
+//! was meshed from those slivers: 143 pieces, 6,218 crossing pairs). Budget and τ cuts do not.
+bool splits_into_lines(const Hierarchy& h, const Node& n);
+
 } // namespace mrt

@@ -789,7 +789,8 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
-        stopped += !n.is_leaf() && n.rms_plane_distance > limit ? 1 : 0;
+        // A tile kept whole over single scan lines is no noise (splits_into_lines, cut.h).
+        stopped += !n.is_leaf() && n.rms_plane_distance > limit && !splits_into_lines(h, n) ? 1 : 0;
     }
     if (stopped > 0) {
         char what[160];
