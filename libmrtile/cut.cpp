@@ -170,11 +170,11 @@ void check_node_ids(const Hierarchy& h, const Cut& cut)
             throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
 }
 
-void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what)
+std::string cut_problem(const Hierarchy& h, const Cut& cut)
 {
     for (std::int32_t id : cut)
         if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
-            throw InvalidInput(what + ": node id " + std::to_string(id) + " of the cut is not in the hierarchy");
+            return "node id " + std::to_string(id) + " of the cut is not in the hierarchy";
     // Nodes own contiguous point ranges and nest as the tree does: in range order (a node before those
     // inside it), a frontier's ranges follow one another from the first point to the last.
     Cut order = cut;
@@ -190,17 +190,23 @@ void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what)
     for (std::size_t i = 0; i < order.size(); ++i) {
         const Node& n = h.nodes[static_cast<std::size_t>(order[i])];
         if (i > 0 && order[i] == order[i - 1])
-            throw InvalidInput(what + ": node " + std::to_string(order[i]) + " is listed twice in the cut");
+            return "node " + std::to_string(order[i]) + " is listed twice in the cut";
         if (n.begin < next)
-            throw InvalidInput(what + ": node " + std::to_string(order[i]) + " of the cut lies inside node " +
-                               std::to_string(order[i - 1]) + " of it (a cut holds each point once)");
+            return "node " + std::to_string(order[i]) + " of the cut lies inside node " + std::to_string(order[i - 1]) +
+                   " of it (a cut holds each point once)";
         if (n.begin > next)
-            throw InvalidInput(what + ": " + points(next, n.begin) + " are in no node of the cut (a subtree is missing)");
+            return points(next, n.begin) + " are in no node of the cut (a subtree is missing)";
         next = n.end;
     }
     if (next < h.cloud.size())
-        throw InvalidInput(what + ": " + points(next, static_cast<std::uint32_t>(h.cloud.size())) +
-                           " are in no node of the cut (a subtree is missing)");
+        return points(next, static_cast<std::uint32_t>(h.cloud.size())) + " are in no node of the cut (a subtree is missing)";
+    return {};
+}
+
+void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what)
+{
+    if (const std::string problem = cut_problem(h, cut); !problem.empty())
+        throw InvalidInput(what + ": " + problem);
 }
 
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions)

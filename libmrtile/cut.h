@@ -30,6 +30,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace mrt {
@@ -81,6 +82,10 @@ void check_node_ids(const Hierarchy& h, const Cut& cut);
 //! \throw InvalidInput starting with `what` and naming what is wrong: a node id not in the hierarchy, a
 //! node listed twice, a node inside another node of the cut, or points in no node of it (a missing subtree).
 void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what);
+
+//! What makes `cut` no frontier of the tree, in words (the text check_cut puts after `what`), or an
+//! empty string when it is one. For entry points that say what they expected before naming the problem.
+std::string cut_problem(const Hierarchy& h, const Cut& cut);
 
 //! Every node meeting a region is refined to the smallest tolerance of the regions it meets; every
 //! other node to `base_tolerance`. Nodes of cut_by_tolerance(h, base_tolerance) that meet no region

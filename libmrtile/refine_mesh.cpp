@@ -921,13 +921,13 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
         !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
         throw InvalidInput(std::string(name) + ": the mesh has no tile ids (v:cluster, f:tile, f:gap); pass a mesh_cut result");
     check_node_ids(h, cut);
-    if (!is_partition(h, cut))
-        throw InvalidInput(std::string(name) + ": the cut asked for is not a partition of the points");
+    if (const std::string problem = cut_problem(h, cut); !problem.empty())
+        throw InvalidInput(std::string(name) + ": the cut asked for is not a partition of the points: " + problem);
     check_node_ids(h, result.cut);
     // The mesh's own cut too: with a node listed twice or missing, the result's cut came out no
     // partition (the duplicate's run meshed twice, the missing node's points in no tile) without a word.
-    if (!is_partition(h, result.cut))
-        throw InvalidInput(std::string(name) + ": result.cut is not a partition of the points; pass the MeshResult of "
+    if (const std::string problem = cut_problem(h, result.cut); !problem.empty())
+        throw InvalidInput(std::string(name) + ": result.cut is not a partition of the points (" + problem + "); pass the MeshResult of "
                            "mesh_cut (or of an earlier refine_mesh, coarsen_mesh or update_mesh) with its cut unchanged");
     // And the mesh must be that cut's: every fan face names a node of it. A mesh of another cut (or
     // model) put in result.mesh was patched where its tile ids happened to match and came back with

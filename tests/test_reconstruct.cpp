@@ -3,11 +3,13 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/reconstruct.h"
+#include "libmrtile/refine_mesh.h"
 #include "libmrtile/point_cloud.h"
 #include "libmrtile/shapes.h"
 #include "formats/read_points.h"
 #include "mesh_fixtures.h"
 #include "obj_fixture.h"
+#include "tests/error_message.h"
 
 #include <gtest/gtest.h>
 
@@ -771,6 +773,36 @@ TEST(Reconstruct, quality_of_a_cut_that_is_no_partition_or_a_non_finite_mesh_is_
     nan_vertex.set_point(*nan_vertex.vertices_begin(), Mesh::Point(std::nan(""), 0, 0));
     EXPECT_THROW(measure_quality(h, r.cut, nan_vertex), InvalidInput);
     EXPECT_EQ(measure_quality(h, r.cut, r.mesh).points, h.cloud.size());
+}
+
+// The entry points that take a whole cut said only that it was no partition; they now also say what is
+// wrong with it, as refine_cut's check_cut does (session 30).
+TEST(Reconstruct, a_cut_that_is_no_partition_is_refused_naming_the_problem)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(3000));
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    Cut twice = r.cut;
+    twice.push_back(twice.front());
+    const std::string listed_twice = "node " + std::to_string(r.cut.front()) + " is listed twice in the cut";
+    EXPECT_EQ(cut_problem(h, twice), listed_twice);
+    EXPECT_EQ(cut_problem(h, r.cut), "");
+    EXPECT_EQ(testing::error_message([&] { mesh_cut(h, twice); }),
+              "mesh: the cut is not a partition of the model's points: " + listed_twice);
+    EXPECT_EQ(testing::error_message([&] { e_rms(h, twice); }),
+              "e_rms / measure_quality: the cut is not a partition of the model's points (" + listed_twice +
+                  "); pass the cut that was meshed (MeshResult::cut)");
+    Cut missing = r.cut;
+    missing.pop_back();
+    const Node& last = h.nodes[static_cast<std::size_t>(r.cut.back())];
+    const std::string gap = "points " + std::to_string(last.begin) + " to " + std::to_string(h.cloud.size() - 1) +
+                            " are in no node of the cut (a subtree is missing)";
+    EXPECT_EQ(cut_problem(h, missing), gap);
+    MeshResult m = r;
+    EXPECT_EQ(testing::error_message([&] { refine_mesh(h, m, missing); }),
+              "refine_mesh: the cut asked for is not a partition of the points: " + gap);
+    m.cut = missing;
+    EXPECT_NE(testing::error_message([&] { refine_mesh(h, m, r.cut); }).find("result.cut is not a partition of the points (" + gap + ")"),
+              std::string::npos);
 }
 
 // QA round qa-left: measure_quality of a mesh without faces reported every distance as 0, the best score
