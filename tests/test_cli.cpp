@@ -1154,6 +1154,17 @@ TEST(Cli, las_crs_places_or_is_named)
               std::string::npos)
         << named.out;
     EXPECT_EQ(named.out.find("placed on the globe by"), std::string::npos) << named.out;
+    // --crs overrides the file's own system; when the two differ it says so (session 30: it was silent,
+    // and a user who meant to reproject got the UTM 33 coordinates placed in zone 32).
+    const Result replaced = mrtile("build " + (dir / "utm.las").string() + " -o " + (dir / "c.mrt").string() + " --crs EPSG:32632", dir);
+    ASSERT_EQ(replaced.code, 0) << replaced.err;
+    EXPECT_NE(replaced.out.find("note: --crs EPSG:32632 replaces the coordinate system of " + (dir / "utm.las").string() +
+                                " (EPSG:32633); the points are not reprojected"),
+              std::string::npos)
+        << replaced.out;
+    const Result same = mrtile("build " + (dir / "utm.las").string() + " -o " + (dir / "d.mrt").string() + " --crs EPSG:32633", dir);
+    ASSERT_EQ(same.code, 0) << same.err;
+    EXPECT_EQ(same.out.find("replaces"), std::string::npos) << same.out;
 }
 
 // The Stanford scan list of the repository names ten scans of which two are here: an error naming the

@@ -1374,10 +1374,16 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     note_coarse_coordinates(cloud);
     if (viewpoint)
         cloud.viewpoint = *viewpoint - cloud.origin;
-    if (!crs.empty())
+    if (!crs.empty()) {
+        // --crs is taken as given (a file's CRS record can be wrong), but a user who meant to reproject
+        // should hear that nothing moves: the coordinates stay those of the files' own system.
+        if (!cloud.crs.empty() && crs_differ(cloud.crs, crs))
+            std::printf("note: --crs %s replaces the coordinate system of %s (%s); the points are not reprojected\n",
+                        mrt::crs_label(crs).c_str(), inputs_name(points).c_str(), mrt::crs_label(cloud.crs).c_str());
         cloud.crs = crs;
-    else if (!cloud.crs.empty())
+    } else if (!cloud.crs.empty()) {
         note_unusable_crs(cloud.crs, inputs_name(points));
+    }
     const std::size_t n = cloud.size();
     // Duplicates go before the outlier test: a point repeated k times is its own k-1 nearest neighbours.
     std::size_t duplicates = 0;
