@@ -170,6 +170,9 @@ struct WktNode
     std::vector<WktNode> children;
 };
 
+// Input text as a message quotes it (defined below, with one_line).
+std::string shown(const std::string& text, std::size_t max = 80);
+
 class WktParser
 {
 public:
@@ -181,7 +184,7 @@ public:
         WktNode root = node(0);
         skip_space();
         if (pos_ != s_.size())
-            fail("unexpected text after the closing bracket of " + root.keyword);
+            fail("unexpected text after the closing bracket of " + shown(root.keyword));
         return root;
     }
 
@@ -255,7 +258,7 @@ private:
             fail("brackets nested deeper than " + std::to_string(kMaxDepth) + " levels");
         skip_space();
         if (pos_ >= s_.size() || (s_[pos_] != '[' && s_[pos_] != '('))
-            fail("expected '[' after " + n.keyword);
+            fail("expected '[' after " + shown(n.keyword));
         const char close = s_[pos_++] == '[' ? ']' : ')';
         skip_space();
         if (pos_ < s_.size() && s_[pos_] == close) {
@@ -265,7 +268,7 @@ private:
         for (;;) {
             skip_space();
             if (pos_ >= s_.size())
-                fail("unbalanced brackets: " + n.keyword + " is not closed");
+                fail("unbalanced brackets: " + shown(n.keyword) + " is not closed");
             const char c = s_[pos_];
             if (c == '"')
                 n.atoms.push_back({quoted(), true});
@@ -282,10 +285,10 @@ private:
             } else if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.')
                 n.atoms.push_back({number(), false});
             else
-                fail(std::string("unexpected character '") + c + "' in " + n.keyword);
+                fail(std::string("unexpected character '") + c + "' in " + shown(n.keyword));
             skip_space();
             if (pos_ >= s_.size())
-                fail("unbalanced brackets: " + n.keyword + " is not closed");
+                fail("unbalanced brackets: " + shown(n.keyword) + " is not closed");
             if (s_[pos_] == ',') {
                 ++pos_;
                 continue;
@@ -294,7 +297,7 @@ private:
                 ++pos_;
                 return n;
             }
-            fail(std::string("expected ',' or '") + close + "' in " + n.keyword);
+            fail(std::string("expected ',' or '") + close + "' in " + shown(n.keyword));
         }
     }
 
@@ -349,6 +352,20 @@ std::string one_line(std::string text)
     return text;
 }
 
+// Input text quoted in a message or kept as a CRS's name: on one line, and cut to `max` characters (at
+// a UTF-8 character's start). A WKT name, keyword or EPSG "code" of a megabyte was quoted whole: a
+// one-line error of a megabyte (QA round qa-fuzz).
+std::string shown(const std::string& text, std::size_t max)
+{
+    if (text.size() <= max)
+        return one_line(text);
+    std::size_t cut = max - 3;
+    while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) // a UTF-8 continuation byte
+        --cut;
+    return one_line(text.substr(0, cut)) + "...";
+}
+
+// The name of a node (its first quoted value), whole: for comparisons; messages quote it through shown.
 std::string name_of(const WktNode& n)
 {
     for (const WktAtom& a : n.atoms)
@@ -379,7 +396,7 @@ double number_of(const WktNode& n, std::size_t index)
         if (parse_double(a.text, x) && seen++ == index)
             return x;
     }
-    throw InvalidInput("WKT " + n.keyword + "[\"" + name_of(n) + "\"...] lacks a number it needs");
+    throw InvalidInput("WKT " + shown(n.keyword) + "[\"" + shown(name_of(n)) + "\"...] lacks a number it needs");
 }
 
 // The conversion factor of a unit node (UNIT["US survey foot",0.3048006096012192]), checked positive.
@@ -387,7 +404,7 @@ double unit_factor(const WktNode& unit)
 {
     const double f = number_of(unit, 0);
     if (!(f > 0.0))
-        throw InvalidInput("WKT " + unit.keyword + "[\"" + name_of(unit) + "\"," + format_number(f) +
+        throw InvalidInput("WKT " + shown(unit.keyword) + "[\"" + shown(name_of(unit)) + "\"," + format_number(f) +
                            "] must have a conversion factor > 0");
     return f;
 }
@@ -456,20 +473,20 @@ ProjectedCrs projected_from_wkt(const WktNode& crs)
             return *known;
 
     const bool wkt1 = crs.keyword == "PROJCS";
-    const std::string crs_name = name_of(crs);
+    const std::string crs_name = shown(name_of(crs)); // ProjectedCrs::name, and quoted in messages
     const WktNode* conversion = wkt1 ? &crs : first_child(crs, {"CONVERSION"});
     const WktNode* method = conversion ? first_child(*conversion, {"PROJECTION", "METHOD"}) : nullptr;
     if (!method)
         throw InvalidInput("projected CRS \"" + crs_name + "\" names no projection method in its WKT; " + kOnlyTm);
     if (normalized_name(name_of(*method)) != "transverse mercator")
-        throw InvalidInput("projection \"" + name_of(*method) + "\" of \"" + crs_name + "\" is not supported: " +
+        throw InvalidInput("projection \"" + shown(name_of(*method)) + "\" of \"" + crs_name + "\" is not supported: " +
                            kOnlyTm);
 
     const WktNode* datum = find_descendant(crs, {"DATUM", "GEODETICDATUM", "TRF", "ENSEMBLE"});
     if (!datum)
         throw InvalidInput("projected CRS \"" + crs_name + "\" names no datum in its WKT; " + kOnlyTm);
     if (!is_supported_datum(name_of(*datum)))
-        throw InvalidInput("datum \"" + name_of(*datum) + "\" is not supported: only WGS 84 and datums within ~2 m "
+        throw InvalidInput("datum \"" + shown(name_of(*datum)) + "\" is not supported: only WGS 84 and datums within ~2 m "
                            "of it (NAD83, ETRS89, GDA94, GDA2020); place the tileset with --enu");
 
     ProjectedCrs out;
@@ -530,7 +547,7 @@ bool is_projected(const WktNode& n) { return has_keyword(n, {"PROJCS", "PROJCRS"
 
 [[noreturn]] void refuse_kind(const WktNode& n)
 {
-    const std::string what = "\"" + name_of(n) + "\" (" + n.keyword + ")";
+    const std::string what = "\"" + shown(name_of(n)) + "\" (" + shown(n.keyword) + ")";
     if (has_keyword(n, {"GEOGCS", "GEOGCRS", "GEOGRAPHICCRS"}))
         throw InvalidInput("geographic CRS " + what + " is not supported: coordinates must be projected; " + kOnlyTm);
     if (has_keyword(n, {"GEOCCS", "GEODCRS", "GEODETICCRS"}))
@@ -559,7 +576,7 @@ ProjectedCrs parse_wkt(const std::string& text)
             for (const WktNode& c : compound->children)
                 if (!has_keyword(c, {"VERT_CS", "VERTCRS", "VERTICALCRS", "AUTHORITY", "ID", "USAGE", "REMARK"}))
                     refuse_kind(c);
-            throw InvalidInput("compound CRS \"" + name_of(*compound) + "\" has no projected part; " + kOnlyTm);
+            throw InvalidInput("compound CRS \"" + shown(name_of(*compound)) + "\" has no projected part; " + kOnlyTm);
         }
     }
     if (!is_projected(*crs))
@@ -570,7 +587,7 @@ ProjectedCrs parse_wkt(const std::string& text)
     if (vertical) {
         const double v = length_unit_of(*vertical);
         if (v > 0.0 && std::fabs(v - out.projection.unit_to_metre) > 1e-12 * out.projection.unit_to_metre)
-            throw InvalidInput("vertical CRS \"" + name_of(*vertical) + "\" has a unit of " + format_number(v) +
+            throw InvalidInput("vertical CRS \"" + shown(name_of(*vertical)) + "\" has a unit of " + format_number(v) +
                                " m but the horizontal CRS one of " + format_number(out.projection.unit_to_metre) +
                                " m; only compound CRSs with one unit for both are supported");
     }
@@ -634,7 +651,7 @@ ProjectedCrs parse_crs(const std::string& text)
         const std::string digits = trimmed(t.substr(5));
         const int code = parse_code(digits);
         if (code < 0)
-            throw InvalidInput("CRS \"" + t + "\": the EPSG code must be a number, e.g. EPSG:32633");
+            throw InvalidInput("CRS \"" + shown(t) + "\": the EPSG code must be a number, e.g. EPSG:32633");
         if (std::optional<ProjectedCrs> crs = crs_from_epsg(code))
             return *crs;
         // Lidar files in longitude/latitude are common enough to deserve their own hint: meshing
@@ -650,8 +667,7 @@ ProjectedCrs parse_crs(const std::string& text)
     }
     if (std::isalpha(static_cast<unsigned char>(t.front())) && t.find_first_of("[(") != std::string::npos)
         return parse_wkt(t);
-    const std::string shown = t.size() > 40 ? t.substr(0, 40) + "..." : t;
-    throw InvalidInput("CRS \"" + shown + "\" is neither EPSG:<code> nor WKT (write a bare code such as 32633 as "
+    throw InvalidInput("CRS \"" + shown(t, 43) + "\" is neither EPSG:<code> nor WKT (write a bare code such as 32633 as "
                        "EPSG:32633)");
 }
 
@@ -709,11 +725,10 @@ bool crs_differ(const std::string& a, const std::string& b)
 std::string crs_label(const std::string& text)
 {
     if (epsg_text_code(text) >= 0)
-        return trimmed(text);
+        return shown(trimmed(text));
     if (const std::optional<ProjectedCrs> c = try_parse_crs(text))
         return c->name + (c->epsg > 0 ? " (EPSG:" + std::to_string(c->epsg) + ")" : std::string());
-    const std::string t = one_line(trimmed(text));
-    return t.size() > 60 ? t.substr(0, 57) + "..." : t;
+    return shown(trimmed(text), 60);
 }
 
 Geodetic projected_to_geodetic(const TransverseMercator& tm, double easting, double northing, double height)

@@ -50,7 +50,7 @@ struct TransverseMercator
 
 struct ProjectedCrs
 {
-    std::string name; //!< e.g. "WGS 84 / UTM zone 33N"
+    std::string name; //!< e.g. "WGS 84 / UTM zone 33N" (a WKT name over 80 characters cut to 77 and "...")
     int epsg = 0;     //!< 0 when not known
     TransverseMercator projection;
 };

@@ -470,6 +470,45 @@ TEST(ParseCrs, MalformedWktThrows)
     EXPECT_NE(parse_error("hello\nworld").find("\"hello world\""), std::string::npos);
 }
 
+// QA round qa-fuzz: text of the input was quoted whole in messages, so that a .prj or a LAS file's WKT
+// record with a name, a keyword or an EPSG "code" of a megabyte gave a one-line error of a megabyte (and
+// a CRS name of that size was printed wherever the CRS is named). Quoted input is cut to 80 characters.
+TEST(ParseCrs, LongInputIsShortenedInMessages)
+{
+    const std::string longest(1 << 20, 'N');
+    const auto renamed = [&](const std::string& wkt) {
+        std::string out = wkt;
+        out.replace(out.find("WGS 84 / UTM zone 33N"), 21, longest);
+        return out;
+    };
+    std::string unsupported = renamed(kWgs84Utm33NoId);
+    unsupported.replace(unsupported.find("Transverse_Mercator"), 19, "Mercator_1SP");
+    std::string bad_scale = renamed(kWgs84Utm33NoId);
+    bad_scale.replace(bad_scale.find("0.9996"), 6, "-0.9996");
+    std::string bad_unit = kWgs84Utm33NoId;
+    bad_unit.replace(bad_unit.find("UNIT[\"metre\",1"), 14, "UNIT[\"" + longest + "\",0");
+    for (const std::string& text :
+         {unsupported, bad_scale, "EPSG:" + longest, longest + "[%]", longest + "[1]", "PROJCS[\"" + longest + "\"]",
+          "PROJCS[\"x\"," + longest + "[%]]", "COMPD_CS[\"" + longest + "\"]", bad_unit}) {
+        const std::string error = parse_error(text);
+        EXPECT_LT(error.size(), 400u) << error.substr(0, 200);
+        EXPECT_NE(error.find("..."), std::string::npos) << error.substr(0, 200);
+    }
+    // A CRS it can place keeps a name of at most 80 characters; short names are kept whole.
+    const ProjectedCrs named = parse_crs(renamed(kWgs84Utm33NoId));
+    EXPECT_EQ(named.name, std::string(77, 'N') + "...");
+    EXPECT_EQ(parse_crs(kWgs84Utm33NoId).name, "WGS 84 / UTM zone 33N");
+    EXPECT_LE(crs_label(renamed(kWgs84Utm33NoId)).size(), 80u);
+    EXPECT_LE(crs_label("EPSG:" + std::string(1000, ' ') + "32633").size(), 80u);
+    // Cut between UTF-8 characters, never inside one (the name stays valid UTF-8).
+    std::string accented = kWgs84Utm33NoId;
+    std::string umlauts;
+    for (int i = 0; i < 100; ++i)
+        umlauts += "\xC3\xA4"; // ä
+    accented.replace(accented.find("WGS 84 / UTM zone 33N"), 21, "xy" + umlauts);
+    EXPECT_EQ(parse_crs(accented).name, "xy" + umlauts.substr(0, 74) + "..."); // 77 bytes would split an ä
+}
+
 // QA round qa-left: files in EPSG:32633 and in the WKT of another system merged without a word (only two
 // EPSG codes were compared). crs_differ tells systems apart by code, else by projection, ellipsoid and
 // unit; two spellings of one system, or systems it cannot read, never differ.
