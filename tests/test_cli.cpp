@@ -1096,6 +1096,33 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     EXPECT_FALSE(fs::exists(dir / "u"));
 }
 
+// QA round qa-fuzz: a model whose CRS came from a .prj (or a LAS WKT record) in Latin-1 could not be
+// described as JSON: `info --json` failed with "[json.exception.type_error.316] invalid UTF-8 byte". The
+// CRS is written with such bytes as U+FFFD; `info` and the placement are unchanged.
+TEST(Cli, info_json_of_a_crs_in_latin1)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    write_text(dir / "zone.prj",
+               "PROJCS[\"Zone \xE4 33N\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563]],"
+               "PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433]],PROJECTION[\"Transverse_Mercator\"],"
+               "PARAMETER[\"latitude_of_origin\",0],PARAMETER[\"central_meridian\",15],PARAMETER[\"scale_factor\",0.9996],"
+               "PARAMETER[\"false_easting\",500000],PARAMETER[\"false_northing\",0],UNIT[\"metre\",1]]\n");
+    std::string utm;
+    for (const auto& [x, y, z] : sphere_points(2000))
+        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+    write_text(dir / "utm.xyz", utm);
+    const Result built = mrtile("build " + (dir / "utm.xyz").string() + " -o " + (dir / "m.mrt").string() + " --crs " +
+                                    (dir / "zone.prj").string(),
+                                dir);
+    ASSERT_EQ(built.code, 0) << built.err;
+    const Result info = mrtile("info --json " + (dir / "m.mrt").string(), dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    const std::string crs = nlohmann::json::parse(info.out)["crs"];
+    EXPECT_EQ(crs.rfind("PROJCS[\"Zone \xEF\xBF\xBD 33N\",GEOGCS[", 0), 0u) << crs;
+    const Result text = mrtile("info " + (dir / "m.mrt").string(), dir);
+    EXPECT_NE(text.out.find("crs         Zone \xE4 33N: 3D Tiles are placed on the globe by it"), std::string::npos) << text.out;
+}
+
 // A LAS 1.2 file (point format 0) of `points` whose GeoTIFF keys name EPSG code `epsg`.
 std::string las_with_crs(const std::vector<std::array<double, 3>>& points, std::uint16_t epsg, std::uint16_t key)
 {

@@ -1495,7 +1495,10 @@ int run_info(const fs::path& model, bool json)
         j["stored_levels"] = stored.levels.size();
         j["stored_level_faces"] = stored_faces;
         j["stored_level_recipe"] = stored.levels.empty() ? nlohmann::json(nullptr) : nlohmann::json(stored.recipe);
-        std::printf("%s\n", j.dump(2).c_str());
+        // The CRS is kept as the input gave it, and a .prj or a LAS WKT record in Latin-1 ("Zone \xE4")
+        // is no UTF-8: dump() threw, and info --json failed with "[json.exception.type_error.316] invalid
+        // UTF-8 byte" (QA round qa-fuzz). Such bytes are written as U+FFFD.
+        std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
         return 0;
     }
     std::printf("model       %s\n", model.string().c_str());
