@@ -314,6 +314,15 @@ struct Separators
 
 constexpr Separators kBlanks(" \t");
 
+// A PLY line up to trailing blanks, '\r' among them (next_line drops one): lines ending in "\r\r\n" (a
+// CRLF file converted twice) kept a '\r' that made "element vertex 4\r" no element line, "end_header\r"
+// unknown and "1 2 3\r" no number (QA round qa-fuzz); rply, tinyply and plyfile read them.
+constexpr const char* kPlyTrailingBlanks = " \t\r\v\f";
+std::string_view without_trailing_blanks(std::string_view line)
+{
+    return line.substr(0, line.find_last_not_of(kPlyTrailingBlanks) + 1);
+}
+
 // Splits a text line into tokens; a token starting with '#' ends the line (comment).
 class Tokens
 {
@@ -992,11 +1001,10 @@ PlyHeader read_ply_header(Input& in)
     std::string_view line;
     // "ply" up to trailing blanks, as every other header line is read: "ply \n" (a writer's trailing
     // space) and "ply\r\r\n" were refused as no PLY file, though rply, tinyply and plyfile read them.
-    constexpr const char* kBlankChars = " \t\r\v\f";
-    if (in.next_line(line) && line.substr(0, 4) == "ply\r" && line.find_first_not_of(kBlankChars, 3) != std::string_view::npos)
+    if (in.next_line(line) && line.substr(0, 4) == "ply\r" && line.find_first_not_of(kPlyTrailingBlanks, 3) != std::string_view::npos)
         throw InvalidInput(in.name() + ": its lines end in a carriage return alone (classic Mac OS text); convert them "
                                        "to line feeds (\\n or \\r\\n)");
-    if (line.substr(0, 3) != "ply" || line.find_first_not_of(kBlankChars, 3) != std::string_view::npos)
+    if (line.substr(0, 3) != "ply" || line.find_first_not_of(kPlyTrailingBlanks, 3) != std::string_view::npos)
         throw InvalidInput(in.name() + ": not a PLY file (no 'ply' on the first line)");
     PlyHeader header;
     bool have_format = false;
@@ -1004,6 +1012,7 @@ PlyHeader read_ply_header(Input& in)
     for (;;) {
         if (!in.next_line(line))
             throw InvalidInput(in.name() + ": PLY header has no end_header line");
+        line = without_trailing_blanks(line); // as the first line
         Tokens tokens(line, kBlanks);
         std::string_view keyword;
         if (!tokens.next(keyword) || keyword == "comment" || keyword == "obj_info")
@@ -1174,9 +1183,11 @@ void skip_binary_element(Input& in, const PlyElement& element, bool swap)
 Tokens next_ascii_record(Input& in, const PlyElement& element, std::uint64_t index)
 {
     std::string_view line;
-    while (in.next_line(line))
+    while (in.next_line(line)) {
+        line = without_trailing_blanks(line);
         if (std::any_of(line.begin(), line.end(), [](char c) { return !kBlanks(c); }))
             return Tokens(line, kBlanks);
+    }
     throw IoError(in.name() + ": truncated: file ends at line " + std::to_string(in.line_number()) + " after " +
                   std::to_string(index) + " of " + std::to_string(element.count) + " " + element.name +
                   " elements");

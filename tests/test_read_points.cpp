@@ -319,6 +319,28 @@ TEST(ReadPly, first_line_with_trailing_blanks)
     expect_error<InvalidInput>([&] { read_points(path); }, {path.string(), "carriage return alone"});
 }
 
+// QA round qa-fuzz: the first line was read up to trailing blanks ("ply\r\r\n"), the others were not: a
+// file whose lines all end in "\r\r\n" (a CRLF file converted twice) was refused on its element line as
+// "expected 'element <name> <count>'" (the count "4\r"), and its ascii values as no numbers ("2\r").
+TEST(ReadPly, header_lines_with_trailing_blanks)
+{
+    const fs::path dir = test_dir();
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n";
+    const std::string body = "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    for (const std::string end : {"\r\r\n", " \n", "\t\r\n", " \r \r\n"}) {
+        SCOPED_TRACE(end);
+        std::string h;
+        for (const char c : header)
+            h += c == '\n' ? end : std::string(1, c);
+        std::string b;
+        for (const char c : body)
+            b += c == '\n' ? end : std::string(1, c);
+        expect_points(read_points(write_file(dir / "blanks.ply", h + body)), kPoints);
+        expect_points(read_points(write_file(dir / "blanks.ply", h + b)), kPoints);
+    }
+}
+
 // Writes each (name, content) file and expects it to read as kPoints.
 void expect_all_read_as_kpoints(const std::vector<std::pair<std::string, std::string>>& files)
 {
