@@ -1004,7 +1004,7 @@ PlyHeader read_ply_header(Input& in)
     if (in.next_line(line) && line.substr(0, 4) == "ply\r" && line.find_first_not_of(kPlyTrailingBlanks, 3) != std::string_view::npos)
         throw InvalidInput(in.name() + ": its lines end in a carriage return alone (classic Mac OS text); convert them "
                                        "to line feeds (\\n or \\r\\n)");
-    if (line.substr(0, 3) != "ply" || line.find_first_not_of(kPlyTrailingBlanks, 3) != std::string_view::npos)
+    if (without_trailing_blanks(line) != "ply")
         throw InvalidInput(in.name() + ": not a PLY file (no 'ply' on the first line)");
     PlyHeader header;
     bool have_format = false;

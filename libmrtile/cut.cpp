@@ -333,17 +333,11 @@ double screen_space_error(const Node& node, const Camera& camera)
 bool in_view(const Node& node, const Camera& camera)
 {
     // The direction may have any length (Camera::direction): one whose norm would overflow (1e300 made
-    // every node out of view) or underflow to 0 (1e-300 looked all around) is scaled by its largest
-    // coordinate first.
-    Vec3 direction = camera.direction;
-    double length = norm(direction);
-    if (!(length > 1e-150 && length < 1e150)) {
-        const double largest = std::max({std::abs(direction.x), std::abs(direction.y), std::abs(direction.z)});
-        if (!(largest > 0))
-            return true;
-        direction = direction / largest;
-        length = norm(direction);
-    }
+    // every node out of view) or underflow to 0 (1e-300 looked all around) is scaled first.
+    const Vec3 direction = with_usable_norm(camera.direction);
+    const double length = norm(direction);
+    if (!(length > 0))
+        return true;
     const Vec3 centre = (node.box.min + node.box.max) * 0.5;
     const double radius = 0.5 * norm(node.box.max - node.box.min);
     const Vec3 to = centre - camera.position;
@@ -383,22 +377,6 @@ double cut_plane_error(const Hierarchy& h, const Cut& cut)
     return sum;
 }
 
-bool is_partition(const Hierarchy& h, const Cut& cut)
-{
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
-    for (std::int32_t id : cut) {
-        if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
-            return false;
-        ranges.push_back({h.nodes[static_cast<std::size_t>(id)].begin, h.nodes[static_cast<std::size_t>(id)].end});
-    }
-    std::sort(ranges.begin(), ranges.end());
-    std::uint32_t next = 0;
-    for (const auto& r : ranges) {
-        if (r.first != next)
-            return false;
-        next = r.second;
-    }
-    return next == h.cloud.size();
-}
+bool is_partition(const Hierarchy& h, const Cut& cut) { return cut_problem(h, cut).empty(); }
 
 } // namespace mrt

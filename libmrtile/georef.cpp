@@ -727,8 +727,13 @@ std::string crs_label(const std::string& text)
     if (epsg_text_code(text) >= 0)
         return shown(trimmed(text));
     if (const std::optional<ProjectedCrs> c = try_parse_crs(text))
-        return c->name + (c->epsg > 0 ? " (EPSG:" + std::to_string(c->epsg) + ")" : std::string());
+        return crs_label(*c);
     return shown(trimmed(text), 60);
+}
+
+std::string crs_label(const ProjectedCrs& crs)
+{
+    return crs.name + (crs.epsg > 0 ? " (EPSG:" + std::to_string(crs.epsg) + ")" : std::string());
 }
 
 Geodetic projected_to_geodetic(const TransverseMercator& tm, double easting, double northing, double height)

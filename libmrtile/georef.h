@@ -88,6 +88,9 @@ bool crs_differ(const std::string& a, const std::string& b);
 //! (EPSG:32633)" when parse_crs reads it, otherwise its first 60 characters on one line.
 std::string crs_label(const std::string& text);
 
+//! The same for a parsed CRS: "WGS 84 / UTM zone 33N (EPSG:32633)", its name alone when no EPSG code is known.
+std::string crs_label(const ProjectedCrs& crs);
+
 //! \brief Inverse projection: (easting, northing) in the CRS unit, height in the CRS unit → geodetic
 //! (longitude in [-180, 180], height in metres, taken as ellipsoidal).
 //! \throw InvalidInput if the coordinates are so far outside the projection that it has no inverse

@@ -213,16 +213,11 @@ std::uint32_t distinct_in_plane(const std::vector<Projected>& pts, double cell)
 }
 
 // TileOptions::plane_axis as a unit vector, or zero for none. An axis of any length counts: one whose
-// squared norm underflows (1e-300) was taken for none, one whose norm overflows (1e300) gave NaN
-// planes; such an axis is scaled by its largest coordinate first.
+// squared norm underflows (1e-300) was taken for none, one whose norm overflows (1e300) gave NaN planes.
 Vec3 unit_plane_axis(const TileOptions& options)
 {
-    const Vec3& a = options.plane_axis;
-    const double n2 = squared_norm(a);
-    if (n2 > 1e-300 && n2 < 1e300)
-        return normalized(a);
-    const double largest = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
-    return largest > 0.0 ? normalized(a / largest) : Vec3{0, 0, 0};
+    const Vec3 a = with_usable_norm(options.plane_axis);
+    return squared_norm(a) > 0.0 ? normalized(a) : Vec3{0, 0, 0};
 }
 
 // The tile of `node` built from the points `indices` (into h.cloud.positions).

@@ -52,6 +52,17 @@ inline Vec3 normalized(const Vec3& a)
     const double n = norm(a);
     return n > 0.0 ? a / n : Vec3{};
 }
+//! `a` itself when its squared norm lies between 1e-300 and 1e300; otherwise `a` divided by its largest
+//! coordinate: the same direction, whose norm neither overflows (1e300) nor underflows to 0 (1e-300).
+//! Zero stays zero. For directions and axes a caller may give at any length.
+inline Vec3 with_usable_norm(const Vec3& a)
+{
+    const double n2 = dot(a, a);
+    if (n2 > 1e-300 && n2 < 1e300)
+        return a;
+    const double largest = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
+    return largest > 0.0 ? Vec3{a.x / largest, a.y / largest, a.z / largest} : a;
+}
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 inline Vec3 min(const Vec3& a, const Vec3& b)
 {

@@ -979,21 +979,13 @@ std::optional<ProjectedCrs> usable_crs(const std::string& text, std::string& why
     }
 }
 
-// "WGS 84 / UTM zone 33N (EPSG:32633)".
-std::string crs_label(const ProjectedCrs& c)
-{
-    return c.name + (c.epsg > 0 ? " (EPSG:" + std::to_string(c.epsg) + ")" : std::string());
-}
-
 // One line for `info`: the CRS's name and whether 3D Tiles can be placed by it.
 std::string crs_summary(const std::string& crs)
 {
     std::string why;
     if (const std::optional<ProjectedCrs> c = usable_crs(crs, why))
         return crs_label(*c) + ": 3D Tiles are placed on the globe by it";
-    std::string shown = crs.size() > 60 ? crs.substr(0, 57) + "..." : crs;
-    std::replace_if(shown.begin(), shown.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
-    return shown + " (not used: " + why + ")";
+    return crs_label(crs) + " (not used: " + why + ")";
 }
 
 // What the levels of a LOD set depend on, in this tool's terms (the level and mesh options, the noise
@@ -1379,7 +1371,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
         // should hear that nothing moves: the coordinates stay those of the files' own system.
         if (!cloud.crs.empty() && crs_differ(cloud.crs, crs))
             std::printf("note: --crs %s replaces the coordinate system of %s (%s); the points are not reprojected\n",
-                        mrt::crs_label(crs).c_str(), inputs_name(points).c_str(), mrt::crs_label(cloud.crs).c_str());
+                        crs_label(crs).c_str(), inputs_name(points).c_str(), crs_label(cloud.crs).c_str());
         cloud.crs = crs;
     } else if (!cloud.crs.empty()) {
         note_unusable_crs(cloud.crs, inputs_name(points));
