@@ -343,6 +343,10 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> ordered_fans(const Surface&
 // u's (a fan (first, last) has the free half-edges first -> v and v -> last).
 std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
 {
+    // Most boundary vertices have one fan: its arc is the way on, no ordering needed.
+    if (s.arc_count(v) == 1)
+        if (const std::uint32_t w = s.arc_end(v, u); w != kNone)
+            return w;
     const auto fans = ordered_fans(s, positions, v);
     for (std::size_t j = 0; j < fans.size(); ++j)
         if (fans[j].first == u)
@@ -354,6 +358,9 @@ std::uint32_t next_boundary_vertex(const Surface& s, const std::vector<Vec3>& po
 // The inverse step: the vertex before u on the loop that leaves u by the free half-edge u -> v.
 std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>& positions, std::uint32_t u, std::uint32_t v)
 {
+    if (s.arc_count(u) == 1)
+        if (const std::uint32_t w = s.arc_start(u, v); w != kNone)
+            return w;
     const auto fans = ordered_fans(s, positions, u);
     for (std::size_t j = 0; j < fans.size(); ++j)
         if (fans[j].second == v)
@@ -367,19 +374,13 @@ std::uint32_t previous_boundary_vertex(const Surface& s, const std::vector<Vec3>
 // the same fan's arc (first -> v, v -> last). kNone if no fan of v starts at u.
 std::uint32_t next_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
 {
-    for (const auto& fan : s.arcs(v))
-        if (fan.first == u)
-            return fan.second;
-    return kNone;
+    return s.arc_end(v, u);
 }
 
 // The inverse step: the vertex before u on the cycle that leaves u by the free half-edge u -> v.
 std::uint32_t previous_in_fan(const Surface& s, std::uint32_t u, std::uint32_t v)
 {
-    for (const auto& fan : s.arcs(u))
-        if (fan.second == v)
-            return fan.first;
-    return kNone;
+    return s.arc_start(u, v);
 }
 
 } // namespace mrt::surface_detail

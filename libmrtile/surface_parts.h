@@ -330,6 +330,61 @@ public:
         return out;
     }
 
+    //! The last vertex of the arc of v that starts at `first` (the arcs(v) entry (first, last)), or kNone
+    //! when no arc starts there. The boundary walks take one step per call: without building every arc.
+    std::uint32_t arc_end(std::uint32_t v, std::uint32_t first) const
+    {
+        const CornerList& link = corners_[v];
+        if (has_link_edge_into(link, first))
+            return kNone;
+        std::uint32_t end = kNone;
+        for (const Corner& e : link)
+            if (e.first == first) {
+                end = e.second;
+                break;
+            }
+        // Links are simple paths (can_add), so the walk ends; the bound only guards that invariant.
+        for (std::size_t steps = 0; end != kNone && steps < link.size(); ++steps) {
+            const Corner* next = nullptr;
+            for (const Corner& o : link)
+                if (o.first == end) {
+                    next = &o;
+                    break;
+                }
+            if (!next)
+                break;
+            end = next->second;
+        }
+        return end;
+    }
+
+    //! The first vertex of the arc of v that ends at `last`, or kNone when no arc ends there (the inverse
+    //! of arc_end).
+    std::uint32_t arc_start(std::uint32_t v, std::uint32_t last) const
+    {
+        const CornerList& link = corners_[v];
+        std::uint32_t start = kNone;
+        for (const Corner& e : link)
+            if (e.second == last) {
+                start = e.first;
+                break;
+            }
+        if (start == kNone || has_link_edge_out_of(link, last))
+            return kNone;
+        for (std::size_t steps = 0; steps < link.size(); ++steps) {
+            const Corner* previous = nullptr;
+            for (const Corner& o : link)
+                if (o.second == start) {
+                    previous = &o;
+                    break;
+                }
+            if (!previous)
+                break;
+            start = previous->first;
+        }
+        return start;
+    }
+
     //! arcs(v).size() without building them.
     std::size_t arc_count(std::uint32_t v) const
     {
@@ -406,6 +461,13 @@ private:
     {
         for (const Corner& o : link)
             if (o.second == x)
+                return true;
+        return false;
+    }
+    static bool has_link_edge_out_of(const CornerList& link, std::uint32_t x)
+    {
+        for (const Corner& o : link)
+            if (o.first == x)
                 return true;
         return false;
     }
