@@ -374,6 +374,12 @@ std::vector<Tri> fill_triangulation(const Surface& s, const std::vector<Vec3>& p
 // Splits a loop at repeated vertices (a loop through a pinch twice bounds two holes that touch there).
 std::vector<std::vector<std::uint32_t>> simple_loops(const std::vector<std::uint32_t>& loop)
 {
+    // Most loops repeat no vertex: tell so in O(n log n) before the quadratic search for the first repeat
+    // (thin walls leave loops of thousands of edges, traced again on every pass).
+    std::vector<std::uint32_t> sorted = loop;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end())
+        return {loop};
     std::vector<std::vector<std::uint32_t>> out;
     std::vector<std::vector<std::uint32_t>> work{loop};
     while (!work.empty()) {
