@@ -81,6 +81,10 @@ struct MeshResult
     Cut cut;
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
+    //! Tiles meshed in all: the cut's, and the refined cut's again in each round that remeshed it
+    //! (MeshOptions::piece_rounds, dropped_rounds). The surface costs about the same per tile, so this
+    //! is the meshing's work, counted the same on every machine.
+    std::size_t meshed_tiles = 0;
     FitStats fit;                   //!< the vertex fit (fit_vertices)
     SliverStats slivers;            //!< caps and needles removed (remove_slivers)
     UntangleStats untangle;         //!< self-intersections removed (untangle)
