@@ -670,8 +670,8 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
             kept = points;
             r.in_pieces = broken_into_pieces(h, r.result, then, options);
             out = std::move(r);
-        } else if (r.cut.size() > kCheapMendTiles) {
-            break; // a large cut costs at most one more meshing
+        } else if (r.result.meshed_tiles > kCheapMendTiles) {
+            break; // a large meshing (see mesh_mended) costs at most one more
         }
     }
     return out;
