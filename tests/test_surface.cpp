@@ -4,6 +4,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 #include "libmrtile/surface.h"
+#include "libmrtile/surface_parts.h"
 
 #include "cut_fixtures.h"
 #include "tests/error_message.h"
@@ -136,6 +137,52 @@ void expect_fans(const Result& r, const testing::FlatCut& fc)
         EXPECT_EQ(centres, 1u);
         EXPECT_EQ(uses.size(), faces + 1);
     }
+}
+
+// The one-step walks along a vertex's fans agree with the arcs they stand for (brute force): on a grid
+// triangulation with a random third of its faces left out, so that vertices have one fan, several
+// (pinched) or a closed link, arc_end(v, x) is the end of the arc of v starting at x, or kNone where
+// none starts, and arc_start the inverse.
+TEST(Surface, arc_walks_agree_with_the_arcs)
+{
+    using surface_detail::kNone;
+    constexpr std::uint32_t side = 12;
+    const auto id = [&](std::uint32_t i, std::uint32_t j) { return i * (side + 1) + j; };
+    std::vector<std::array<std::uint32_t, 3>> faces;
+    for (std::uint32_t i = 0; i < side; ++i)
+        for (std::uint32_t j = 0; j < side; ++j) {
+            faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+            faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+        }
+    std::mt19937 rng(5);
+    std::shuffle(faces.begin(), faces.end(), rng);
+    surface_detail::Surface s((side + 1) * (side + 1));
+    std::size_t added = 0;
+    for (std::size_t f = 0; f < faces.size(); ++f)
+        if (f % 3 != 0 && s.can_add(faces[f][0], faces[f][1], faces[f][2])) {
+            s.add(faces[f][0], faces[f][1], faces[f][2], 0);
+            ++added;
+        }
+    ASSERT_GT(added, faces.size() / 2);
+    std::size_t pinched = 0, closed = 0, checked = 0;
+    for (std::uint32_t v = 0; v < (side + 1) * (side + 1); ++v) {
+        const auto arcs = s.arcs(v);
+        pinched += arcs.size() > 1 ? 1 : 0;
+        closed += s.on_surface(v) && arcs.empty() ? 1 : 0;
+        for (std::uint32_t x = 0; x < (side + 1) * (side + 1); ++x) {
+            std::uint32_t end = kNone, start = kNone;
+            for (const auto& [first, last] : arcs) {
+                end = first == x ? last : end;
+                start = last == x ? first : start;
+            }
+            EXPECT_EQ(s.arc_end(v, x), end) << v << " " << x;
+            EXPECT_EQ(s.arc_start(v, x), start) << v << " " << x;
+            checked += end != kNone ? 1 : 0;
+        }
+    }
+    EXPECT_GT(pinched, 0u); // the case is exercised: several fans, closed links and single arcs
+    EXPECT_GT(closed, 0u);
+    EXPECT_GT(checked, 50u);
 }
 
 TEST(Surface, sphere_is_closed_genus_0_outward)
