@@ -312,21 +312,9 @@ public:
     {
         const CornerList& link = corners_[v]; // directed link edges first -> second
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
-        for (const Corner& e : link) {
-            if (has_link_edge_into(link, e.first))
-                continue;
-            std::uint32_t end = e.second;
-            for (bool moved = true; moved;) {
-                moved = false;
-                for (const Corner& o : link)
-                    if (o.first == end) {
-                        end = o.second;
-                        moved = true;
-                        break;
-                    }
-            }
-            out.push_back({e.first, end});
-        }
+        for (const Corner& e : link)
+            if (!has_link_edge_into(link, e.first))
+                out.push_back({e.first, arc_end(v, e.first)});
         return out;
     }
 
