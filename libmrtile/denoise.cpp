@@ -8,7 +8,6 @@
 
 #include "libmrtile/errors.h"
 #include "libmrtile/neighbours.h"
-#include "libmrtile/parallel.h"
 #include "libmrtile/pca.h"
 
 #include <Eigen/Dense>
@@ -106,22 +105,18 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
     const NearestNeighbours search(positions);
     std::vector<Vec3> moved(n);
     std::vector<double> spread(n); // mean distance to the neighbours
-    run_parallel_ranges(n, 4096, options.threads, [&](std::size_t begin, std::size_t end) {
-        std::vector<std::uint32_t> index;
-        std::vector<double> distance;
-        std::vector<Vec3> points;
-        for (std::size_t i = begin; i < end; ++i) {
-            search.query(static_cast<std::uint32_t>(i), options.neighbours - 1, index, distance);
-            points.assign(1, positions[i]);
-            for (const std::uint32_t j : index)
-                points.push_back(positions[j]);
-            moved[i] = onto_jet(points);
-            double sum = 0.0;
-            for (const double d : distance)
-                sum += d;
-            spread[i] = sum / static_cast<double>(distance.size());
-        }
-    });
+    search.for_each_point(options.neighbours - 1, options.threads,
+                          [&](std::uint32_t i, const std::vector<std::uint32_t>& index, const std::vector<double>& distance) {
+                              std::vector<Vec3> points{positions[i]};
+                              points.reserve(index.size() + 1);
+                              for (const std::uint32_t j : index)
+                                  points.push_back(positions[j]);
+                              moved[i] = onto_jet(points);
+                              double sum = 0.0;
+                              for (const double d : distance)
+                                  sum += d;
+                              spread[i] = sum / static_cast<double>(distance.size());
+                          });
     // An isolated point (a stray return among others: neighbours far apart) stays where it is: its
     // neighbourhood is no surface, and a quadric through stray points would turn them into a sheet of
     // their own (a sphere with 1.5% stray points: 8 pieces, 1 when they stay).

@@ -8,7 +8,6 @@
 
 #include "libmrtile/errors.h"
 #include "libmrtile/neighbours.h"
-#include "libmrtile/parallel.h"
 
 #include <algorithm>
 #include <cassert>
@@ -41,19 +40,14 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
     const NearestNeighbours search(positions);
     std::vector<std::uint32_t> near(n * k);
     std::vector<double> spread(n);
-    run_parallel_ranges(n, 4096, o.threads, [&](std::size_t begin, std::size_t end) {
-        std::vector<std::uint32_t> index;
-        std::vector<double> distance;
-        for (std::size_t i = begin; i < end; ++i) {
-            search.query(static_cast<std::uint32_t>(i), k, index, distance);
-            assert(index.size() == k);
-            double sum = 0.0;
-            for (std::size_t m = 0; m < k; ++m) {
-                near[i * k + m] = index[m];
-                sum += distance[m];
-            }
-            spread[i] = sum / static_cast<double>(k);
+    search.for_each_point(k, o.threads, [&](std::uint32_t i, const std::vector<std::uint32_t>& index, const std::vector<double>& distance) {
+        assert(index.size() == k);
+        double sum = 0.0;
+        for (std::size_t m = 0; m < k; ++m) {
+            near[i * k + m] = index[m];
+            sum += distance[m];
         }
+        spread[i] = sum / static_cast<double>(k);
     });
 
     std::vector<double> all = spread;
