@@ -5,6 +5,7 @@
 #include "libmrtile/mesh_stats.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/hierarchy.h"
 #include "libmrtile/parallel.h"
 #include "libmrtile/point_cloud.h"
 #include "libmrtile/union_find.h"
@@ -672,6 +673,28 @@ std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points, const 
     return out;
 }
 
+namespace {
+
+// The mesh's samples for mesh_to_point_distance: its vertices and face centroids.
+std::vector<Vec3> mesh_samples(const Soup& soup)
+{
+    std::vector<Vec3> samples(soup.positions);
+    samples.reserve(soup.positions.size() + soup.triangles.size());
+    for (const Triangle& t : soup.triangles)
+        samples.push_back((soup.positions[t[0]] + soup.positions[t[1]] + soup.positions[t[2]]) / 3.0);
+    return samples;
+}
+
+double squared_distance_to_box(const Vec3& p, const BoundingBox& b)
+{
+    const double dx = std::max({b.min.x - p.x, 0.0, p.x - b.max.x});
+    const double dy = std::max({b.min.y - p.y, 0.0, p.y - b.max.y});
+    const double dz = std::max({b.min.z - p.z, 0.0, p.z - b.max.z});
+    return dx * dx + dy * dy + dz * dz;
+}
+
+} // namespace
+
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points)
 {
     const Soup soup = mesh_to_soup(mesh);
@@ -690,15 +713,75 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& 
     Search::Tree tree(cgal_points.begin(), cgal_points.end());
     tree.build();
 
-    std::vector<Vec3> samples(soup.positions);
-    samples.reserve(soup.positions.size() + soup.triangles.size());
-    for (const Triangle& t : soup.triangles)
-        samples.push_back((soup.positions[t[0]] + soup.positions[t[1]] + soup.positions[t[2]]) / 3.0);
+    const std::vector<Vec3> samples = mesh_samples(soup);
     std::vector<double> squared(samples.size());
     for (std::size_t i = 0; i < samples.size(); ++i) {
         const Search search(tree, to_cgal(samples[i]), 1);
         squared[i] = search.begin()->second;
     }
+    return summarize(squared, diagonal);
+}
+
+DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const std::vector<Vec3>& points)
+{
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.positions.empty())
+        return {};
+    if (points.empty())
+        throw InvalidInput("mesh_to_point_distance: no points given to measure the mesh against");
+    if (points.size() != h.cloud.size() || h.nodes.empty())
+        throw InvalidInput("mesh_to_point_distance: " + std::to_string(points.size()) + " points given for a hierarchy of " +
+                           std::to_string(h.cloud.size()) + "; pass its own points (cloud or raw_positions)");
+    const double diagonal = checked_diagonal(points, "mesh_to_point_distance");
+    // Each node's box around `points` (the stored boxes are of the cloud's positions, and raw ones can
+    // lie outside them). Parents come before children, so backwards every child is done first.
+    std::vector<BoundingBox> box(h.nodes.size());
+    for (std::size_t id = h.nodes.size(); id-- > 0;) {
+        const Node& n = h.nodes[id];
+        BoundingBox& b = box[id];
+        if (n.is_leaf()) {
+            b.min = Vec3{1, 1, 1} * std::numeric_limits<double>::infinity();
+            b.max = Vec3{1, 1, 1} * -std::numeric_limits<double>::infinity();
+            for (std::uint32_t i = n.begin; i < n.end; ++i) {
+                b.min = min(b.min, points[i]);
+                b.max = max(b.max, points[i]);
+            }
+        } else {
+            const BoundingBox& l = box[static_cast<std::size_t>(n.left)];
+            const BoundingBox& r = box[static_cast<std::size_t>(n.right)];
+            b = {min(l.min, r.min), max(l.max, r.max)};
+        }
+    }
+    const std::vector<Vec3> samples = mesh_samples(soup);
+    std::vector<double> squared(samples.size());
+    run_parallel_ranges(samples.size(), 256, 0, [&](std::size_t begin, std::size_t end) {
+        std::vector<std::int32_t> stack;
+        for (std::size_t s = begin; s < end; ++s) {
+            const Vec3& q = samples[s];
+            double best = std::numeric_limits<double>::infinity();
+            stack.assign(1, 0);
+            while (!stack.empty()) {
+                const std::size_t id = static_cast<std::size_t>(stack.back());
+                stack.pop_back();
+                if (!(squared_distance_to_box(q, box[id]) < best))
+                    continue;
+                const Node& n = h.nodes[id];
+                if (n.is_leaf()) {
+                    for (std::uint32_t i = n.begin; i < n.end; ++i) {
+                        const Vec3 d = points[i] - q;
+                        best = std::min(best, d.x * d.x + d.y * d.y + d.z * d.z);
+                    }
+                    continue;
+                }
+                // The nearer child on top, searched first: its points bound the other's.
+                const bool left_nearer = squared_distance_to_box(q, box[static_cast<std::size_t>(n.left)]) <=
+                                         squared_distance_to_box(q, box[static_cast<std::size_t>(n.right)]);
+                stack.push_back(left_nearer ? n.right : n.left);
+                stack.push_back(left_nearer ? n.left : n.right);
+            }
+            squared[s] = best;
+        }
+    });
     return summarize(squared, diagonal);
 }
 

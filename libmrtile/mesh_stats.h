@@ -88,6 +88,15 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
 //! the points' bounding box has a zero diagonal. An empty mesh gives zeros.
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points);
 
+struct Hierarchy;
+
+//! \brief The same, searching `points` through the hierarchy built over them (its nodes' point
+//! ranges; `points` in its tree order: h.cloud.positions or h.raw_positions), so that no search
+//! structure is built: a mesh of a 10M-point model measured in 0.1 s instead of 3 s for CGAL's
+//! kd-tree. Same result as the overload above.
+//! \throw InvalidInput as above, or if `points` does not have one position per point of `h`.
+DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const std::vector<Vec3>& points);
+
 //! \brief Pairs of faces (handle indices, smaller first, sorted) whose triangles intersect other than in
 //! the vertices and edges they share: geometric self-intersections of a combinatorially valid mesh (CGAL's
 //! Polygon_mesh_processing::self_intersections). With `among`, only pairs of faces both in that list.

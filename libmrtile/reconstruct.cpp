@@ -814,7 +814,7 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
         for (const std::int32_t id : cut)
             coarsest = std::max(coarsest, node_error(h.nodes[static_cast<std::size_t>(id)]));
         q.point_to_mesh = point_to_mesh_distance(points, mesh, 2.0 * coarsest);
-        q.mesh_to_points = mesh_to_point_distance(mesh, points);
+        q.mesh_to_points = mesh_to_point_distance(mesh, h, points);
     }
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)
         q.self_intersections = self_intersecting_faces(mesh).size();

@@ -8,6 +8,7 @@
 #endif
 #include "libmrtile/mesh_stats.h"
 
+#include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "tests/mesh_fixtures.h"
 
@@ -636,21 +637,18 @@ TEST(Distance, matches_brute_force_on_a_random_closed_mesh)
     expect_stats_of(d, squared);
 }
 
-TEST(Distance, mesh_to_points_matches_brute_force)
+// What mesh_to_point_distance measures from: the mesh's vertices and face centroids.
+std::vector<Vec3> samples_of(const Soup& s)
 {
-    const Soup s = bumpy_sphere(17);
-    const Mesh mesh = to_mesh(s);
-    // The mesh's own vertices and centroids are all at distance zero.
     std::vector<Vec3> samples = s.positions;
     for (const auto& t : s.triangles)
         samples.push_back((s.positions[t[0]] + s.positions[t[1]] + s.positions[t[2]]) / 3.0);
-    EXPECT_EQ(mesh_to_point_distance(mesh, samples).max, 0.0);
+    return samples;
+}
 
-    std::mt19937 rng(19);
-    std::uniform_real_distribution<double> u(-1.4, 1.4);
-    std::vector<Vec3> points(300);
-    for (Vec3& p : points)
-        p = {u(rng), u(rng), u(rng)};
+// The squared distance of each sample to its nearest point, every pair tried.
+std::vector<double> brute_force_nearest(const std::vector<Vec3>& samples, const std::vector<Vec3>& points)
+{
     std::vector<double> squared;
     for (const Vec3& q : samples) {
         double best = INFINITY;
@@ -658,7 +656,50 @@ TEST(Distance, mesh_to_points_matches_brute_force)
             best = std::min(best, squared_distance(p, q));
         squared.push_back(best);
     }
-    expect_stats_of(mesh_to_point_distance(mesh, points), squared);
+    return squared;
+}
+
+TEST(Distance, mesh_to_points_matches_brute_force)
+{
+    const Soup s = bumpy_sphere(17);
+    const Mesh mesh = to_mesh(s);
+    // The mesh's own vertices and centroids are all at distance zero.
+    const std::vector<Vec3> samples = samples_of(s);
+    EXPECT_EQ(mesh_to_point_distance(mesh, samples).max, 0.0);
+
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<double> u(-1.4, 1.4);
+    std::vector<Vec3> points(300);
+    for (Vec3& p : points)
+        p = {u(rng), u(rng), u(rng)};
+    expect_stats_of(mesh_to_point_distance(mesh, points), brute_force_nearest(samples, points));
+}
+
+TEST(Distance, mesh_to_points_through_a_hierarchy_matches_brute_force)
+{
+    const Soup s = bumpy_sphere(17);
+    const Mesh mesh = to_mesh(s);
+    const std::vector<Vec3> samples = samples_of(s);
+    // Points near the sphere and scattered around it, in a hierarchy of leaves of a few points.
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> u(-1.4, 1.4);
+    PointCloud cloud;
+    for (int i = 0; i < 3000; ++i) {
+        const Vec3 p{u(rng), u(rng), u(rng)};
+        cloud.positions.push_back(i % 3 == 0 ? p : p / norm(p) * (1.0 + 0.02 * u(rng)));
+    }
+    BuildOptions options;
+    options.denoise = BuildOptions::Denoise::Off;
+    const Hierarchy h = build_hierarchy(cloud, options);
+    ASSERT_GT(h.nodes.size(), 100u);
+    expect_stats_of(mesh_to_point_distance(mesh, h, h.cloud.positions), brute_force_nearest(samples, h.cloud.positions));
+    // Other positions of the same points (as raw_positions are), moved out of the stored boxes: the
+    // search must bound them by their own.
+    std::vector<Vec3> moved = h.cloud.positions;
+    for (Vec3& p : moved)
+        p = p * 1.3 + Vec3{0.2 * u(rng), 0.0, 0.0};
+    expect_stats_of(mesh_to_point_distance(mesh, h, moved), brute_force_nearest(samples, moved));
+    EXPECT_THROW(mesh_to_point_distance(mesh, h, std::vector<Vec3>(moved.begin(), moved.end() - 1)), InvalidInput);
 }
 
 TEST(Distance, degenerate_input)
