@@ -29,6 +29,8 @@
 namespace mrt {
 namespace {
 
+constexpr const char* kBuildStage = "building hierarchy"; // BuildOptions::progress
+
 // A point as the builder holds it: its position is copied next to its index so that scanning a
 // cluster reads memory sequentially (the scans over clusters and their neighbours are the whole cost
 // of the build; gathering positions through indices made it memory-bound).
@@ -460,7 +462,7 @@ void Builder::split_failing()
         split(top.id);
         ++splits_;
         if (options_.progress && (splits_ & 1023) == 0)
-            options_.progress(1.0 - static_cast<double>(unsettled_) / static_cast<double>(pos_.size()));
+            options_.progress(kBuildStage, 1.0 - static_cast<double>(unsettled_) / static_cast<double>(pos_.size()));
     }
 }
 
@@ -543,7 +545,7 @@ void Builder::run()
         for (const Member& mb : clusters_[id].members)
             leaf_of_point[mb.index] = id;
     if (options_.progress)
-        options_.progress(1.0);
+        options_.progress(kBuildStage, 1.0);
 }
 
 } // namespace
@@ -798,9 +800,14 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
         cloud = std::move(first.cloud);
     }
     const std::vector<Vec3> raw = cloud.positions;
-    denoise_points(cloud.positions, options.denoising);
+    DenoiseOptions denoising = options.denoising;
+    if (options.progress)
+        denoising.progress = [&](double fraction) { options.progress("denoising", fraction); };
+    denoise_points(cloud.positions, denoising);
     BuildOptions again = options;
     again.merge_duplicates = false; // merged already
+    if (options.progress)
+        again.progress = [&](const char*, double fraction) { options.progress("building hierarchy of the denoised points", fraction); };
     Hierarchy h = build_once(std::move(cloud), again);
     h.raw_positions.resize(raw.size());
     for (std::size_t i = 0; i < h.input_index.size(); ++i) {

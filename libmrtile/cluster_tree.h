@@ -74,8 +74,11 @@ struct BuildOptions
     enum class Denoise { Auto, Off, On };
     Denoise denoise = Denoise::Auto;
     DenoiseOptions denoising; //!< how points are moved when denoised (denoise.h; defaults: 48-point quadrics)
-    //! Called now and then with the fraction of points already in flat clusters (0..1).
-    std::function<void(double)> progress;
+    //! Called now and then with what the build is doing and how far it is (0..1): "building
+    //! hierarchy" (the fraction of points already in flat clusters), and for a noisy sample then
+    //! "denoising" (of points moved) and "building hierarchy of the denoised points". Each stage
+    //! ends with 1. One call at a time (the denoising calls from any of its threads).
+    std::function<void(const char* stage, double fraction)> progress;
 };
 
 //! \brief Builds the hierarchy of a point cloud.

@@ -13,7 +13,9 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 namespace mrt {
@@ -105,8 +107,22 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
     const NearestNeighbours search(positions);
     std::vector<Vec3> moved(n);
     std::vector<double> spread(n); // mean distance to the neighbours
+    std::atomic<std::size_t> done{0}; // points moved
+    std::mutex progress_lock;
+    std::size_t reported = 0; // under progress_lock: calls rise even when two threads cross a step together
+    constexpr std::size_t kProgressStep = 1 << 16;
     search.for_each_point(options.neighbours - 1, options.threads,
                           [&](std::uint32_t i, const std::vector<std::uint32_t>& index, const std::vector<double>& distance) {
+                              if (options.progress) {
+                                  const std::size_t now = done.fetch_add(1) + 1;
+                                  if (now % kProgressStep == 0) {
+                                      const std::lock_guard<std::mutex> hold(progress_lock);
+                                      if (now > reported) {
+                                          reported = now;
+                                          options.progress(static_cast<double>(now) / static_cast<double>(n));
+                                      }
+                                  }
+                              }
                               std::vector<Vec3> points{positions[i]};
                               points.reserve(index.size() + 1);
                               for (const std::uint32_t j : index)
@@ -117,6 +133,8 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
                                   sum += d;
                               spread[i] = sum / static_cast<double>(distance.size());
                           });
+    if (options.progress)
+        options.progress(1.0);
     // An isolated point (a stray return among others: neighbours far apart) stays where it is: its
     // neighbourhood is no surface, and a quadric through stray points would turn them into a sheet of
     // their own (a sphere with 1.5% stray points: 8 pieces, 1 when they stay).

@@ -14,6 +14,7 @@
 #include "libmrtile/vec3.h"
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace mrt {
@@ -29,6 +30,9 @@ struct DenoiseOptions
     double isolated_ratio = 3.0;
     //! Threads (0 = the default, parallel.h). The result does not depend on it.
     std::size_t threads = 0;
+    //! Called now and then with the fraction of points moved (0..1, rising; last with 1), one call at
+    //! a time but from any of the threads.
+    std::function<void(double)> progress;
 };
 
 //! \brief Moves every point onto the quadric fitted to its neighbourhood (see the file comment).

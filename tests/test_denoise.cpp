@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
+#include <utility>
 
 namespace mrt {
 namespace {
@@ -210,6 +212,45 @@ TEST(Denoise, the_build_denoises_noisy_samples_only)
     ASSERT_EQ(forced.raw_positions.size(), 5000u);
     for (std::size_t i = 0; i < forced.cloud.size(); ++i)
         ASSERT_EQ(forced.raw_positions[i] + forced.cloud.origin, repeated.positions[forced.input_index[i]]) << i;
+}
+
+TEST(Denoise, the_build_reports_each_stage_of_a_noisy_sample)
+{
+    // Large enough for several denoising reports (one per 65,536 points moved).
+    PointCloud noisy = shapes::sphere(140000);
+    shapes::add_noise(noisy, 0.01);
+    std::vector<std::pair<std::string, double>> calls;
+    BuildOptions options;
+    options.progress = [&](const char* stage, double fraction) { calls.emplace_back(stage, fraction); };
+    options.denoising.threads = 2;
+    const Hierarchy h = build_hierarchy(noisy, options);
+    ASSERT_TRUE(h.info.denoised);
+    // The stages in order, each rising within [0, 1] and ending with 1; denoising in between.
+    const std::vector<std::string> stages{"building hierarchy", "denoising", "building hierarchy of the denoised points"};
+    std::size_t stage = 0, denoising_calls = 0;
+    double last = 0.0;
+    for (const auto& [name, fraction] : calls) {
+        if (name != stages[stage]) {
+            EXPECT_EQ(last, 1.0) << stages[stage] << " did not end with 1";
+            ++stage;
+            ASSERT_LT(stage, stages.size()) << "unexpected stage " << name;
+            ASSERT_EQ(name, stages[stage]);
+            last = 0.0;
+        }
+        EXPECT_GE(fraction, last) << name;
+        EXPECT_LE(fraction, 1.0) << name;
+        last = fraction;
+        denoising_calls += name == "denoising" ? 1 : 0;
+    }
+    EXPECT_EQ(stage, 2u);
+    EXPECT_EQ(last, 1.0);
+    EXPECT_EQ(denoising_calls, 3u); // at 65,536 and 131,072 points, then 1
+    // A clean sample has the first stage only.
+    calls.clear();
+    build_hierarchy(shapes::sphere(20000), options);
+    ASSERT_FALSE(calls.empty());
+    for (const auto& call : calls)
+        EXPECT_EQ(call.first, "building hierarchy");
 }
 
 } // namespace

@@ -210,7 +210,7 @@ struct BuildArgs
         o.merge_duplicates = !keep_duplicates;
         o.denoise = denoise == "on" ? BuildOptions::Denoise::On : denoise == "off" ? BuildOptions::Denoise::Off : BuildOptions::Denoise::Auto;
         if (g.progress())
-            o.progress = [](double f) { std::fprintf(stderr, "\rbuilding hierarchy %5.1f%%", 100.0 * f); };
+            o.progress = [](const char* stage, double f) { std::fprintf(stderr, "\r%s %5.1f%%      ", stage, 100.0 * f); };
         return o;
     }
 };
@@ -1385,7 +1385,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     Hierarchy h = build_hierarchy(std::move(cloud), args.options(g));
     duplicates += h.info.duplicates_merged;
     if (g.progress())
-        std::fprintf(stderr, "\r%40s\r", "");
+        std::fprintf(stderr, "\r%60s\r", "");
     std::printf("read and built %s: %zu points", inputs_name(points).c_str(), n);
     if (duplicates > 0)
         std::printf(" (%zu duplicates merged)", duplicates);
