@@ -107,32 +107,36 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
     const NearestNeighbours search(positions);
     std::vector<Vec3> moved(n);
     std::vector<double> spread(n); // mean distance to the neighbours
-    std::atomic<std::size_t> done{0}; // points moved
-    std::mutex progress_lock;
-    std::size_t reported = 0; // under progress_lock: calls rise even when two threads cross a step together
+    // Progress every kProgressStep points moved; under the lock, the calls rise even when two threads
+    // cross a step together.
     constexpr std::size_t kProgressStep = 1 << 16;
-    search.for_each_point(options.neighbours - 1, options.threads,
-                          [&](std::uint32_t i, const std::vector<std::uint32_t>& index, const std::vector<double>& distance) {
-                              if (options.progress) {
-                                  const std::size_t now = done.fetch_add(1) + 1;
-                                  if (now % kProgressStep == 0) {
-                                      const std::lock_guard<std::mutex> hold(progress_lock);
-                                      if (now > reported) {
-                                          reported = now;
-                                          options.progress(static_cast<double>(now) / static_cast<double>(n));
-                                      }
-                                  }
-                              }
-                              std::vector<Vec3> points{positions[i]};
-                              points.reserve(index.size() + 1);
-                              for (const std::uint32_t j : index)
-                                  points.push_back(positions[j]);
-                              moved[i] = onto_jet(points);
-                              double sum = 0.0;
-                              for (const double d : distance)
-                                  sum += d;
-                              spread[i] = sum / static_cast<double>(distance.size());
-                          });
+    std::atomic<std::size_t> done{0};
+    std::mutex progress_lock;
+    std::size_t reported = 0;
+    const auto count_one = [&] {
+        const std::size_t now = done.fetch_add(1) + 1;
+        if (now % kProgressStep != 0)
+            return;
+        const std::lock_guard<std::mutex> hold(progress_lock);
+        if (now > reported) {
+            reported = now;
+            options.progress(static_cast<double>(now) / static_cast<double>(n));
+        }
+    };
+    const auto move_point = [&](std::uint32_t i, const std::vector<std::uint32_t>& index, const std::vector<double>& distance) {
+        std::vector<Vec3> points{positions[i]};
+        points.reserve(index.size() + 1);
+        for (const std::uint32_t j : index)
+            points.push_back(positions[j]);
+        moved[i] = onto_jet(points);
+        double sum = 0.0;
+        for (const double d : distance)
+            sum += d;
+        spread[i] = sum / static_cast<double>(distance.size());
+        if (options.progress)
+            count_one();
+    };
+    search.for_each_point(options.neighbours - 1, options.threads, move_point);
     if (options.progress)
         options.progress(1.0);
     // An isolated point (a stray return among others: neighbours far apart) stays where it is: its
