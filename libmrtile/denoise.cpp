@@ -49,7 +49,11 @@ struct Jet
             local(q, u, v, w);
             Eigen::Matrix<double, 6, 1> basis;
             basis << 1.0, u, v, u * u, u * v, v * v;
-            a.selfadjointView<Eigen::Lower>().rankUpdate(basis);
+            // The lower triangle of a += basis basisᵀ, by hand: Eigen's rankUpdate takes its general
+            // product path for a 6x6 (a tenth of the denoising). The same products and sums.
+            for (int j = 0; j < 6; ++j)
+                for (int i = j; i < 6; ++i)
+                    a(i, j) += basis[i] * basis[j];
             b += basis * w;
         }
         const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(a.selfadjointView<Eigen::Lower>());
