@@ -57,15 +57,13 @@ struct NearestNeighbours::Tree
 
     // Candidates (squared distance, input index) no farther than `bound`, an upper bound on the k-th
     // nearest distance once k candidates were seen. Collected, then selected: a heap kept at k
-    // (tried first) spent half the query reordering itself. Ties are broken by the index, so the
-    // result is the same whatever order the tree visits the points in.
+    // (tried first) spent half the query reordering itself.
     struct Best
     {
         std::size_t k;
         std::vector<std::pair<double, std::uint32_t>> found;
         double bound = std::numeric_limits<double>::infinity();
-        // Keeps the k best by (distance, index) and makes the k-th distance the bound (a point at
-        // that distance with a smaller index still gets in).
+        // Keeps the k best by (distance, index) and makes the k-th distance the bound.
         void tighten()
         {
             if (found.size() < k)
@@ -93,13 +91,14 @@ struct NearestNeighbours::Tree
         best.found.resize(count);
     }
 
-    // Every point of the subtree that can still make the k best, nearer child first. A subtree is
-    // skipped only when its box is strictly farther than the worst kept (a point at exactly that
-    // distance with a smaller index would still get in).
+    // Every point of the subtree that can still make the k best, nearer child first. A subtree no
+    // nearer than the bound is skipped: its points could only tie with the k-th. (Searching those
+    // too, to break ties by index, made a point repeated 50,000 times quadratic: every copy's box
+    // is at distance 0 from every copy.)
     void search(std::int32_t id, const Vec3& q, std::uint32_t self, Best& best) const
     {
         const Node& n = nodes[static_cast<std::size_t>(id)];
-        if (squared_distance_to_box(q, n.box) > best.bound)
+        if (squared_distance_to_box(q, n.box) >= best.bound)
             return;
         if (n.left < 0) {
             scan(id, q, self, best);
@@ -214,7 +213,7 @@ void NearestNeighbours::query(std::uint32_t i, std::size_t k, std::vector<std::u
         return;
     }
     best.tighten();
-    std::sort(best.found.begin(), best.found.end()); // nearest first, ties by index (at most k)
+    std::sort(best.found.begin(), best.found.end()); // nearest first (at most k)
     for (const auto& [d2, j] : best.found) {
         index.push_back(j);
         distance.push_back(std::sqrt(d2));

@@ -27,12 +27,13 @@ public:
     //! \brief The (at most) `k` nearest other points of point `i`, nearest first: their indices and
     //! distances. A duplicate of the point counts as another point; the point itself never does.
     //! Safe to call from several threads at once; the result depends on the positions only.
-    //! Ties in distance go to the smaller index, so the result is the exact k nearest by (distance,
-    //! index) whatever the tree's shape. `within`, when given, is a distance that holds k other
+    //! Exact: no point left out is nearer than the k-th; which of the points tied at the k-th
+    //! distance are returned is up to the search (deterministic). `within`, when given, is a distance that holds k other
     //! points around point i: the k-th distance of another point j plus the distance from j to i
     //! (j's neighbours and j itself, less i, are k points within it). Querying the points one after
     //! the other in order(), each with the bound of the one before (for_each_point), searches far
-    //! fewer points; the result is the same (a radius that holds fewer is searched again without).
+    //! fewer points; the result is the same up to those ties (a radius that holds fewer is searched
+    //! again without).
     void query(std::uint32_t i, std::size_t k, std::vector<std::uint32_t>& index, std::vector<double>& distance,
                double within = std::numeric_limits<double>::infinity()) const;
 
