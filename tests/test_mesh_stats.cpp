@@ -713,6 +713,20 @@ TEST(Distance, degenerate_input)
     EXPECT_THROW(point_to_mesh_distance({{0, 0, 0}, {NAN, 0, 0}}, mesh), InvalidInput);
     EXPECT_THROW(mesh_to_point_distance(mesh, {}), InvalidInput);
     EXPECT_EQ(mesh_to_point_distance(Mesh{}, {{0, 0, 0}}).max, 0.0);
+    // Closest points need no extent: one point, or several at one position (the probes of a one-point
+    // tile, QA round 32), each get their closest point; only a non-finite point or no faces is refused.
+    const Soup t = tetrahedron();
+    const Vec3 outside = (t.positions[0] + t.positions[1] + t.positions[2]) / 3.0 * 3.0;
+    for (const std::vector<Vec3>& same : {std::vector<Vec3>{outside}, std::vector<Vec3>(5, outside)}) {
+        const std::vector<ClosestPoint> c = closest_points(same, mesh);
+        ASSERT_EQ(c.size(), same.size());
+        for (const ClosestPoint& p : c) {
+            EXPECT_GE(p.face, 0);
+            EXPECT_LT(norm(p.point - outside), norm(outside)); // on the tetrahedron, nearer than its centre
+        }
+    }
+    EXPECT_THROW(closest_points({{0, 0, 0}, {NAN, 0, 0}}, mesh), InvalidInput);
+    EXPECT_THROW(closest_points({{0, 0, 0}}, Mesh{}), InvalidInput);
 }
 
 } // namespace
