@@ -668,6 +668,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     st.restored_islands = restored_islands;
     st.height_field_used = projection.used;
     st.height_field_axis = projection.axis;
+    st.looks_airborne = projection.looks_airborne;
     st.alpha = alpha;
     if (mesh.n_faces() == 0) {
         // Every piece was a small detached island (see SurfaceOptions): the tiles never joined.

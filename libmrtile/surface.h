@@ -132,6 +132,9 @@ struct SurfaceStats
     std::size_t restored_islands = 0;
     bool height_field_used = false;
     Vec3 height_field_axis{0, 0, 1}; //!< the "up" the height field is a graph over (when used)
+    //! Meshed in 3D by HeightField::Auto for want of a CRS, although the tiles would pass as an
+    //! airborne scan's (ground and roofs facing up z, walls left out): HeightField::On may fit better.
+    bool looks_airborne = false;
     double alpha = 0.0;              //!< global alpha used (model units)
     double seconds = 0.0;
 };

@@ -1135,6 +1135,80 @@ TEST(Reconstruct, airborne_walls_are_bridged_in_a_height_field)
     }
 }
 
+// A town seen from above (QA round 32's terrain, smaller): rolling ground and rotated buildings, flat
+// and gabled, 8-25 m tall, whose walls have no points at all, every 0.63 m with 5 cm of noise. At a
+// roof's edge a tile takes in roof and ground points across the missing wall and leans over its
+// neighbours: a few tile centres lie inside other tiles' outlines, which Auto refused in any cloud.
+PointCloud airborne_town()
+{
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    struct Building { double cx, cy, hx, hy, angle, height; bool gable; };
+    std::vector<Building> buildings;
+    const double size = 200.0;
+    const auto ground = [](double x, double y) { return 6.0 * std::sin(x / 40.0) * std::cos(y / 55.0) + 3.0 * std::sin(x / 15.0 + 1.0) * std::sin(y / 19.0); };
+    for (int attempt = 0; attempt < 5000 && buildings.size() < 16; ++attempt) {
+        const Building b{15 + 170 * unit(rng), 15 + 170 * unit(rng), 5 + 10 * unit(rng), 5 + 10 * unit(rng),
+                         3.14159 * unit(rng), 8 + 17 * unit(rng), unit(rng) < 0.5};
+        bool apart = true;
+        for (const Building& o : buildings)
+            apart = apart && std::hypot(b.cx - o.cx, b.cy - o.cy) > 40.0;
+        if (apart)
+            buildings.push_back(b);
+    }
+    PointCloud c;
+    const double spacing = 0.63;
+    for (int i = 0; i * spacing < size; ++i)
+        for (int j = 0; j * spacing < size; ++j) {
+            const double x = (i + unit(rng)) * spacing, y = (j + unit(rng)) * spacing;
+            double z = ground(x, y);
+            for (const Building& b : buildings) {
+                const double dx = x - b.cx, dy = y - b.cy;
+                const double u = dx * std::cos(b.angle) + dy * std::sin(b.angle), v = -dx * std::sin(b.angle) + dy * std::cos(b.angle);
+                if (std::abs(u) < b.hx && std::abs(v) < b.hy) {
+                    z = ground(b.cx, b.cy) + b.height + (b.gable ? 4.0 * (1.0 - std::abs(v) / b.hy) : 0.0);
+                    break;
+                }
+            }
+            c.positions.push_back({400000.0 + x, 5500000.0 + y, 200.0 + z + noise(rng)});
+        }
+    recenter(c);
+    return c;
+}
+
+TEST(Reconstruct, an_airborne_town_is_a_height_field_with_a_crs_and_says_so_without)
+{
+    PointCloud georeferenced = airborne_town();
+    georeferenced.crs = "EPSG:32633";
+    const Hierarchy h = build_hierarchy(georeferenced);
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    ASSERT_TRUE(r.surface.height_field_used);
+    const TopologyStats t = topology_stats(r.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+    EXPECT_FALSE(r.surface.looks_airborne);
+
+    // Without a CRS, Auto meshes it in 3D (a range scan's steep tiles are no walls) and says the points
+    // look airborne; --height-field on makes it whole.
+    const Hierarchy local = build_hierarchy(airborne_town());
+    const MeshResult in_3d = mesh_cut(local, cut_by_tolerance(local, 0.002));
+    EXPECT_FALSE(in_3d.surface.height_field_used);
+    EXPECT_TRUE(in_3d.surface.looks_airborne);
+    MeshOptions on;
+    on.surface.height_field = HeightField::On;
+    const MeshResult forced = mesh_cut(local, cut_by_tolerance(local, 0.002), on);
+    EXPECT_EQ(topology_stats(forced.mesh).components, 1u);
+    // In 3D the town broke into pieces (10, 26 loops; the height field: 1 piece, 7 loops, at roofs'
+    // edges where a bridged wall meets an overhanging tile).
+    const TopologyStats t3 = topology_stats(in_3d.mesh);
+    EXPECT_GT(t3.components, 1u);
+    EXPECT_LT(2 * t.boundary_loops, t3.boundary_loops);
+    // Clean shapes and scans never look airborne.
+    for (const Hierarchy& other : {build_hierarchy(shapes::sphere(20000)), build_hierarchy(shapes::smooth_height_field(20000))})
+        EXPECT_FALSE(mesh_cut(other, cut_by_tolerance(other, 0.002)).surface.looks_airborne);
+}
+
 // A 15 m terrain patch in UTM-like coordinates, every 5 cm, with a 4 x 4 m block 2.5 m tall whose walls
 // have no points at all (nadir airborne lidar). In a height field every fan faces up the axis; the
 // front placed a fan reached by a face bridging a wall by that face's normal instead, and a face

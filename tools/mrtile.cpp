@@ -782,6 +782,10 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                     cut_args.tiles > 0 ? "a larger --tiles budget may join them (bounds, such as --tolerance, are meshed "
                                          "finer where so)"
                                        : "no finer cut tried joined them");
+    if (r.surface.looks_airborne && topology_stats(r.mesh).components > 1)
+        std::printf("note: the points look like an airborne scan (ground and roofs facing up z), meshed in 3D for want "
+                    "of a coordinate system; --height-field on (or a CRS: build or reconstruct with --crs, which a LAS "
+                    "file usually carries) meshes them as a height field, its walls bridged\n");
     // Tiles of a plain tolerance cut that only their noise floor kept from refining: of the cut as
     // made, not as mesh_cut refined it (refined children can be rougher than their parent's bound).
     const Cut cut = plain ? cut_args.cut(h, mended.steps) : Cut{};
