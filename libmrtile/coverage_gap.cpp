@@ -504,6 +504,46 @@ bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
     return radius > 0.0f && radius >= min_radius;
 }
 
+WidestGap widest_gap(const std::vector<double>& values)
+{
+    WidestGap out;
+    if (values.size() < 2)
+        return out;
+    const auto [lo_it, hi_it] = std::minmax_element(values.begin(), values.end());
+    const double lo = *lo_it, hi = *hi_it;
+    out.extent = hi - lo;
+    out.from = lo;
+    if (!(hi > lo))
+        return out;
+    // Pigeonholes: 2n buckets over [lo, hi]. The bucket of a value never decreases as the value grows
+    // (every operation below rounds monotonically), so the buckets in turn hold the values in sorted
+    // order, each bucket's unordered. A gap inside a bucket is under its width, range / 2n, less than
+    // half the smallest widest gap there can be, range / (n - 1): so the widest gap, and every gap as
+    // wide, runs from one non-empty bucket's largest value to the next one's smallest, and scanning
+    // the buckets upwards meets them as the sorted scan does.
+    const std::size_t n = values.size();
+    const std::size_t buckets = 2 * n;
+    const double scale = static_cast<double>(buckets) / (hi - lo);
+    std::vector<double> low(buckets, std::numeric_limits<double>::infinity());
+    std::vector<double> high(buckets, -std::numeric_limits<double>::infinity());
+    for (const double v : values) {
+        const auto b = std::min(buckets - 1, static_cast<std::size_t>((v - lo) * scale));
+        low[b] = std::min(low[b], v);
+        high[b] = std::max(high[b], v);
+    }
+    double previous = high[0]; // bucket 0 holds lo
+    for (std::size_t b = 1; b < buckets; ++b) {
+        if (!(low[b] <= high[b]))
+            continue; // empty
+        if (low[b] - previous > out.width) {
+            out.width = low[b] - previous;
+            out.from = previous;
+        }
+        previous = high[b];
+    }
+    return out;
+}
+
 double separation_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, double min_width,
                       const CoverageOptions& options, const std::vector<Vec3>& fill)
 {
@@ -521,14 +561,8 @@ double separation_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const
             lo = std::min(lo, dot(p, across));
             hi = std::max(hi, dot(p, across));
         }
-        std::sort(values.begin(), values.end());
-        double strip = 0.0, from = 0.0;
-        for (std::size_t i = 1; i < values.size(); ++i)
-            if (values[i] - values[i - 1] > strip) {
-                strip = values[i] - values[i - 1];
-                from = values[i - 1];
-            }
-        const double extent = values.back() - values.front();
+        const WidestGap gap = widest_gap(values);
+        const double strip = gap.width, from = gap.from, extent = gap.extent;
         if (!(strip > 0.25 * extent) || !(strip > min_width))
             continue;
         std::size_t inside = 0;

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
@@ -332,6 +333,49 @@ TEST(CoverageGap, tiles_whose_cells_reach_over_a_hole_keep_their_own_points)
 
 // Holes 20 to 50 spacings wide in a flat plate stay open in the mesh, clean or noisy, at the default
 // cut, and the rest of the plate is covered.
+// widest_gap against sorting and scanning, on values built to tie: equal gaps everywhere (a grid),
+// repeated values, two clusters, negative and huge values, and random ones.
+TEST(CoverageGap, widest_gap_equals_sorting)
+{
+    auto sorted_scan = [](std::vector<double> v) {
+        WidestGap g;
+        if (v.size() < 2)
+            return g;
+        std::sort(v.begin(), v.end());
+        g.extent = v.back() - v.front();
+        g.from = v.front();
+        for (std::size_t i = 1; i < v.size(); ++i)
+            if (v[i] - v[i - 1] > g.width) {
+                g.width = v[i] - v[i - 1];
+                g.from = v[i - 1];
+            }
+        return g;
+    };
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<std::vector<double>> cases{{}, {3.0}, {2.0, 2.0, 2.0}, {1.0, -1.0}, {0.0, 1.0, 2.0, 3.0, 4.0}};
+    for (int n : {7, 100, 1001}) {
+        std::vector<double> random, grid, repeated, clusters, huge;
+        for (int i = 0; i < n; ++i) {
+            random.push_back(u(rng));
+            grid.push_back(0.1 * (i % 37)); // equal gaps: the lowest must win
+            repeated.push_back(std::round(4.0 * u(rng)));
+            clusters.push_back(i % 2 ? 100.0 + u(rng) : u(rng));
+            huge.push_back(1e12 * u(rng) - 5e11);
+        }
+        std::shuffle(grid.begin(), grid.end(), rng);
+        cases.insert(cases.end(), {random, grid, repeated, clusters, huge});
+    }
+    for (std::size_t c = 0; c < cases.size(); ++c) {
+        const WidestGap expected = sorted_scan(cases[c]), got = widest_gap(cases[c]);
+        EXPECT_EQ(got.width, expected.width) << c;
+        EXPECT_EQ(got.extent, expected.extent) << c;
+        if (expected.width > 0.0) {
+            EXPECT_EQ(got.from, expected.from) << c;
+        }
+    }
+}
+
 TEST(CoverageGap, holes_in_a_flat_plate_stay_open)
 {
     const std::size_t n = 60000;
