@@ -504,6 +504,8 @@ bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
     return radius > 0.0f && radius >= min_radius;
 }
 
+constexpr std::size_t kMaxBucketedValues = std::size_t{1} << 20;
+
 WidestGap widest_gap(const std::vector<double>& values)
 {
     WidestGap out;
@@ -522,6 +524,16 @@ WidestGap widest_gap(const std::vector<double>& values)
     // wide, runs from one non-empty bucket's largest value to the next one's smallest, and scanning
     // the buckets upwards meets them as the sorted scan does.
     const std::size_t n = values.size();
+    if (n > kMaxBucketedValues) { // the buckets would take 4x the values' memory: sort a copy instead
+        std::vector<double> sorted = values;
+        std::sort(sorted.begin(), sorted.end());
+        for (std::size_t i = 1; i < n; ++i)
+            if (sorted[i] - sorted[i - 1] > out.width) {
+                out.width = sorted[i] - sorted[i - 1];
+                out.from = sorted[i - 1];
+            }
+        return out;
+    }
     const std::size_t buckets = 2 * n;
     const double scale = static_cast<double>(buckets) / (hi - lo);
     std::vector<double> low(buckets, std::numeric_limits<double>::infinity());

@@ -85,8 +85,9 @@ struct WidestGap
     double from = 0.0;
     double extent = 0.0;
 };
-//! \brief As sorting `values` and scanning them, in linear time (separation_gap's share of building a
-//! hierarchy of a 1M-point terrestrial scan was a third, most of it sorting). Values must be finite.
+//! \brief As sorting `values` and scanning them, in linear time up to 2^20 values (separation_gap's
+//! share of building a hierarchy of a 1M-point terrestrial scan was a third, most of it sorting);
+//! beyond, by sorting a copy, since the buckets would take 4x the values' memory. Values must be finite.
 WidestGap widest_gap(const std::vector<double>& values);
 
 //! \brief The empty regions that count (coverage_gap), kept to ask where they are: whether a fill

@@ -366,6 +366,12 @@ TEST(CoverageGap, widest_gap_equals_sorting)
         std::shuffle(grid.begin(), grid.end(), rng);
         cases.insert(cases.end(), {random, grid, repeated, clusters, huge});
     }
+    // Past 2^20 values widest_gap sorts (the buckets would take 4x the memory): both ways agree.
+    std::vector<double> many(std::size_t{1} << 20 | 1);
+    for (std::size_t i = 0; i < many.size(); ++i)
+        many[i] = i % 3 ? u(rng) : 0.5 * std::round(8.0 * u(rng));
+    cases.push_back(many);
+    cases.push_back(std::vector<double>(many.begin(), many.end() - 1));
     for (std::size_t c = 0; c < cases.size(); ++c) {
         const WidestGap expected = sorted_scan(cases[c]), got = widest_gap(cases[c]);
         EXPECT_EQ(got.width, expected.width) << c;
