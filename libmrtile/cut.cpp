@@ -22,11 +22,7 @@ void check_tolerance(double value, const char* name)
         throw InvalidInput(std::string("cut: ") + name + " must be a finite number >= 0, got " + std::to_string(value));
 }
 
-double distance_to_box(const Vec3& p, const BoundingBox& b)
-{
-    const Vec3 d = max(max(b.min - p, p - b.max), Vec3{0, 0, 0});
-    return norm(d);
-}
+double distance_to_box(const Vec3& p, const BoundingBox& b) { return std::sqrt(b.squared_distance_to(p)); }
 
 // Whether a node's points lie along one line: across the line they spread under a thirtieth of their
 // spread along it (eigenvalues 900 apart), and they are 8 or more (the fewest a leaf holds by choice:

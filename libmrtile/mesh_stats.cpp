@@ -692,14 +692,6 @@ std::vector<Vec3> mesh_samples(const Soup& soup)
     return samples;
 }
 
-double squared_distance_to_box(const Vec3& p, const BoundingBox& b)
-{
-    const double dx = std::max({b.min.x - p.x, 0.0, p.x - b.max.x});
-    const double dy = std::max({b.min.y - p.y, 0.0, p.y - b.max.y});
-    const double dz = std::max({b.min.z - p.z, 0.0, p.z - b.max.z});
-    return dx * dx + dy * dy + dz * dz;
-}
-
 } // namespace
 
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& points)
@@ -770,7 +762,7 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
             while (!stack.empty()) {
                 const std::size_t id = static_cast<std::size_t>(stack.back());
                 stack.pop_back();
-                if (!(squared_distance_to_box(q, box[id]) < best))
+                if (!(box[id].squared_distance_to(q) < best))
                     continue;
                 const Node& n = h.nodes[id];
                 if (n.is_leaf()) {
@@ -781,8 +773,8 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
                     continue;
                 }
                 // The nearer child on top, searched first: its points bound the other's.
-                const bool left_nearer = squared_distance_to_box(q, box[static_cast<std::size_t>(n.left)]) <=
-                                         squared_distance_to_box(q, box[static_cast<std::size_t>(n.right)]);
+                const bool left_nearer = box[static_cast<std::size_t>(n.left)].squared_distance_to(q) <=
+                                         box[static_cast<std::size_t>(n.right)].squared_distance_to(q);
                 stack.push_back(left_nearer ? n.right : n.left);
                 stack.push_back(left_nearer ? n.left : n.right);
             }

@@ -23,15 +23,6 @@ namespace {
 
 constexpr std::uint32_t kLeafSize = 16; // points per leaf at most
 
-// Squared distance from p to the box (0 inside).
-double squared_distance_to_box(const Vec3& p, const BoundingBox& b)
-{
-    const double dx = std::max({b.min.x - p.x, 0.0, p.x - b.max.x});
-    const double dy = std::max({b.min.y - p.y, 0.0, p.y - b.max.y});
-    const double dz = std::max({b.min.z - p.z, 0.0, p.z - b.max.z});
-    return dx * dx + dy * dy + dz * dz;
-}
-
 // Squared distance from p, inside the box, to the box's outside: a ball around p of a smaller radius
 // holds no point outside the box.
 double squared_depth_in_box(const Vec3& p, const BoundingBox& b)
@@ -98,14 +89,14 @@ struct NearestNeighbours::Tree
     void search(std::int32_t id, const Vec3& q, std::uint32_t self, Best& best) const
     {
         const Node& n = nodes[static_cast<std::size_t>(id)];
-        if (squared_distance_to_box(q, n.box) >= best.bound)
+        if (n.box.squared_distance_to(q) >= best.bound)
             return;
         if (n.left < 0) {
             scan(id, q, self, best);
             return;
         }
-        const double dl = squared_distance_to_box(q, nodes[static_cast<std::size_t>(n.left)].box);
-        const double dr = squared_distance_to_box(q, nodes[static_cast<std::size_t>(n.right)].box);
+        const double dl = nodes[static_cast<std::size_t>(n.left)].box.squared_distance_to(q);
+        const double dr = nodes[static_cast<std::size_t>(n.right)].box.squared_distance_to(q);
         const bool left_first = dl <= dr;
         search(left_first ? n.left : n.right, q, self, best);
         search(left_first ? n.right : n.left, q, self, best);

@@ -36,6 +36,11 @@ struct BoundingBox
     {
         return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y && p.z <= max.z;
     }
+    //! Squared distance from p to the box (0 inside).
+    double squared_distance_to(const Vec3& p) const
+    {
+        return squared_norm(mrt::max(mrt::max(min - p, p - max), Vec3{0, 0, 0}));
+    }
 };
 
 //! \brief A file whose coordinates were stored as 32-bit floats so far from the origin that adjacent
