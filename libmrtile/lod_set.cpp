@@ -282,6 +282,7 @@ void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
     MeshResult meshed = mesh_cut(h, level.cut, level_options);
     level.cut = std::move(meshed.cut);
     level.mesh = std::move(meshed.mesh);
+    level.looks_airborne = meshed.surface.looks_airborne;
 }
 
 // Level 0 is the best cut whose mesh fits one tile: start from a guess of the triangles per tile and

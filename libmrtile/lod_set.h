@@ -68,6 +68,8 @@ struct LodLevel
     Mesh mesh;                    //!< the whole level, one manifold surface
     double geometric_error = 0.0; //!< model units (see file comment)
     double max_plane_distance = 0.0; //!< raw largest point-to-tile-plane distance over the cut
+    //! SurfaceStats::looks_airborne of its meshing (false for a level read from a model).
+    bool looks_airborne = false;
 };
 
 struct LodTile

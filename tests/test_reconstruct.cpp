@@ -2,6 +2,7 @@
 // the right genus on closed inputs, and the paper's E_RMS equals a brute-force evaluation.
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/lod_set.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/refine_mesh.h"
 #include "libmrtile/point_cloud.h"
@@ -1199,6 +1200,13 @@ TEST(Reconstruct, an_airborne_town_is_a_height_field_with_a_crs_and_says_so_with
     on.surface.height_field = HeightField::On;
     const MeshResult forced = mesh_cut(local, cut_by_tolerance(local, 0.002), on);
     EXPECT_EQ(topology_stats(forced.mesh).components, 1u);
+    // A LOD set's levels say so too (the CLI's lods and export name the options from them).
+    LodSetOptions lod;
+    lod.tolerances = {0.002};
+    lod.tileset = false;
+    const LodSet set = make_lod_set(local, lod);
+    ASSERT_EQ(set.levels.size(), 1u);
+    EXPECT_TRUE(set.levels[0].looks_airborne);
     // In 3D the town broke into pieces (10, 26 loops; the height field: 1 piece, 7 loops, at roofs'
     // edges where a bridged wall meets an overhanging tile).
     const TopologyStats t3 = topology_stats(in_3d.mesh);

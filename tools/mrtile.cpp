@@ -736,6 +736,26 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
     return j;
 }
 
+// A mesh of points that look airborne (SurfaceStats::looks_airborne), meshed in 3D for want of a CRS:
+// when it is in pieces, name the two ways to a height field.
+void note_airborne(const Mesh& mesh)
+{
+    if (topology_stats(mesh).components > 1)
+        std::printf("note: the points look like an airborne scan (ground and roofs facing up z), meshed in 3D for want "
+                    "of a coordinate system; --height-field on (or a CRS: build or reconstruct with --crs, which a LAS "
+                    "file usually carries) meshes them as a height field, its walls bridged\n");
+}
+
+// The same for a LOD set, once, by its finest level that looks so.
+void note_airborne(const LodSet& set)
+{
+    for (auto level = set.levels.rbegin(); level != set.levels.rend(); ++level)
+        if (level->looks_airborne) {
+            note_airborne(level->mesh);
+            return;
+        }
+}
+
 // Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`. The mesh is used where it
 // was made: an OpenMesh mesh has no move constructor, so moving a MeshResult into a variable declared
 // earlier would copy it.
@@ -782,10 +802,8 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                     cut_args.tiles > 0 ? "a larger --tiles budget may join them (bounds, such as --tolerance, are meshed "
                                          "finer where so)"
                                        : "no finer cut tried joined them");
-    if (r.surface.looks_airborne && topology_stats(r.mesh).components > 1)
-        std::printf("note: the points look like an airborne scan (ground and roofs facing up z), meshed in 3D for want "
-                    "of a coordinate system; --height-field on (or a CRS: build or reconstruct with --crs, which a LAS "
-                    "file usually carries) meshes them as a height field, its walls bridged\n");
+    if (r.surface.looks_airborne)
+        note_airborne(r.mesh);
     // Tiles of a plain tolerance cut that only their noise floor kept from refining: of the cut as
     // made, not as mesh_cut refined it (refined children can be rougher than their parent's bound).
     const Cut cut = plain ? cut_args.cut(h, mended.steps) : Cut{};
@@ -1128,6 +1146,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     const LodSetOptions options = e.options(m);
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    note_airborne(set);
     note_fewer_levels(h, options, set);
     stored.store(set.levels);
     Vec3 origin = h.cloud.origin;
@@ -1165,6 +1184,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     options.tileset = false;
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
+    note_airborne(set);
     note_fewer_levels(h, options, set);
     stored.store(set.levels);
     std::vector<const Mesh*> fine_to_coarse;
@@ -1189,6 +1209,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
     show_level_progress(options, g);
     const LodSet set = make_lod_set(h, options);
     note_noise_floor(h, set);
+    note_airborne(set);
     note_fewer_levels(h, options, set);
     // Measure first: a level is kept only while the measured mean error keeps falling, so that the set
     // is consistent (a coarser level is never more accurate than a finer one). Where the finest cuts
