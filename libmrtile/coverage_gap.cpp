@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mrt {
@@ -506,7 +507,7 @@ bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
 
 constexpr std::size_t kMaxBucketedValues = std::size_t{1} << 20;
 
-WidestGap widest_gap(const std::vector<double>& values)
+WidestGap widest_gap(std::vector<double> values)
 {
     WidestGap out;
     if (values.size() < 2)
@@ -524,13 +525,12 @@ WidestGap widest_gap(const std::vector<double>& values)
     // wide, runs from one non-empty bucket's largest value to the next one's smallest, and scanning
     // the buckets upwards meets them as the sorted scan does.
     const std::size_t n = values.size();
-    if (n > kMaxBucketedValues) { // the buckets would take 4x the values' memory: sort a copy instead
-        std::vector<double> sorted = values;
-        std::sort(sorted.begin(), sorted.end());
+    if (n > kMaxBucketedValues) { // the buckets would take 4x the values' memory: sort them in place
+        std::sort(values.begin(), values.end());
         for (std::size_t i = 1; i < n; ++i)
-            if (sorted[i] - sorted[i - 1] > out.width) {
-                out.width = sorted[i] - sorted[i - 1];
-                out.from = sorted[i - 1];
+            if (values[i] - values[i - 1] > out.width) {
+                out.width = values[i] - values[i - 1];
+                out.from = values[i - 1];
             }
         return out;
     }
@@ -573,7 +573,7 @@ double separation_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const
             lo = std::min(lo, dot(p, across));
             hi = std::max(hi, dot(p, across));
         }
-        const WidestGap gap = widest_gap(values);
+        const WidestGap gap = widest_gap(std::move(values));
         const double strip = gap.width, from = gap.from, extent = gap.extent;
         if (!(strip > 0.25 * extent) || !(strip > min_width))
             continue;

@@ -87,8 +87,9 @@ struct WidestGap
 };
 //! \brief As sorting `values` and scanning them, in linear time up to 2^20 values (separation_gap's
 //! share of building a hierarchy of a 1M-point terrestrial scan was a third, most of it sorting);
-//! beyond, by sorting a copy, since the buckets would take 4x the values' memory. Values must be finite.
-WidestGap widest_gap(const std::vector<double>& values);
+//! beyond, by sorting them (taken by value: a caller done with them moves them in, and no copy is
+//! made), since the buckets would take 4x the values' memory. Values must be finite.
+WidestGap widest_gap(std::vector<double> values);
 
 //! \brief The empty regions that count (coverage_gap), kept to ask where they are: whether a fill
 //! between tiles would cover a hole of the sample (surface stage). The hull is that of all `points`.
