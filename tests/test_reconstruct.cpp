@@ -768,6 +768,30 @@ TEST(Reconstruct, untangle_and_flip_options_out_of_range_are_refused)
     EXPECT_THROW(mesh_mended(h, std::function<Cut(int)>{}), InvalidInput);
 }
 
+// Two sheets 3 spacings apart: the default cut is nearly all leaves (1,346 tiles of 1,358), in two pieces
+// that the sample joins. A finer cut of such a large cut is meshed only when it splits at least 1 tile
+// in 20; the finer cuts here are no partitions (a node listed twice), so meshing one throws, and
+// whether it throws tells whether it was meshed.
+TEST(Reconstruct, a_large_cut_goes_finer_only_where_that_splits_enough_tiles)
+{
+    const Hierarchy h = build_hierarchy(shapes::parallel_planes(40000, 0.03));
+    const Cut cut = cut_by_tolerance(h, 0.002);
+    ASSERT_GT(cut.size(), 1000u);
+    const auto with_repeats = [&](std::size_t extra) {
+        Cut finer = cut;
+        finer.insert(finer.end(), cut.begin(), cut.begin() + static_cast<std::ptrdiff_t>(extra));
+        return finer;
+    };
+    // One more node in 20 or fewer: not meshed.
+    const std::size_t few = cut.size() / 20 - 1;
+    const MendedMeshResult kept = mesh_mended(h, [&](int step) { return step == 0 ? cut : with_repeats(few); });
+    ASSERT_TRUE(kept.in_pieces);
+    EXPECT_EQ(kept.steps, 0);
+    // One in 20: meshed (and refused as no partition).
+    EXPECT_THROW(mesh_mended(h, [&](int step) { return step == 0 ? cut : with_repeats(cut.size() / 20 + 1); }),
+                 InvalidInput);
+}
+
 // QA round qa3: measure_quality and e_rms checked the cut's node ids only: a node listed twice counted
 // its points twice (3,078 points of 3,000) and E_RMS came out wrong without a word. A mesh vertex set
 // to NaN reached CGAL, which threw its own precondition exception.
