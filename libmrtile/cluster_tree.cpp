@@ -803,7 +803,7 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     DenoiseOptions denoising = options.denoising;
     if (options.progress)
         denoising.progress = [&](double fraction) { options.progress("denoising", fraction); };
-    denoise_points(cloud.positions, denoising);
+    const double rms_move = denoise_points(cloud.positions, denoising);
     BuildOptions again = options;
     again.merge_duplicates = false; // merged already
     if (options.progress)
@@ -817,6 +817,8 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     }
     h.info.duplicates_merged = merged;
     h.info.denoised = true;
+    h.info.denoise_rms_move = rms_move;
+    derive_noise_floor(h); // again, now that the residual noise is known
     h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return h;
 }

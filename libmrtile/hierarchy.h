@@ -85,6 +85,11 @@ struct BuildInfo
     //! The points were denoised before the build (BuildOptions::denoise, denoise.h): the stored
     //! positions are the moved ones.
     bool denoised = false;
+    //! A denoised build's RMS distance the points moved (denoise_points; model units; 0 when not
+    //! denoised). The moved points keep residual noise, which their own leaves no longer show: the
+    //! nodes' noise floors are raised to it (derive_noise_floor), so that the finest cut of a denoised
+    //! model stops where the one of a less noisy, undenoised sample does. Stored in the model file.
+    double denoise_rms_move = 0.0;
 };
 
 struct Hierarchy
@@ -141,6 +146,11 @@ void update_derived(Hierarchy& h);
 //! else the whole sample's on the same terms. Smaller regions take the same measure over the whole
 //! sample; nodes below a region take its floor, nodes above the smallest of their children's.
 void derive_noise_floor(Hierarchy& h);
+
+//! The noise floor of every node of a denoised hierarchy: the residual noise of its moved points,
+//! estimated from BuildInfo::denoise_rms_move (0 when not denoised). derive_noise_floor raises every
+//! node's floor to it.
+double denoised_noise_floor(const BuildInfo& info);
 
 //! Sets every node's noise_floor to 0 (cut below the noise anyway).
 void clear_noise_floor(Hierarchy& h);

@@ -33,7 +33,11 @@ constexpr std::size_t kNodeSizeV1 = 168; // version 1: no coverage gap
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
 constexpr std::uint32_t kFlagDenoised = 32; // BuildInfo::denoised: no section of its own
-constexpr std::uint32_t kKnownFlags = kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels | kFlagDenoised;
+// BuildInfo::denoise_rms_move (the denoised model's noise floor); files from before it have flag 32
+// alone and load with no floor, as they were cut then.
+constexpr std::uint32_t kFlagDenoiseMove = 64;
+constexpr std::uint32_t kKnownFlags =
+    kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels | kFlagDenoised | kFlagDenoiseMove;
 // Stored levels: a LOD set has at most LodSetOptions::max_levels (16) levels; a recipe is a line of options.
 constexpr std::uint32_t kMaxStoredLevels = 64;
 constexpr std::uint32_t kMaxRecipeBytes = 1u << 16;
@@ -509,9 +513,10 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
+    const bool denoise_move = h.info.denoised && h.info.denoise_rms_move > 0.0 && std::isfinite(h.info.denoise_rms_move);
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
           (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u) |
-          (h.info.denoised ? kFlagDenoised : 0u));
+          (h.info.denoised ? kFlagDenoised : 0u) | (denoise_move ? kFlagDenoiseMove : 0u));
     w.u64(n);
     w.u64(h.nodes.size());
     w.f64(h.cloud.origin.x);
@@ -568,6 +573,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         w.u32(static_cast<std::uint32_t>(h.cloud.crs.size()));
         w.bytes(h.cloud.crs.data(), h.cloud.crs.size());
     }
+    if (denoise_move)
+        w.f64(h.info.denoise_rms_move);
     if (levels)
         write_levels(w, out, *options.levels);
     const std::uint64_t payload = out.size() - kHeaderSize;
@@ -605,7 +612,8 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
-        kHeaderSize + n * per_point + node_count * node_size + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
+        kHeaderSize + n * per_point + node_count * node_size + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) +
+                ((flags & kFlagDenoiseMove) ? 8 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -689,6 +697,12 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
             r.fail("CRS of " + std::to_string(length) + " bytes does not fit");
         h.cloud.crs.resize(length);
         r.bytes(h.cloud.crs.data(), length);
+    }
+    if (flags & kFlagDenoiseMove) {
+        const double move = r.f64();
+        if (!(flags & kFlagDenoised) || !(move > 0.0) || !std::isfinite(move))
+            r.fail("bad denoising section (a distance of " + std::to_string(move) + (flags & kFlagDenoised ? "" : " in a model not denoised") + ")");
+        h.info.denoise_rms_move = move;
     }
     std::size_t levels_at = 0;
     if (flags & kFlagLevels) {

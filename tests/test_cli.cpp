@@ -1500,8 +1500,15 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_EQ(e["faces"], d["faces"]); // the same mesh
     const Result denoised_info = mrtile("info --json " + (dir / "d.mrt").string(), dir);
     ASSERT_EQ(denoised_info.code, 0) << denoised_info.err;
-    EXPECT_TRUE(nlohmann::json::parse(denoised_info.out)["denoised"].get<bool>());
+    const auto di = nlohmann::json::parse(denoised_info.out);
+    EXPECT_TRUE(di["denoised"].get<bool>());
     EXPECT_FALSE(j["denoised"].get<bool>());
+    // The denoising's distance is kept, and its residual noise floors every node.
+    EXPECT_GT(di["denoise_rms_move"].get<double>(), 0.0);
+    EXPECT_EQ(j["denoise_rms_move"].get<double>(), 0.0);
+    EXPECT_GE(di["noise_floor_max"].get<double>(), 0.7 * di["denoise_rms_move"].get<double>() * (1 - 1e-12));
+    const Result denoised_text = mrtile("info " + (dir / "d.mrt").string(), dir);
+    EXPECT_NE(denoised_text.out.find("residual noise sets every floor to at least"), std::string::npos) << denoised_text.out;
     // Forced, the build says it denoised, not that it found the sample noisy.
     const Result forced = mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "f.mrt").string() + " --denoise on", dir);
     ASSERT_EQ(forced.code, 0) << forced.err;

@@ -73,7 +73,7 @@ TEST(ModelFile, viewpoint_round_trip_and_unknown_flags)
     EXPECT_EQ(serialize_model(back), bytes);
     EXPECT_FALSE(deserialize_model(serialize_model(sample()), "memory").cloud.viewpoint.has_value());
     std::string unknown = bytes;
-    unknown[20] = static_cast<char>(unknown[20] | 64); // flags: the u32 after magic, version, marker, header size
+    unknown[20] = static_cast<char>(unknown[20] | 128); // flags: the u32 after magic, version, marker, header size
     try {
         deserialize_model(unknown, "m.mrt");
         ADD_FAILURE() << "an unknown flag was accepted";
@@ -343,6 +343,42 @@ TEST(ModelFile, damaged_stored_levels_are_rejected)
         }
     }
     EXPECT_GT(refused, 0u);
+}
+
+// A denoised model keeps how far its points moved (its noise floor: hierarchy.h), exactly; a damaged
+// value, or one in a model not denoised, is refused.
+TEST(ModelFile, denoising_distance_round_trip_and_damage)
+{
+    PointCloud c = shapes::torus(3000);
+    shapes::add_noise(c, 0.01);
+    BuildOptions on;
+    on.denoise = BuildOptions::Denoise::On;
+    const Hierarchy h = build_hierarchy(c, on);
+    ASSERT_GT(h.info.denoise_rms_move, 0.0);
+    const std::string bytes = serialize_model(h);
+    const Hierarchy back = deserialize_model(bytes, "memory");
+    EXPECT_EQ(back.info.denoise_rms_move, h.info.denoise_rms_move);
+    EXPECT_EQ(serialize_model(back), bytes);
+    for (std::size_t k = 0; k < h.nodes.size(); ++k)
+        ASSERT_EQ(back.nodes[k].noise_floor, h.nodes[k].noise_floor) << k;
+    EXPECT_EQ(deserialize_model(serialize_model(sample()), "memory").info.denoise_rms_move, 0.0);
+
+    const std::size_t move_at = bytes.size() - 8 - 8; // the last section: no viewpoint, CRS or levels
+    for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+        std::string damaged = bytes;
+        std::memcpy(&damaged[move_at], &bad, 8);
+        refresh_checksum(damaged);
+        EXPECT_THROW(deserialize_model(damaged, "m.mrt"), IoError) << bad;
+    }
+    std::string not_denoised = bytes;
+    not_denoised[20] = static_cast<char>(not_denoised[20] & ~32);
+    refresh_checksum(not_denoised);
+    try {
+        deserialize_model(not_denoised, "m.mrt");
+        ADD_FAILURE() << "a denoising distance in a model not denoised was accepted";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("denoising"), std::string::npos) << e.what();
+    }
 }
 
 // Every truncation and every single flipped byte (sampled) is rejected with an IoError.
