@@ -363,7 +363,7 @@ void derive_noise_floor(Hierarchy& h)
 
 double denoised_noise_floor(const BuildInfo& info)
 {
-    if (!info.denoised || !(info.denoise_rms_move > 0.0) || !std::isfinite(info.denoise_rms_move))
+    if (!info.denoised || !(info.denoise_move > 0.0) || !std::isfinite(info.denoise_move))
         return 0.0;
     // The moved points keep about a third of the noise (each is the value at its own spot of a
     // quadric fitted to 48 points: README "Choices"), smooth over a few spacings, so that nodes of
@@ -373,7 +373,7 @@ double denoised_noise_floor(const BuildInfo& info)
     // move (0.3 gave 3-6 times the tiles and was the farthest but for every leaf; 1.0 was farther
     // again on the ellipsoid's bumps; on the sphere 0.5 and 0.7 were within 1%).
     constexpr double kResidualShare = 0.7;
-    return kResidualShare * info.denoise_rms_move;
+    return kResidualShare * info.denoise_move;
 }
 
 void clear_noise_floor(Hierarchy& h)

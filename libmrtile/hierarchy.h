@@ -85,11 +85,12 @@ struct BuildInfo
     //! The points were denoised before the build (BuildOptions::denoise, denoise.h): the stored
     //! positions are the moved ones.
     bool denoised = false;
-    //! A denoised build's RMS distance the points moved (denoise_points; model units; 0 when not
-    //! denoised). The moved points keep residual noise, which their own leaves no longer show: the
-    //! nodes' noise floors are raised to it (derive_noise_floor), so that the finest cut of a denoised
-    //! model stops where the one of a less noisy, undenoised sample does. Stored in the model file.
-    double denoise_rms_move = 0.0;
+    //! How far a denoised build's denoising typically moved the points: 1.4826 × the median distance,
+    //! the RMS of Gaussian moves without the large ones at sharp edges (model units; 0 when not
+    //! denoised; about the noise's σ). The moved points keep residual noise, which their own leaves no
+    //! longer show: the nodes' noise floors are raised from it (denoised_noise_floor), so that the
+    //! finest cut of a denoised model stops above the noise. Stored in the model file.
+    double denoise_move = 0.0;
 };
 
 struct Hierarchy
@@ -148,7 +149,7 @@ void update_derived(Hierarchy& h);
 void derive_noise_floor(Hierarchy& h);
 
 //! The noise floor of every node of a denoised hierarchy: the residual noise of its moved points,
-//! estimated from BuildInfo::denoise_rms_move (0 when not denoised). derive_noise_floor raises every
+//! estimated from BuildInfo::denoise_move (0 when not denoised). derive_noise_floor raises every
 //! node's floor to it.
 double denoised_noise_floor(const BuildInfo& info);
 

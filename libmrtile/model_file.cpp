@@ -33,7 +33,7 @@ constexpr std::size_t kNodeSizeV1 = 168; // version 1: no coverage gap
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
 constexpr std::uint32_t kFlagDenoised = 32; // BuildInfo::denoised: no section of its own
-// BuildInfo::denoise_rms_move (the denoised model's noise floor); files from before it have flag 32
+// BuildInfo::denoise_move (the denoised model's noise floor); files from before it have flag 32
 // alone and load with no floor, as they were cut then.
 constexpr std::uint32_t kFlagDenoiseMove = 64;
 constexpr std::uint32_t kKnownFlags =
@@ -513,7 +513,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
-    const bool denoise_move = h.info.denoised && h.info.denoise_rms_move > 0.0 && std::isfinite(h.info.denoise_rms_move);
+    const bool denoise_move = h.info.denoised && h.info.denoise_move > 0.0 && std::isfinite(h.info.denoise_move);
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
           (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u) |
           (h.info.denoised ? kFlagDenoised : 0u) | (denoise_move ? kFlagDenoiseMove : 0u));
@@ -574,7 +574,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         w.bytes(h.cloud.crs.data(), h.cloud.crs.size());
     }
     if (denoise_move)
-        w.f64(h.info.denoise_rms_move);
+        w.f64(h.info.denoise_move);
     if (levels)
         write_levels(w, out, *options.levels);
     const std::uint64_t payload = out.size() - kHeaderSize;
@@ -702,7 +702,7 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         const double move = r.f64();
         if (!(flags & kFlagDenoised) || !(move > 0.0) || !std::isfinite(move))
             r.fail("bad denoising section (a distance of " + std::to_string(move) + (flags & kFlagDenoised ? "" : " in a model not denoised") + ")");
-        h.info.denoise_rms_move = move;
+        h.info.denoise_move = move;
     }
     std::size_t levels_at = 0;
     if (flags & kFlagLevels) {

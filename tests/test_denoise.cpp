@@ -225,8 +225,8 @@ TEST(Denoise, a_denoised_model_s_finest_cut_stops_at_the_residual_noise)
     shapes::add_noise(noisy, 0.018);
     const Hierarchy h = deserialize_model(serialize_model(build_hierarchy(noisy)), "memory");
     ASSERT_TRUE(h.info.denoised);
-    EXPECT_GT(h.info.denoise_rms_move, 0.7 * 0.018); // the move is about the noise
-    EXPECT_LT(h.info.denoise_rms_move, 1.1 * 0.018);
+    EXPECT_GT(h.info.denoise_move, 0.7 * 0.018); // the move is about the noise
+    EXPECT_LT(h.info.denoise_move, 1.1 * 0.018);
     const double floor = denoised_noise_floor(h.info);
     EXPECT_GT(floor, 0.0);
     for (const Node& n : h.nodes)

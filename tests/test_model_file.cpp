@@ -354,14 +354,14 @@ TEST(ModelFile, denoising_distance_round_trip_and_damage)
     BuildOptions on;
     on.denoise = BuildOptions::Denoise::On;
     const Hierarchy h = build_hierarchy(c, on);
-    ASSERT_GT(h.info.denoise_rms_move, 0.0);
+    ASSERT_GT(h.info.denoise_move, 0.0);
     const std::string bytes = serialize_model(h);
     const Hierarchy back = deserialize_model(bytes, "memory");
-    EXPECT_EQ(back.info.denoise_rms_move, h.info.denoise_rms_move);
+    EXPECT_EQ(back.info.denoise_move, h.info.denoise_move);
     EXPECT_EQ(serialize_model(back), bytes);
     for (std::size_t k = 0; k < h.nodes.size(); ++k)
         ASSERT_EQ(back.nodes[k].noise_floor, h.nodes[k].noise_floor) << k;
-    EXPECT_EQ(deserialize_model(serialize_model(sample()), "memory").info.denoise_rms_move, 0.0);
+    EXPECT_EQ(deserialize_model(serialize_model(sample()), "memory").info.denoise_move, 0.0);
 
     const std::size_t move_at = bytes.size() - 8 - 8; // the last section: no viewpoint, CRS or levels
     for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {

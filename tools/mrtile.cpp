@@ -1500,7 +1500,7 @@ int run_info(const fs::path& model, bool json)
         j["min_cluster"] = h.info.min_cluster;
         j["reclassify"] = h.info.reclassify;
         j["denoised"] = h.info.denoised;
-        j["denoise_rms_move"] = h.scale > 0 ? h.info.denoise_rms_move / h.scale : 0.0; // 0: not denoised, or before the value was stored
+        j["denoise_move"] = h.scale > 0 ? h.info.denoise_move / h.scale : 0.0; // 0: not denoised, or before the value was stored
         j["colors"] = h.cloud.has_colors();
         j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
         j["crs"] = h.cloud.crs.empty() ? nlohmann::json(nullptr) : nlohmann::json(h.cloud.crs);
@@ -1532,10 +1532,10 @@ int run_info(const fs::path& model, bool json)
     }
     if (!h.cloud.crs.empty())
         std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
-    if (h.info.denoised && h.info.denoise_rms_move > 0 && h.scale > 0)
+    if (h.info.denoised && h.info.denoise_move > 0 && h.scale > 0)
         std::printf("denoised    the points were moved onto the surface before the build (a noisy sample), by %.3g of the "
-                    "scale (RMS); their residual noise sets every floor to at least %.3g\n",
-                    h.info.denoise_rms_move / h.scale, denoised_noise_floor(h.info) / h.scale);
+                    "scale (typically); their residual noise sets every floor to at least %.3g\n",
+                    h.info.denoise_move / h.scale, denoised_noise_floor(h.info) / h.scale);
     else if (h.info.denoised)
         std::printf("denoised    the points were moved onto the surface before the build (a noisy sample)\n");
     if (noisy_points > 0)
