@@ -130,6 +130,7 @@ struct GapGrid
     double x0 = 0, y0 = 0, g = 1;
     int nx = 0, ny = 0;
     std::vector<float> counted; // the radius of the counted region a cell lies in, 0 for none
+    std::vector<std::uint32_t> centre; // per counted cell: its region's cell farthest from the points
 };
 
 // The points less all but one of each clump of points within `resolution` of each other (grid keys).
@@ -209,6 +210,7 @@ double gap_of_projected(std::vector<P2> pts, std::vector<P2> fill, const Coverag
         out->nx = nx;
         out->ny = ny;
         out->counted.assign(static_cast<std::size_t>(nx) * ny, 0);
+        out->centre.assign(static_cast<std::size_t>(nx) * ny, 0);
     }
     const auto cell = [nx](int i, int j) { return static_cast<std::size_t>(j) * nx + i; };
     // Points per cell, and the points of each cell (cell_start / cell_points, counting sort) to measure
@@ -457,8 +459,10 @@ double gap_of_projected(std::vector<P2> pts, std::vector<P2> fill, const Coverag
             island_points[region] <= 2.0 + o.max_island_share * missing) {
             gap = std::max(gap, radius);
             if (out)
-                for (const std::size_t c : members)
+                for (const std::size_t c : members) {
                     out->counted[c] = static_cast<float>(radius);
+                    out->centre[c] = static_cast<std::uint32_t>(farthest[region - 1]);
+                }
         }
     }
     return gap;
@@ -490,6 +494,7 @@ CoverageMap::CoverageMap(const std::vector<Vec3>& points, const Vec3& axis_u, co
     nx_ = grid.nx;
     ny_ = grid.ny;
     counted_ = std::move(grid.counted);
+    centre_ = std::move(grid.centre);
 }
 
 bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
@@ -503,6 +508,21 @@ bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
     const float radius = counted_[static_cast<std::size_t>(static_cast<int>(fj)) * static_cast<std::size_t>(nx_) +
                                   static_cast<std::size_t>(static_cast<int>(fi))];
     return radius > 0.0f && radius >= min_radius;
+}
+
+bool CoverageMap::gap_disc(const Vec3& p, double min_radius, Vec3& centre, double& radius) const
+{
+    if (!in_gap(p, min_radius))
+        return false;
+    const P2 q = project(p, origin_, u_, v_);
+    const std::size_t c = static_cast<std::size_t>(static_cast<int>((q.y - y0_) / g_)) * static_cast<std::size_t>(nx_) +
+                          static_cast<std::size_t>(static_cast<int>((q.x - x0_) / g_));
+    const std::size_t far = centre_[c];
+    const double x = x0_ + (static_cast<double>(far % static_cast<std::size_t>(nx_)) + 0.5) * g_;
+    const double y = y0_ + (static_cast<double>(far / static_cast<std::size_t>(nx_)) + 0.5) * g_;
+    centre = p + u_ * (x - q.x) + v_ * (y - q.y);
+    radius = counted_[c];
+    return true;
 }
 
 constexpr std::size_t kMaxBucketedValues = std::size_t{1} << 20;

@@ -102,12 +102,16 @@ public:
     //! Whether p, projected into the plane, lies in a counted empty region whose radius (its largest
     //! distance to a point) is at least min_radius.
     bool in_gap(const Vec3& p, double min_radius = 0.0) const;
+    //! With in_gap(p, min_radius): sets `centre` to the spot of p's region farthest from the points (at
+    //! p's height above the plane) and `radius` to its distance to them (the region's radius).
+    bool gap_disc(const Vec3& p, double min_radius, Vec3& centre, double& radius) const;
 
 private:
     Vec3 origin_{0, 0, 0}, u_, v_;
     double x0_ = 0, y0_ = 0, g_ = 1, gap_ = 0;
     int nx_ = 0, ny_ = 0;
     std::vector<float> counted_; // per grid cell: the radius of its counted region, 0 for none
+    std::vector<std::uint32_t> centre_; // per counted cell: its region's cell farthest from the points
 };
 
 //! Every how many points to judge out of `count` (1 up to options.max_points).

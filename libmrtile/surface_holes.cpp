@@ -729,6 +729,95 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
     return false;
 }
 
+// Whether the empty disc at `centre` of `radius` (in the plane of the unit vectors u and v) is a chance
+// gap of the sparser side of a density step, not a hole of the sample: where two samples of different
+// density meet (a dense scan of half a surface merged with a sparse scan of all of it), the tiles and
+// the points around a gap take the dense one's spacing, and the sparse sample's own gaps beside the
+// dense part look like holes. Judged on the points from `radius` to 3 × `radius` away (in space, so
+// that a curved surface keeps its points and a sheet far above, a roof over the ground, is left out),
+// in 8 sectors around the disc, each of about the disc's own area; the 4 emptiest are its sparser
+// half. Explained when
+//  - at the sparser half's density (its 4th-emptiest sector) the disc would hold fewer points than an
+//    empty region must miss to count as a hole (CoverageOptions::min_missing_points): there such a
+//    disc is empty by chance;
+//  - at most one sector is empty: the border of a scan or a shadow beside a hole empties 3 or more, and
+//    then nothing tells the density of the sparse side;
+//  - the sparser half's points lie at least kMinStep times farther from their nearest neighbours
+//    (medians) than the denser half's: a sparse sample, not the frayed edge of a dense one (a roof's
+//    edge beside the ground of an airborne scan, whose few points in the sparse sectors have neighbours
+//    at the roof's spacing).
+bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v)
+{
+    constexpr int kSectors = 8;
+    constexpr int kSparseSectors = 4; // the sparser half
+    constexpr double kOuter = 3.0;    // a sector's area is π (3² - 1) r² / 8 = π r², the disc's own
+    // A density step of 4:1 or more. Measured: 3.4-7.6 at the 1:50 step of QA round 32's torus; 1.1-1.4
+    // at the roof edges of an airborne scan (1 point/m², QA terrain_1M), which the two rules before it
+    // would have filled.
+    constexpr double kMinStep = 2.0;
+    constexpr std::size_t kMaxJudged = 64; // points per half whose neighbours are looked for (a median)
+    if (!(radius > 0.0))
+        return false;
+    const double outer = kOuter * radius;
+    // Out to a radius beyond the annulus, so that the annulus's points have their neighbours.
+    const double reach = outer + radius;
+    const BoundingBox box{centre - Vec3{reach, reach, reach}, centre + Vec3{reach, reach, reach}};
+    std::vector<Vec3> near;
+    std::vector<int> sector_of; // per point near: its sector of the annulus, -1 outside it
+    std::array<std::size_t, kSectors> counts{};
+    const double pi = std::acos(-1.0);
+    for (const std::uint32_t i : points_in_box(h, box)) {
+        const Vec3 d = h.cloud.positions[i] - centre;
+        const double r2 = dot(d, d);
+        if (r2 > reach * reach)
+            continue;
+        int sector = -1;
+        if (r2 > radius * radius && r2 <= outer * outer) {
+            sector = std::clamp(static_cast<int>(std::floor((std::atan2(dot(d, v), dot(d, u)) + pi) / (2.0 * pi) * kSectors)), 0,
+                                kSectors - 1);
+            ++counts[static_cast<std::size_t>(sector)];
+        }
+        near.push_back(h.cloud.positions[i]);
+        sector_of.push_back(sector);
+    }
+    std::array<int, kSectors> order{};
+    for (int k = 0; k < kSectors; ++k)
+        order[static_cast<std::size_t>(k)] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return counts[static_cast<std::size_t>(a)] < counts[static_cast<std::size_t>(b)]; });
+    const std::size_t sparse_points = counts[static_cast<std::size_t>(order[kSparseSectors - 1])];
+    if (counts[static_cast<std::size_t>(order[1])] == 0 ||
+        static_cast<double>(sparse_points) >= CoverageOptions{}.min_missing_points)
+        return false;
+    // The median distance to the nearest other point of the annulus's points in the sparser or denser
+    // half (every k-th of them, at most kMaxJudged). Neighbours within a hundredth of the radius count as
+    // the same point: clumps of near-equal points (repeated frames) would make every distance 0.
+    const double same2 = 1e-4 * radius * radius;
+    const auto median_nearest = [&](bool sparser) {
+        std::vector<std::size_t> members;
+        for (std::size_t i = 0; i < near.size(); ++i)
+            if (sector_of[i] >= 0 &&
+                (std::find(order.begin(), order.begin() + kSparseSectors, sector_of[i]) != order.begin() + kSparseSectors) == sparser)
+                members.push_back(i);
+        const std::size_t stride = members.size() / kMaxJudged + 1;
+        std::vector<double> nearest;
+        for (std::size_t m = 0; m < members.size(); m += stride) {
+            double best = std::numeric_limits<double>::infinity();
+            for (const Vec3& q : near) {
+                const double d2 = squared_distance(near[members[m]], q);
+                if (d2 > same2)
+                    best = std::min(best, d2);
+            }
+            nearest.push_back(best);
+        }
+        const auto middle = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
+        std::nth_element(nearest.begin(), middle, nearest.end());
+        return std::sqrt(*middle);
+    };
+    const double sparse_nearest = median_nearest(true), dense_nearest = median_nearest(false);
+    return std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest;
+}
+
 // Removes the candidates for which drop(triangle) holds, keeping the others' order. Judged in parallel
 // blocks, each candidate on its own: the result does not depend on the thread count.
 template <typename Drop>
@@ -802,9 +891,28 @@ bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int
     if (points.empty() || std::sqrt(sum2 / static_cast<double>(points.size())) > kMaxThickness * margin)
         return false;
     const CoverageMap map(points, axis_u, axis_v);
-    const bool hole = map.gap() >= min_radius &&
-                      std::any_of(spots.begin(), spots.end(), [&](const Vec3& p) { return map.in_gap(p, min_radius); });
-    return hole;
+    if (!(map.gap() >= min_radius))
+        return false;
+    // The map judges an empty region by the density of all the points around it, which the denser side
+    // dominates at a density step: each region under the patch is judged once more by the sparser half
+    // of its surroundings. A region at least min_radius (5 spacings) in radius that this explains has a
+    // sparser half whose spacing is over twice `spacing` (π (5 s)² / s'² < 16): only a density step
+    // of 4:1 or more changes the answer, not a uniform sample's variation.
+    std::vector<Vec3> judged; // the regions' centres, each judged once
+    return std::any_of(spots.begin(), spots.end(), [&](const Vec3& p) {
+        Vec3 hole_centre;
+        double hole_radius = 0.0;
+        if (!map.gap_disc(p, min_radius, hole_centre, hole_radius))
+            return false;
+        for (const Vec3& c : judged) {
+            // The same cell, up to rounding (the spots' heights above the plane differ).
+            const Vec3 d = c - hole_centre;
+            if (std::abs(dot(d, axis_u)) < 1e-6 * hole_radius && std::abs(dot(d, axis_v)) < 1e-6 * hole_radius)
+                return false;
+        }
+        judged.push_back(hole_centre);
+        return !explained_by_sparse_side(h, hole_centre, hole_radius, axis_u, axis_v);
+    });
 }
 
 void drop_uncovered_candidates(const Hierarchy& h, const Layout& layout, const std::vector<Vec3>& positions,

@@ -585,7 +585,10 @@ constexpr double kMinHoleSpacings = 5.0;
 // them, or up to 4 levels above, whose gap dominates its error): on its own the density test finds
 // holes in real scans that are sparse patches.
 // The points are projected into the plane of the tiles `tiles`; where their normals differ by more
-// than 30 degrees (a fill across a sharp edge or the rim of a thin part) the patch is not judged.
+// than 30 degrees (a fill across a sharp edge or the rim of a thin part) the patch is not judged. An
+// empty region beside a density step whose sparser side would leave it empty by chance (a dense scan
+// of half a surface merged with a sparse scan of all of it) is no hole (surface_holes.cpp,
+// explained_by_sparse_side).
 bool covers_sample_hole(const Hierarchy& h, const Layout& layout, const std::int32_t* tiles, std::size_t count,
                         const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double spacing);
 

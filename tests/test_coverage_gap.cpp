@@ -159,7 +159,8 @@ TEST(CoverageGap, non_finite_points_and_options_are_refused)
     EXPECT_GT(coverage_gap(c.positions, kU, kV), 0.05);
 }
 
-// Points of other clusters in the hole fill it; a map locates the hole.
+// Points of other clusters in the hole fill it; a map locates the hole, and its centre and radius
+// from any spot in it (gap_disc: the surface stage judges the hole by the points around that disc).
 TEST(CoverageGap, fill_points_close_a_hole_and_a_map_locates_it)
 {
     const Hole hole{0.3, 0.6, 0.15};
@@ -172,6 +173,16 @@ TEST(CoverageGap, fill_points_close_a_hole_and_a_map_locates_it)
     EXPECT_TRUE(map.in_gap({0.3, 0.6, 0.0}, 0.1));
     EXPECT_FALSE(map.in_gap({0.3, 0.6, 0.0}, 0.5)); // the hole is narrower than that
     EXPECT_FALSE(map.in_gap({0.8, 0.2, 0.0}));
+    Vec3 centre;
+    double radius = 0.0;
+    ASSERT_TRUE(map.gap_disc({0.4, 0.55, 0.25}, 0.1, centre, radius));
+    // Within a grid cell (about 0.014) or so of the hole's centre, at the spot's height above the plane.
+    EXPECT_NEAR(centre.x, hole.x, 0.03);
+    EXPECT_NEAR(centre.y, hole.y, 0.03);
+    EXPECT_DOUBLE_EQ(centre.z, 0.25);
+    EXPECT_NEAR(radius, hole.r, 0.03);
+    EXPECT_FALSE(map.gap_disc({0.4, 0.55, 0.25}, 0.5, centre, radius));
+    EXPECT_FALSE(map.gap_disc({0.8, 0.2, 0.0}, 0.0, centre, radius));
 }
 
 // The inside corner of an L-shaped plate is a gap of its hull.

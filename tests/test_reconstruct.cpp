@@ -347,6 +347,38 @@ TEST(Reconstruct, clumps_of_near_equal_points_mesh_closed)
     }
 }
 
+// A dense sample of half a torus merged with a 50 times sparser one of all of it (a density step along
+// x = 0: a detailed scan of one side merged with a coarse scan of the whole) meshes closed, genus 1. The
+// tiles along the step hold points of both densities and take the dense spacing, and the sparse
+// sample's own gaps beside the dense part were kept open as holes of the sample (covers_sample_hole):
+// a loop at tolerance 0.002 and one at 0.001 here, and 2 beside the real hole below (QA round 32: 4 of 3
+// edges on its torus). Judged by the sparser half of their surroundings they are chance gaps. A real
+// hole across the step, 4 sparse spacings wide, stays open.
+TEST(Reconstruct, a_density_step_leaves_no_holes_along_it)
+{
+    const auto merged = [](const std::function<bool(const Vec3&)>& keep) {
+        PointCloud cloud;
+        for (const Vec3& p : shapes::torus(600000, 1.0, 0.35, 11).positions)
+            if (p.x > 0.0 && keep(p))
+                cloud.positions.push_back(p);
+        for (const Vec3& p : shapes::torus(12000, 1.0, 0.35, 12).positions)
+            if (keep(p))
+                cloud.positions.push_back(p);
+        return cloud;
+    };
+    const Hierarchy h = build_hierarchy(merged([](const Vec3&) { return true; }));
+    for (double tolerance : {0.002, 0.001}) {
+        SCOPED_TRACE(tolerance);
+        expect_closed(mesh_at_tolerance(h, tolerance).result.mesh, 1);
+    }
+    const Vec3 centre{0.0, 1.35, 0.0}; // on the outer equator, at the step
+    const Hierarchy holed = build_hierarchy(merged([&](const Vec3& p) { return distance(p, centre) > 0.15; }));
+    const TopologyStats t = topology_stats(mesh_at_tolerance(holed, 0.002).result.mesh);
+    EXPECT_EQ(t.boundary_loops, 1u);
+    EXPECT_EQ(t.genus, 1);
+    EXPECT_EQ(t.nonmanifold_edges, 0u);
+}
+
 // A camera cut of a torus (fine near the camera, coarse far away) is a closed genus-1 surface.
 TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 {
