@@ -1297,6 +1297,80 @@ TEST(Reconstruct, an_airborne_town_is_a_height_field_with_a_crs_and_says_so_with
         EXPECT_FALSE(mesh_cut(other, cut_by_tolerance(other, 0.002)).surface.looks_airborne);
 }
 
+// A terrestrial scan: a scanner 1.8 m above flat ground with a 2 x 2 x 1.5 m box 3 m away, points where
+// its rays meet the ground, the box's top and the wall facing it (none in the box's shadow), every 5 cm.
+// Georeferenced, its ground and top face up z as an airborne scan's do, and Auto bridged the wall as a
+// height field would, leaving its points off the mesh; with its viewpoint it is no airborne scan.
+TEST(Reconstruct, a_georeferenced_terrestrial_scan_keeps_its_walls)
+{
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+    const Vec3 eye{0.0, 0.0, 1.8};
+    const BoundingBox box{{6.0, -2.0, 0.0}, {8.0, 2.0, 2.5}};
+    // Whether the segment from the eye to p passes through the box (slabs), short of p itself.
+    const auto hidden = [&](const Vec3& p) {
+        double t0 = 0.0, t1 = 1.0 - 1e-6;
+        for (int k = 0; k < 3; ++k) {
+            const double d = p[k] - eye[k];
+            if (std::abs(d) < 1e-12) {
+                if (eye[k] < box.min[k] || eye[k] > box.max[k])
+                    return false;
+                continue;
+            }
+            double a = (box.min[k] - eye[k]) / d, b = (box.max[k] - eye[k]) / d;
+            if (a > b)
+                std::swap(a, b);
+            t0 = std::max(t0, a);
+            t1 = std::min(t1, b);
+        }
+        return t0 < t1;
+    };
+    const double spacing = 0.2;
+    PointCloud c;
+    for (int i = -80; i <= 100; ++i)
+        for (int j = -80; j <= 80; ++j) {
+            const double x = (i + jitter(rng)) * spacing, y = (j + jitter(rng)) * spacing;
+            if (!(x >= box.min.x && x <= box.max.x && y >= box.min.y && y <= box.max.y) && !hidden({x, y, 0.0}))
+                c.positions.push_back({x, y, 0.0});
+        }
+    const std::size_t ground = c.positions.size();
+    for (int j = -10; j <= 10; ++j) // the wall facing the scanner; the box is taller than the scanner
+        for (int k = 0; k <= 12; ++k)
+            c.positions.push_back({box.min.x, (j + jitter(rng)) * spacing, std::clamp((k + jitter(rng)) * spacing, 0.0, box.max.z)});
+    const std::size_t wall = c.positions.size() - ground;
+    for (Vec3& p : c.positions)
+        p = p + Vec3{500000.0, 4100000.0, 100.0};
+    recenter(c);
+    c.crs = "EPSG:32633";
+    c.viewpoint = Vec3{500000.0, 4100000.0, 101.8} - c.origin;
+
+    const auto wall_points_off = [&](const PointCloud& cloud) {
+        const Hierarchy h = build_hierarchy(cloud);
+        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+        EXPECT_EQ(r.surface.refused_faces, 0u);
+        const TopologyStats t = topology_stats(r.mesh);
+        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+        // The mesh is relative to the hierarchy's origin, the wall's points to the cloud's.
+        std::vector<Vec3> wall_points;
+        for (auto p = cloud.positions.end() - static_cast<std::ptrdiff_t>(wall); p != cloud.positions.end(); ++p)
+            wall_points.push_back(*p + cloud.origin - h.cloud.origin);
+        std::size_t off = 0;
+        const std::vector<ClosestPoint> closest = closest_points(wall_points, r.mesh);
+        for (std::size_t k = 0; k < wall_points.size(); ++k)
+            off += distance(wall_points[k], closest[k].point) > spacing ? 1 : 0;
+        return std::make_pair(r.surface.height_field_used, off);
+    };
+    const auto [seen_as_height_field, off] = wall_points_off(c);
+    EXPECT_FALSE(seen_as_height_field);
+    EXPECT_LT(off, wall / 50);
+    // Without the viewpoint the same cloud passes for an airborne scan: the wall is bridged.
+    PointCloud no_view = c;
+    no_view.viewpoint.reset();
+    const auto [airborne, bridged] = wall_points_off(no_view);
+    EXPECT_TRUE(airborne);
+    EXPECT_GT(bridged, wall / 2);
+}
+
 // A 15 m terrain patch in UTM-like coordinates, every 5 cm, with a 4 x 4 m block 2.5 m tall whose walls
 // have no points at all (nadir airborne lidar). In a height field every fan faces up the axis; the
 // front placed a fan reached by a face bridging a wall by that face's normal instead, and a face
