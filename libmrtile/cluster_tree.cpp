@@ -768,20 +768,6 @@ Hierarchy build_once(PointCloud cloud, const BuildOptions& options)
     return h;
 }
 
-// How far the denoising typically moved the points (BuildInfo::denoise_move): 1.4826 × the median
-// distance, which is the RMS of moves that are Gaussian noise, without the large moves where a quadric
-// cannot follow the surface (sharp edges: the noisy rocker arm's RMS put its floor so high that its
-// finest cut lost detail, 15% farther from the clean points at 0.002; with the median, 3% nearer).
-double typical_move(const std::vector<Vec3>& before, const std::vector<Vec3>& after)
-{
-    assert(before.size() == after.size() && !before.empty());
-    std::vector<double> moves(before.size());
-    for (std::size_t i = 0; i < before.size(); ++i)
-        moves[i] = norm(after[i] - before[i]);
-    std::nth_element(moves.begin(), moves.begin() + static_cast<std::ptrdiff_t>(moves.size() / 2), moves.end());
-    return 1.4826 * moves[moves.size() / 2];
-}
-
 } // namespace
 
 Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
@@ -831,7 +817,9 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     }
     h.info.duplicates_merged = merged;
     h.info.denoised = true;
-    h.info.denoise_move = typical_move(h.raw_positions, h.cloud.positions);
+    h.denoise_moves.resize(h.cloud.size());
+    for (std::size_t i = 0; i < h.cloud.size(); ++i)
+        h.denoise_moves[i] = static_cast<float>(norm(h.cloud.positions[i] - h.raw_positions[i]));
     derive_noise_floor(h); // again, now that the residual noise is known
     h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return h;

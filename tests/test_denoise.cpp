@@ -225,12 +225,11 @@ TEST(Denoise, a_denoised_model_s_finest_cut_stops_at_the_residual_noise)
     shapes::add_noise(noisy, 0.018);
     const Hierarchy h = deserialize_model(serialize_model(build_hierarchy(noisy)), "memory");
     ASSERT_TRUE(h.info.denoised);
-    EXPECT_GT(h.info.denoise_move, 0.7 * 0.018); // the move is about the noise
-    EXPECT_LT(h.info.denoise_move, 1.1 * 0.018);
-    const double floor = denoised_noise_floor(h.info);
-    EXPECT_GT(floor, 0.0);
+    const double move = typical_move(h, 0, h.denoise_moves.size());
+    EXPECT_GT(move, 0.7 * 0.018); // the move is about the noise
+    EXPECT_LT(move, 1.15 * 0.018);
     for (const Node& n : h.nodes)
-        ASSERT_GE(n.noise_floor, floor);
+        ASSERT_GT(n.noise_floor, 0.2 * move);
 
     const Cut finest = cut_by_tolerance(h, 0.0);
     Hierarchy unfloored = h;
@@ -255,6 +254,54 @@ TEST(Denoise, a_denoised_model_s_finest_cut_stops_at_the_residual_noise)
         return radial_error(centroids).rms;
     };
     EXPECT_LT(face_error(finest), 0.85 * face_error(leaves));
+}
+
+// The floors are the regions' own: a sphere noisy on three quarters (x > -0.5, noise of 1.5 spacings)
+// and clean on the rest is denoised as a whole, and one floor for the whole sample cut the clean part as
+// coarsely as the noisy one (QA round 33: its vertices 0.00234 from the true sphere at tolerance 0,
+// against 0.00009 with no floor). Measured on the face centroids of each part at tolerance 0.
+TEST(Denoise, a_partly_noisy_sample_is_cut_finer_where_it_is_clean)
+{
+    PointCloud cloud = shapes::sphere(100000); // spacing about 0.0112
+    std::mt19937 rng(11);
+    std::normal_distribution<double> gauss(0.0, 1.5 * 0.0112);
+    for (Vec3& p : cloud.positions)
+        if (p.x + cloud.origin.x > -0.5)
+            p = p + Vec3{gauss(rng), gauss(rng), gauss(rng)};
+    const Hierarchy h = build_hierarchy(cloud);
+    ASSERT_TRUE(h.info.denoised);
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.0));
+    EXPECT_EQ(r.surface.boundary_loops, 0u);
+    std::vector<Vec3> clean, noisy;
+    for (const auto f : r.mesh.faces()) {
+        Vec3 sum{0, 0, 0};
+        for (const auto v : r.mesh.fv_range(f))
+            sum = sum + to_vec3(r.mesh.point(v));
+        const Vec3 c = sum / 3.0 + h.cloud.origin;
+        if (c.x < -0.6)
+            clean.push_back(c);
+        else if (c.x > -0.4)
+            noisy.push_back(c);
+    }
+    ASSERT_FALSE(clean.empty());
+    ASSERT_FALSE(noisy.empty());
+    EXPECT_LT(radial_error(clean).rms, 0.25 * radial_error(noisy).rms);
+    // Its regions' floors follow: where it is clean they are far under the noisy part's (medians over
+    // the leaves).
+    std::vector<double> clean_floors, noisy_floors;
+    for (const Node& n : h.nodes)
+        if (n.is_leaf()) {
+            const Vec3 c = n.centre() + h.cloud.origin;
+            if (c.x < -0.6)
+                clean_floors.push_back(n.noise_floor);
+            else if (c.x > -0.4)
+                noisy_floors.push_back(n.noise_floor);
+        }
+    const auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    EXPECT_LT(4.0 * median(clean_floors), median(noisy_floors));
 }
 
 TEST(Denoise, the_build_reports_each_stage_of_a_noisy_sample)

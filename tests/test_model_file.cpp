@@ -345,28 +345,30 @@ TEST(ModelFile, damaged_stored_levels_are_rejected)
     EXPECT_GT(refused, 0u);
 }
 
-// A denoised model keeps how far its points moved (its noise floor: hierarchy.h), exactly; a damaged
-// value, or one in a model not denoised, is refused.
-TEST(ModelFile, denoising_distance_round_trip_and_damage)
+// A denoised model keeps how far each point moved (its noise floors: hierarchy.h), exactly; a damaged
+// move (negative, not finite, farther than the cloud is wide), or moves in a model not denoised, are
+// refused.
+TEST(ModelFile, denoising_moves_round_trip_and_damage)
 {
     PointCloud c = shapes::torus(3000);
     shapes::add_noise(c, 0.01);
     BuildOptions on;
     on.denoise = BuildOptions::Denoise::On;
     const Hierarchy h = build_hierarchy(c, on);
-    ASSERT_GT(h.info.denoise_move, 0.0);
+    ASSERT_EQ(h.denoise_moves.size(), h.cloud.size());
     const std::string bytes = serialize_model(h);
     const Hierarchy back = deserialize_model(bytes, "memory");
-    EXPECT_EQ(back.info.denoise_move, h.info.denoise_move);
+    EXPECT_EQ(back.denoise_moves, h.denoise_moves);
     EXPECT_EQ(serialize_model(back), bytes);
     for (std::size_t k = 0; k < h.nodes.size(); ++k)
         ASSERT_EQ(back.nodes[k].noise_floor, h.nodes[k].noise_floor) << k;
-    EXPECT_EQ(deserialize_model(serialize_model(sample()), "memory").info.denoise_move, 0.0);
+    EXPECT_TRUE(deserialize_model(serialize_model(sample()), "memory").denoise_moves.empty());
 
-    const std::size_t move_at = bytes.size() - 8 - 8; // the last section: no viewpoint, CRS or levels
-    for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    // The moves are the last section here (no viewpoint, CRS or levels): the point k's at its end.
+    const std::size_t moves_at = bytes.size() - 8 - 4 * h.cloud.size();
+    for (const float bad : {-1.0f, 100.0f, std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
         std::string damaged = bytes;
-        std::memcpy(&damaged[move_at], &bad, 8);
+        std::memcpy(&damaged[moves_at + 4 * 17], &bad, 4);
         refresh_checksum(damaged);
         EXPECT_THROW(deserialize_model(damaged, "m.mrt"), IoError) << bad;
     }
@@ -375,7 +377,7 @@ TEST(ModelFile, denoising_distance_round_trip_and_damage)
     refresh_checksum(not_denoised);
     try {
         deserialize_model(not_denoised, "m.mrt");
-        ADD_FAILURE() << "a denoising distance in a model not denoised was accepted";
+        ADD_FAILURE() << "denoising moves in a model not denoised were accepted";
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("denoising"), std::string::npos) << e.what();
     }

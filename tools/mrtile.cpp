@@ -1500,7 +1500,8 @@ int run_info(const fs::path& model, bool json)
         j["min_cluster"] = h.info.min_cluster;
         j["reclassify"] = h.info.reclassify;
         j["denoised"] = h.info.denoised;
-        j["denoise_move"] = h.scale > 0 ? h.info.denoise_move / h.scale : 0.0; // 0: not denoised, or before the value was stored
+        // 0: not denoised, or denoised before the moves were stored.
+        j["denoise_move"] = h.scale > 0 ? typical_move(h, 0, h.denoise_moves.size()) / h.scale : 0.0;
         j["colors"] = h.cloud.has_colors();
         j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
         j["crs"] = h.cloud.crs.empty() ? nlohmann::json(nullptr) : nlohmann::json(h.cloud.crs);
@@ -1532,12 +1533,12 @@ int run_info(const fs::path& model, bool json)
     }
     if (!h.cloud.crs.empty())
         std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
-    if (h.info.denoised && h.info.denoise_move > 0 && h.scale > 0)
-        std::printf("denoised    the points were moved onto the surface before the build (a noisy sample), by %.3g of the "
-                    "scale (typically); their residual noise sets every floor to at least %.3g\n",
-                    h.info.denoise_move / h.scale, denoised_noise_floor(h.info) / h.scale);
+    if (h.info.denoised && !h.denoise_moves.empty() && h.scale > 0)
+        std::printf("denoised    the points were moved onto the surface before the build, by %.3g of the scale "
+                    "(typically); their residual noise floors each region at 0.7 times its points' typical move\n",
+                    typical_move(h, 0, h.denoise_moves.size()) / h.scale);
     else if (h.info.denoised)
-        std::printf("denoised    the points were moved onto the surface before the build (a noisy sample)\n");
+        std::printf("denoised    the points were moved onto the surface before the build\n");
     if (noisy_points > 0)
         std::printf("noise       %.0f%% of the points are noisy: cuts by tolerance stop at floors up to %.3g of the scale\n",
                     100.0 * noisy_share, floor_max);
