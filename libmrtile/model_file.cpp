@@ -517,6 +517,18 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         throw InvalidInput("save_model: the hierarchy's input_index (" + std::to_string(h.input_index.size()) +
                            ") and colours (" + std::to_string(h.cloud.colors.size()) + ") must have one entry per point (" +
                            std::to_string(n) + "; colours may be empty)");
+    if (!h.denoise_moves.empty()) {
+        // What load_model checks (parse_model), so that a model saved loads.
+        const BoundingBox box = bounding_box(h.cloud.positions);
+        const double reach = norm(box.max - box.min);
+        const bool valid = h.info.denoised && h.denoise_moves.size() == n &&
+                           std::all_of(h.denoise_moves.begin(), h.denoise_moves.end(),
+                                       [&](float m) { return m >= 0.0f && static_cast<double>(m) <= reach; });
+        if (!valid)
+            throw InvalidInput("save_model: the hierarchy's denoise_moves must be of a denoised hierarchy (info.denoised), "
+                               "one per point (" + std::to_string(n) + ", got " + std::to_string(h.denoise_moves.size()) +
+                               "), each finite, >= 0 and within the cloud's diagonal");
+    }
     std::string out;
     out.reserve(kHeaderSize + n * (24 + 4 + (h.cloud.has_colors() ? 4 : 0)) + h.nodes.size() * kNodeSize + kTrailerSize);
     Writer w(out);
@@ -526,7 +538,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
     const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
-    const bool denoise_move = h.info.denoised && h.denoise_moves.size() == n;
+    const bool denoise_move = !h.denoise_moves.empty();
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
           (h.cloud.viewpoint ? kFlagViewpoint : 0u) | (h.cloud.crs.empty() ? 0u : kFlagCrs) | (levels ? kFlagLevels : 0u) |
           (h.info.denoised ? kFlagDenoised : 0u) | (denoise_move ? kFlagDenoiseMove : 0u));

@@ -544,6 +544,17 @@ TEST(ModelFile, a_hierarchy_load_model_would_refuse_is_not_saved)
     few_colours.cloud.colors.pop_back();
     EXPECT_THROW(save_model(few_colours, path), InvalidInput);
     EXPECT_FALSE(fs::exists(path));
+    // Denoising moves: one per point, of a denoised hierarchy, each within what the loader accepts.
+    Hierarchy moves = sample();
+    moves.denoise_moves.assign(moves.cloud.size(), 0.001f);
+    EXPECT_THROW(serialize_model(moves), InvalidInput); // not denoised
+    moves.info.denoised = true;
+    EXPECT_NO_THROW(deserialize_model(serialize_model(moves), "sample"));
+    moves.denoise_moves.pop_back();
+    EXPECT_THROW(serialize_model(moves), InvalidInput);
+    moves.denoise_moves.push_back(std::numeric_limits<float>::quiet_NaN());
+    EXPECT_THROW(save_model(moves, path), InvalidInput);
+    EXPECT_FALSE(fs::exists(path));
     EXPECT_NO_THROW(deserialize_model(serialize_model(sample(true)), "sample"));
 }
 
