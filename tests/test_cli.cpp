@@ -1507,6 +1507,15 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     EXPECT_GT(di["denoise_move"].get<double>(), 0.0);
     EXPECT_EQ(j["denoise_move"].get<double>(), 0.0);
     EXPECT_GT(di["noise_floor_max"].get<double>(), 0.0);
+    // Region and camera cuts say when the floors stopped them too (a unit sphere around the origin).
+    for (const std::string cut : {" --focus 1,0,0,0.5:0", " --camera 3,0,0:0,0,0:60:1080:1"}) {
+        const Result stopped = mrtile("mesh " + (dir / "d.mrt").string() + " -o " + (dir / "g.ply").string() + cut, dir);
+        ASSERT_EQ(stopped.code, 0) << stopped.err;
+        EXPECT_NE(stopped.out.find("stop at their noise floor"), std::string::npos) << cut << ": " << stopped.out;
+        const Result below = mrtile("--below-noise mesh " + (dir / "d.mrt").string() + " -o " + (dir / "g.ply").string() + cut, dir);
+        ASSERT_EQ(below.code, 0) << below.err;
+        EXPECT_EQ(below.out.find("stop at their noise floor"), std::string::npos) << cut << ": " << below.out;
+    }
     const Result denoised_text = mrtile("info " + (dir / "d.mrt").string(), dir);
     EXPECT_NE(denoised_text.out.find("their residual noise floors each region"), std::string::npos) << denoised_text.out;
     // Forced, the build says it denoised, not that it found the sample noisy.

@@ -804,15 +804,46 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                                        : "no finer cut tried joined them");
     if (r.surface.looks_airborne)
         note_airborne(r.mesh);
-    // Tiles of a plain tolerance cut that only their noise floor kept from refining: of the cut as
-    // made, not as mesh_cut refined it (refined children can be rougher than their parent's bound).
-    const Cut cut = plain ? cut_args.cut(h, mended.steps) : Cut{};
-    const double limit = cut_args.base_tolerance(h) * std::pow(0.5, 0.5 * mended.steps) * h.scale;
+    // Tiles of a tolerance, region or camera cut that only their noise floor kept from refining: of
+    // the cut as made, not as mesh_cut refined it (refined children can be rougher than their parent's
+    // bound). A region or camera cut is made again here (without the region notes of its first making).
+    const double finer = std::pow(0.5, 0.5 * mended.steps);
+    const bool by_camera = !cut_args.camera.empty(), by_region = !cut_args.focus.empty();
+    Camera camera;
+    std::vector<FocusRegion> regions;
+    Cut cut;
+    if (plain) {
+        cut = cut_args.cut(h, mended.steps);
+    } else if (by_camera && max_noise_floor(h) > 0) {
+        camera = cut_args.parsed_camera();
+        camera.position = camera.position - h.cloud.origin;
+        camera.max_pixel_error *= finer;
+        cut = cut_for_camera(h, camera);
+    } else if (by_region && max_noise_floor(h) > 0) {
+        regions = cut_args.parsed_focus();
+        for (FocusRegion& region : regions) {
+            region.centre = region.centre - h.cloud.origin;
+            region.tolerance *= finer;
+        }
+        cut = cut_by_regions(h, cut_args.base_tolerance(h) * finer, regions);
+    }
+    const auto asks_finer = [&](const Node& n) {
+        if (by_camera) {
+            const double error = screen_space_error(n, camera);
+            return error > camera.max_pixel_error &&
+                   (error > camera.max_pixel_error * camera.out_of_view_factor || in_view(n, camera));
+        }
+        double tolerance = cut_args.base_tolerance(h) * finer;
+        for (const FocusRegion& region : regions)
+            if (intersects(n, region))
+                tolerance = std::min(tolerance, region.tolerance);
+        return n.rms_plane_distance > tolerance * h.scale;
+    };
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
         const Node& n = h.nodes[static_cast<std::size_t>(id)];
         // A tile kept whole over single scan lines is no noise (splits_into_lines, cut.h).
-        stopped += !n.is_leaf() && n.rms_plane_distance > limit && !splits_into_lines(h, n) ? 1 : 0;
+        stopped += !n.is_leaf() && asks_finer(n) && n.rms_plane_distance <= n.noise_floor && !splits_into_lines(h, n) ? 1 : 0;
     }
     if (stopped > 0) {
         char what[160];
