@@ -803,7 +803,7 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     DenoiseOptions denoising = options.denoising;
     if (options.progress)
         denoising.progress = [&](double fraction) { options.progress("denoising", fraction); };
-    denoise_points(cloud.positions, denoising);
+    const bool moved = denoise_points(cloud.positions, denoising) > 0.0;
     BuildOptions again = options;
     again.merge_duplicates = false; // merged already
     if (options.progress)
@@ -816,6 +816,11 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
             h.input_index[i] = to_input[h.input_index[i]];
     }
     h.info.duplicates_merged = merged;
+    if (!moved) { // too few points to fit (DenoiseOptions::neighbours), or none off its neighbours' surface
+        std::vector<Vec3>().swap(h.raw_positions);
+        h.info.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return h;
+    }
     h.info.denoised = true;
     h.denoise_moves.resize(h.cloud.size());
     for (std::size_t i = 0; i < h.cloud.size(); ++i)

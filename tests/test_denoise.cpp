@@ -209,6 +209,12 @@ TEST(Denoise, the_build_denoises_noisy_samples_only)
     repeated.positions.insert(repeated.positions.end(), repeated.positions.begin(), repeated.positions.begin() + 100);
     const Hierarchy forced = build_hierarchy(repeated, on);
     EXPECT_TRUE(forced.info.denoised);
+    // Forced on a cloud too small to fit (at most DenoiseOptions::neighbours points): nothing moves,
+    // and the hierarchy does not claim it was denoised.
+    const Hierarchy tiny = build_hierarchy(shapes::sphere(40), on);
+    EXPECT_FALSE(tiny.info.denoised);
+    EXPECT_TRUE(tiny.raw_positions.empty());
+    EXPECT_TRUE(tiny.denoise_moves.empty());
     EXPECT_EQ(forced.cloud.size(), 5000u);
     EXPECT_EQ(forced.info.duplicates_merged, 100u);
     ASSERT_EQ(forced.raw_positions.size(), 5000u);
