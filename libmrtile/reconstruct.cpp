@@ -620,6 +620,9 @@ MendedMeshResult mesh_at_tolerance(const Hierarchy& h, double tolerance, const M
                        mend_steps);
 }
 
+// mesh_to_triangle_count stops once a fitting cut's mesh is within 1 / kCloseEnough of the target.
+constexpr std::size_t kCloseEnough = 100;
+
 TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t triangles, const MeshOptions& options,
                                            std::size_t max_meshings)
 {
@@ -652,6 +655,10 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
         const std::size_t faces = try_tiles(n);
         ++meshings;
         if (fits + 1 >= fails) // converged (this also covers the leaves fitting and one tile not fitting)
+            break;
+        // Close enough: the bracket's last steps change the face count by a fraction of a percent and
+        // cost a meshing each (the bunny at 20,000 faces: 10 meshings, 5.7 s, for the last 0.5%).
+        if (fits > 0 && best.result.mesh.n_faces() * kCloseEnough >= triangles * (kCloseEnough - 1))
             break;
         // Next: scale N by the target over the faces seen (faces per tile is nearly constant locally),
         // kept strictly inside the bracket; bisect when the guess falls outside it.

@@ -107,7 +107,8 @@ struct TriangleCountResult
 //! \brief The finest best-N cut (cut_by_budget) whose mesh has at most `triangles` faces, and its mesh.
 //! \details A cut's face count is known only once it is meshed (tiles differ in size and rim), so this
 //! meshes a few candidate cuts: a guess from the faces per tile seen so far, then bisection on N between
-//! the largest N known to fit and the smallest known not to, up to `max_meshings` (default 10). The
+//! the largest N known to fit and the smallest known not to, up to `max_meshings` (default 10), and
+//! stops once a fitting cut's mesh has 99% of `triangles` faces or more (finer cuts would add under 1%). The
 //! face count grows with N almost always, not strictly; the result is the best fitting cut found. When
 //! even one tile has more faces, that one-tile mesh is returned; when the leaves fit, the leaves'.
 //! Where the best fitting cut's mesh is in pieces that its sample joins (see mesh_mended), the budgets
