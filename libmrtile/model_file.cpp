@@ -46,6 +46,11 @@ constexpr std::size_t kStoredFaceBytes = 12 + 4 + 1;
 // A WKT CRS is a few kilobytes; anything near this is not one.
 constexpr std::uint32_t kMaxCrsBytes = 1u << 20;
 
+// The farthest the denoising can have moved a point: across the cloud (its quadric passes through its
+// neighbours). Saving and loading hold Hierarchy::denoise_moves to it.
+double move_reach(const std::vector<Vec3>& positions) { return bounding_box(positions).diagonal(); }
+bool plausible_move(float move, double reach) { return move >= 0.0f && static_cast<double>(move) <= reach; }
+
 // Little-endian writer over a string (byte by byte through shifts: correct on any host).
 class Writer
 {
@@ -519,11 +524,10 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
                            std::to_string(n) + "; colours may be empty)");
     if (!h.denoise_moves.empty()) {
         // What load_model checks (parse_model), so that a model saved loads.
-        const BoundingBox box = bounding_box(h.cloud.positions);
-        const double reach = norm(box.max - box.min);
+        const double reach = move_reach(h.cloud.positions);
         const bool valid = h.info.denoised && h.denoise_moves.size() == n &&
                            std::all_of(h.denoise_moves.begin(), h.denoise_moves.end(),
-                                       [&](float m) { return m >= 0.0f && static_cast<double>(m) <= reach; });
+                                       [&](float m) { return plausible_move(m, reach); });
         if (!valid)
             throw InvalidInput("save_model: the hierarchy's denoise_moves must be of a denoised hierarchy (info.denoised), "
                                "one per point (" + std::to_string(n) + ", got " + std::to_string(h.denoise_moves.size()) +
@@ -727,13 +731,11 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     if (flags & kFlagDenoiseMove) {
         if (!(flags & kFlagDenoised))
             r.fail("bad denoising section (moves in a model not denoised)");
-        // No point moves farther than the cloud is wide: its quadric passes through its neighbours.
-        const BoundingBox box = bounding_box(h.cloud.positions);
-        const double reach = norm(box.max - box.min);
+        const double reach = move_reach(h.cloud.positions);
         h.denoise_moves.resize(n);
         for (float& m : h.denoise_moves) {
             m = r.f32();
-            if (!(m >= 0.0f) || !(static_cast<double>(m) <= reach))
+            if (!plausible_move(m, reach))
                 r.fail("bad denoising section (a move of " + std::to_string(m) + ", the cloud being " + std::to_string(reach) + " across)");
         }
     }
