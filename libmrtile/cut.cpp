@@ -213,24 +213,20 @@ Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<
     const double side = h.scale;
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        double tolerance = base_tolerance;
-        for (const FocusRegion& r : regions)
-            if (intersects(n, r))
-                tolerance = std::min(tolerance, r.tolerance);
-        return rougher_than(hh, n, tolerance * side);
+        return rougher_than(hh, n, region_tolerance(n, base_tolerance, regions) * side);
     });
 }
 
-namespace {
-
-double region_tolerance(const Node& n, double base, const std::vector<FocusRegion>& regions)
+double region_tolerance(const Node& n, double base_tolerance, const std::vector<FocusRegion>& regions)
 {
-    double tolerance = base;
+    double tolerance = base_tolerance;
     for (const FocusRegion& r : regions)
         if (intersects(n, r))
             tolerance = std::min(tolerance, r.tolerance);
     return tolerance;
 }
+
+namespace {
 
 bool box_inside(const BoundingBox& b, const FocusRegion& r)
 {
@@ -357,11 +353,14 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
                            "an out-of-view factor of at least 1, and a finite position and direction");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        const double error = screen_space_error(n, camera);
-        if (!(error > camera.max_pixel_error) || !rougher_than(hh, n, 0.0))
-            return false;
-        return error > camera.max_pixel_error * camera.out_of_view_factor || in_view(n, camera);
+        return camera_asks_finer(n, camera) && rougher_than(hh, n, 0.0);
     });
+}
+
+bool camera_asks_finer(const Node& node, const Camera& camera)
+{
+    const double error = screen_space_error(node, camera);
+    return error > camera.max_pixel_error && (error > camera.max_pixel_error * camera.out_of_view_factor || in_view(node, camera));
 }
 
 double cut_plane_error(const Hierarchy& h, const Cut& cut)

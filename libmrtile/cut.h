@@ -92,6 +92,9 @@ std::string cut_problem(const Hierarchy& h, const Cut& cut);
 //! are in the result unchanged.
 Cut cut_by_regions(const Hierarchy& h, double base_tolerance, const std::vector<FocusRegion>& regions);
 
+//! The tolerance cut_by_regions refines `n` to: the smallest of the regions it meets, else `base_tolerance`.
+double region_tolerance(const Node& n, double base_tolerance, const std::vector<FocusRegion>& regions);
+
 //! Incremental refinement: every node of `cut` (a frontier: check_cut) that meets a region is replaced
 //! by its subtree's frontier under the same rule as cut_by_regions (the smallest tolerance of the
 //! regions a node meets, else `base_tolerance`); nodes meeting no region are kept. Cost: a sort of the
@@ -140,6 +143,11 @@ bool in_view(const Node& node, const Camera& camera);
 //! Refines every node whose screen-space error exceeds the camera's max_pixel_error, or that many
 //! times out_of_view_factor when it is out of view (in_view), down to the noise floor.
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
+
+//! Whether the camera asks for `node` finer (cut_for_camera's rule before the node's own limits: its
+//! noise floor, a leaf): its screen-space error exceeds max_pixel_error in view, or that many times
+//! out_of_view_factor out of it.
+bool camera_asks_finer(const Node& node, const Camera& camera);
 
 //! Σ λ_min over the cut: the total squared distance of the points to their tile planes.
 double cut_plane_error(const Hierarchy& h, const Cut& cut);

@@ -379,17 +379,16 @@ double typical_move(const Hierarchy& h, std::size_t begin, std::size_t count)
 
 double denoised_noise_floor(const Hierarchy& h, const Node& region)
 {
-    // The moved points keep about a third of the noise (each is the value at its own spot of a
-    // quadric fitted to 48 points: README "Choices"), smooth over a few spacings, so that nodes of
-    // a few dozen points cannot tell it from the surface. The share is where the finest cut came
+    // kDenoisedFloorShare (0.7): the moved points keep about a third of the noise (each is the value
+    // at its own spot of a quadric fitted to 48 points: README "Choices"), smooth over a few spacings,
+    // so that nodes of a few dozen points cannot tell it from the surface. The share is where the finest cut came
     // nearest the true surface (face centroids): a torus and a bumpy ellipsoid, 1M points, noise of
     // 0.6 and 1.2 spacings, and a sphere, 40k points, noise of one spacing; floors of 0.3-1.0 × the
     // move (0.3 gave 3-6 times the tiles and was the farthest but for every leaf; 1.0 was farther
     // again on the ellipsoid's bumps; on the sphere 0.5 and 0.7 were within 1%). Per region (a few
     // hundred points), not per sample: a clean scan merged with a noisy one moves little where it is
     // clean, and one floor for all cut it as coarsely as the noisy part (QA round 33).
-    constexpr double kResidualShare = 0.7;
-    return kResidualShare * typical_move(h, region.begin, region.count());
+    return kDenoisedFloorShare * typical_move(h, region.begin, region.count());
 }
 
 void clear_noise_floor(Hierarchy& h)

@@ -154,8 +154,12 @@ void derive_noise_floor(Hierarchy& h);
 //! none.
 double typical_move(const Hierarchy& h, std::size_t begin, std::size_t count);
 
+//! The share of a denoised region's typical move (typical_move) that is its noise floor.
+inline constexpr double kDenoisedFloorShare = 0.7;
+
 //! The noise floor a denoised region takes from its points' typical move (typical_move): the
-//! residual noise of its moved points, 0.7 × the move. 0 when the hierarchy was not denoised.
+//! residual noise of its moved points, kDenoisedFloorShare × the move. 0 when the hierarchy was not
+//! denoised.
 double denoised_noise_floor(const Hierarchy& h, const Node& region);
 
 //! Sets every node's noise_floor to 0 (cut below the noise anyway).

@@ -351,6 +351,26 @@ struct CutArgs
         return false;
     }
 
+    // The camera of --camera in the model's frame, its pixel error made finer by `step` as cut() does.
+    Camera camera_at(const Hierarchy& h, int step) const
+    {
+        Camera cam = parsed_camera();
+        cam.position = cam.position - h.cloud.origin;
+        cam.max_pixel_error *= std::pow(0.5, 0.5 * step);
+        return cam;
+    }
+
+    // The --focus regions in the model's frame, their tolerances made finer by `step` as cut() does.
+    std::vector<FocusRegion> regions_at(const Hierarchy& h, int step) const
+    {
+        std::vector<FocusRegion> regions = parsed_focus();
+        for (FocusRegion& region : regions) {
+            region.centre = region.centre - h.cloud.origin;
+            region.tolerance *= std::pow(0.5, 0.5 * step);
+        }
+        return regions;
+    }
+
     // The cut asked (step 0), or for mesh_mended a finer one that still meets every bound asked: each
     // tolerance and the camera's pixel error / √2^step, τ / 2^step. A tile budget is a count, not a
     // bound: it is not made finer.
@@ -358,30 +378,24 @@ struct CutArgs
     {
         const double finer = std::pow(0.5, 0.5 * step);
         const Vec3 origin = h.cloud.origin;
-        if (!camera.empty()) {
-            Camera cam = parsed_camera();
-            cam.position = cam.position - origin;
-            cam.max_pixel_error *= finer;
-            return cut_for_camera(h, cam);
-        }
+        if (!camera.empty())
+            return cut_for_camera(h, camera_at(h, step));
         if (tiles > 0)
             return cut_by_budget(h, tiles);
         if (tau > 0)
             return cut_by_tau(h, tau * finer * finer);
         if (focus.empty())
             return cut_by_tolerance(h, base_tolerance(h) * finer);
-        std::vector<FocusRegion> regions = parsed_focus();
-        for (std::size_t k = 0; k < regions.size(); ++k) {
-            regions[k].centre = regions[k].centre - origin;
-            regions[k].tolerance *= finer;
+        const std::vector<FocusRegion> regions = regions_at(h, step);
+        for (std::size_t k = 0; k < regions.size() && step == 0; ++k) {
             // Coordinates in another frame (local ones for a georeferenced model, say) miss the model.
-            if (step == 0 && !intersects(h.nodes.front(), regions[k]))
+            if (!intersects(h.nodes.front(), regions[k]))
                 std::printf("note: --focus %s: the sphere does not meet the model's points (bounding box %.9g,%.9g,%.9g "
                             "to %.9g,%.9g,%.9g); it refines nothing\n",
                             focus[k].c_str(), h.nodes.front().box.min.x + origin.x, h.nodes.front().box.min.y + origin.y,
                             h.nodes.front().box.min.z + origin.z, h.nodes.front().box.max.x + origin.x,
                             h.nodes.front().box.max.y + origin.y, h.nodes.front().box.max.z + origin.z);
-            else if (step == 0 && !holds_a_point(h, regions[k]))
+            else if (!holds_a_point(h, regions[k]))
                 std::printf("note: --focus %s: no point of the model lies in the sphere; it refines only the tiles "
                             "whose bounding boxes reach into it\n",
                             focus[k].c_str());
@@ -809,35 +823,20 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
     // bound). A region or camera cut is made again here (without the region notes of its first making).
     const double finer = std::pow(0.5, 0.5 * mended.steps);
     const bool by_camera = !cut_args.camera.empty(), by_region = !cut_args.focus.empty();
-    Camera camera;
-    std::vector<FocusRegion> regions;
+    const bool floored = max_noise_floor(h) > 0;
+    const Camera camera = by_camera ? cut_args.camera_at(h, mended.steps) : Camera{};
+    const std::vector<FocusRegion> regions = by_region ? cut_args.regions_at(h, mended.steps) : std::vector<FocusRegion>{};
     Cut cut;
-    if (plain) {
+    if (plain)
         cut = cut_args.cut(h, mended.steps);
-    } else if (by_camera && max_noise_floor(h) > 0) {
-        camera = cut_args.parsed_camera();
-        camera.position = camera.position - h.cloud.origin;
-        camera.max_pixel_error *= finer;
+    else if (by_camera && floored)
         cut = cut_for_camera(h, camera);
-    } else if (by_region && max_noise_floor(h) > 0) {
-        regions = cut_args.parsed_focus();
-        for (FocusRegion& region : regions) {
-            region.centre = region.centre - h.cloud.origin;
-            region.tolerance *= finer;
-        }
+    else if (by_region && floored)
         cut = cut_by_regions(h, cut_args.base_tolerance(h) * finer, regions);
-    }
     const auto asks_finer = [&](const Node& n) {
-        if (by_camera) {
-            const double error = screen_space_error(n, camera);
-            return error > camera.max_pixel_error &&
-                   (error > camera.max_pixel_error * camera.out_of_view_factor || in_view(n, camera));
-        }
-        double tolerance = cut_args.base_tolerance(h) * finer;
-        for (const FocusRegion& region : regions)
-            if (intersects(n, region))
-                tolerance = std::min(tolerance, region.tolerance);
-        return n.rms_plane_distance > tolerance * h.scale;
+        if (by_camera)
+            return camera_asks_finer(n, camera);
+        return n.rms_plane_distance > region_tolerance(n, cut_args.base_tolerance(h) * finer, regions) * h.scale;
     };
     std::size_t stopped = 0;
     for (std::int32_t id : cut) {
@@ -1566,8 +1565,8 @@ int run_info(const fs::path& model, bool json)
         std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
     if (h.info.denoised && !h.denoise_moves.empty() && h.scale > 0)
         std::printf("denoised    the points were moved onto the surface before the build, by %.3g of the scale "
-                    "(typically); their residual noise floors each region at 0.7 times its points' typical move\n",
-                    typical_move(h, 0, h.denoise_moves.size()) / h.scale);
+                    "(typically); their residual noise floors each region at %g times its points' typical move\n",
+                    typical_move(h, 0, h.denoise_moves.size()) / h.scale, kDenoisedFloorShare);
     else if (h.info.denoised)
         std::printf("denoised    the points were moved onto the surface before the build\n");
     if (noisy_points > 0)
