@@ -336,17 +336,25 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
     }
 }
 
-// Crossing pairs of `mesh` that the untangling (untangle.h, as mesh_cut runs it last) leaves, on a copy.
-std::size_t crossings_left(const Mesh& mesh, const SurfaceStats& surface, UntangleOptions options)
+// Options of a stage after the surface (fit, slivers, untangling), vertical along the height field's
+// axis when the surface is one: a height field stays a graph, every face they change facing up its axis.
+template <typename Options>
+Options along_height_field(Options options, const SurfaceStats& surface)
 {
-    if (options.max_rounds == 0)
-        return self_intersecting_faces(mesh).size();
     if (surface.height_field_used) {
         options.vertical = true;
         options.axis = surface.height_field_axis;
     }
+    return options;
+}
+
+// Crossing pairs of `mesh` that the untangling (untangle.h, as mesh_cut runs it last) leaves, on a copy.
+std::size_t crossings_left(const Mesh& mesh, const SurfaceStats& surface, const UntangleOptions& options)
+{
+    if (options.max_rounds == 0)
+        return self_intersecting_faces(mesh).size();
     Mesh copy = mesh;
-    return untangle(copy, options).pairs_after;
+    return untangle(copy, along_height_field(options, surface)).pairs_after;
 }
 
 // A dropped-tile round may leave, after the untangling, one more crossing pair than the cut before
@@ -450,14 +458,9 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     const std::vector<bool> away = refine_dropped_tiles(h, options, surface_options, result, tiles);
     result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);
-    // A height field stays a graph through both: every face they change faces up its axis.
-    FitOptions fit = options.fit;
-    SliverOptions slivers = options.slivers;
-    UntangleOptions untangle_options = options.untangle;
-    if (result.surface.height_field_used) {
-        fit.vertical = slivers.vertical = untangle_options.vertical = true;
-        fit.axis = slivers.axis = untangle_options.axis = result.surface.height_field_axis;
-    }
+    const FitOptions fit = along_height_field(options.fit, result.surface);
+    const SliverOptions slivers = along_height_field(options.slivers, result.surface);
+    const UntangleOptions untangle_options = along_height_field(options.untangle, result.surface);
     // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
     // no new caps: FitOptions::max_flip_angle_degrees).
     result.slivers = remove_slivers(result.mesh, slivers);
