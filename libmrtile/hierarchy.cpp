@@ -405,6 +405,31 @@ double max_noise_floor(const Hierarchy& h)
     return m;
 }
 
+NoiseFloorStops noise_floor_stops(const Hierarchy& h)
+{
+    NoiseFloorStops stops;
+    if (h.nodes.empty())
+        return stops;
+    // The finest cut's walk (cut.cpp: rougher_than at limit 0), down to the first node the floor
+    // holds: rough enough to split by its plane distance, not by a hole its tile would cover.
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const Node& n = h.nodes[static_cast<std::size_t>(stack.back())];
+        stack.pop_back();
+        if (n.is_leaf())
+            continue;
+        const bool holds_hole = n.coverage_gap > 0.0 && gap_dominates(n);
+        if (n.rms_plane_distance > 0.0 && n.rms_plane_distance <= n.noise_floor && !holds_hole) {
+            stops.points += n.count();
+            stops.floor_max = std::max(stops.floor_max, n.noise_floor);
+            continue;
+        }
+        stack.push_back(n.left);
+        stack.push_back(n.right);
+    }
+    return stops;
+}
+
 bool sample_is_noisy(const Hierarchy& h)
 {
     const std::size_t region_max = 32 * min_cluster_of(h);

@@ -168,6 +168,17 @@ void clear_noise_floor(Hierarchy& h);
 //! The largest noise floor of any node (0 for a clean sample).
 double max_noise_floor(const Hierarchy& h);
 
+//! Where the noise floors stop the finest cut by tolerance (tolerance 0) above the leaves: the
+//! points under those stops and the largest floor that stops it. A floor under a node's own RMS plane
+//! distance stops nothing, so a clean sample forced through denoising, whose floors are tiny, has few
+//! such points.
+struct NoiseFloorStops
+{
+    std::size_t points = 0; //!< points of the topmost nodes the floor alone keeps from being refined
+    double floor_max = 0.0; //!< the largest floor among those nodes (0: none)
+};
+NoiseFloorStops noise_floor_stops(const Hierarchy& h);
+
 //! \brief Whether the sample is noisy throughout, with noise that breaks meshes: it has 8 regions or
 //! more (the nodes derive_noise_floor judges; a smaller cloud is not judged) and its leaves are blobs
 //! (median roughness, RMS plane distance / RMS extent along the second axis, 0.4 or more). Measured:

@@ -209,6 +209,9 @@ TEST(Denoise, the_build_denoises_noisy_samples_only)
     repeated.positions.insert(repeated.positions.end(), repeated.positions.begin(), repeated.positions.begin() + 100);
     const Hierarchy forced = build_hierarchy(repeated, on);
     EXPECT_TRUE(forced.info.denoised);
+    // Its floors are tiny, under its nodes' own plane distances, and stop the finest cut almost
+    // nowhere (`info` called such a sample 100% noisy, counting every leaf with a floor).
+    EXPECT_LT(noise_floor_stops(forced).points, forced.cloud.size() / 10);
     // Forced on a cloud too small to fit (at most DenoiseOptions::neighbours points): nothing moves,
     // and the hierarchy does not claim it was denoised.
     const Hierarchy tiny = build_hierarchy(shapes::sphere(40), on);
@@ -243,6 +246,20 @@ TEST(Denoise, a_denoised_model_s_finest_cut_stops_at_the_residual_noise)
     const Cut leaves = cut_by_tolerance(unfloored, 0.0);
     EXPECT_EQ(leaves.size(), h.leaf_count());
     EXPECT_LT(finest.size() * 4, leaves.size());
+    // What `info` reports: the points under the finest cut's stops at a floor, which are its tiles
+    // that are no leaves (cut.cpp's rule, counted by hand), nearly the whole sample.
+    const NoiseFloorStops stops = noise_floor_stops(h);
+    std::size_t above_leaves = 0;
+    double floor_max = 0.0;
+    for (const std::int32_t id : finest)
+        if (!h.nodes[static_cast<std::size_t>(id)].is_leaf()) {
+            above_leaves += h.nodes[static_cast<std::size_t>(id)].count();
+            floor_max = std::max(floor_max, h.nodes[static_cast<std::size_t>(id)].noise_floor);
+        }
+    EXPECT_EQ(stops.points, above_leaves);
+    EXPECT_EQ(stops.floor_max, floor_max);
+    EXPECT_GT(stops.points, h.cloud.size() * 9 / 10);
+    EXPECT_EQ(noise_floor_stops(unfloored).points, 0u);
 
     // Meshed, the floored finest cut is closed and nearer the true sphere than every leaf (face
     // centroids, RMS: 0.0030 against 0.0042).

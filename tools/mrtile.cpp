@@ -1496,14 +1496,13 @@ int run_info(const fs::path& model, bool json)
     const Vec3 lo = box.min + h.cloud.origin, hi = box.max + h.cloud.origin;
     const bool timed = std::isfinite(h.info.build_seconds);
     const std::string criterion = h.info.criterion == Criterion::Tau ? "tau" : "tolerance";
-    // Share of the points in tiles-to-be whose noise floor is set (the leaves' floors: where a cut
-    // by tolerance stops short of the leaves).
-    std::uint64_t noisy_points = 0;
-    for (const Node& n : h.nodes)
-        if (n.is_leaf() && n.noise_floor > 0)
-            noisy_points += n.count();
+    // Share of the points where the finest cut by tolerance stops short of the leaves at a noise
+    // floor. (Counting the leaves with any floor called a clean sample forced through --denoise on
+    // 100% noisy: its floors are tiny, under the nodes' own plane distances.)
+    const NoiseFloorStops stops = noise_floor_stops(h);
+    const std::size_t noisy_points = stops.points;
     const double noisy_share = h.cloud.size() > 0 ? static_cast<double>(noisy_points) / static_cast<double>(h.cloud.size()) : 0.0;
-    const double floor_max = h.scale > 0 ? max_noise_floor(h) / h.scale : 0.0;
+    const double floor_max = h.scale > 0 ? stops.floor_max / h.scale : 0.0;
     // Holes a tile would cover (coverage_gap.h): the largest gap that is a node's error (larger than its
     // plane distance), relative to the scale; cuts by tolerance finer than it keep that hole open.
     double hole_max = 0.0;
