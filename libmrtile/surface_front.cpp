@@ -107,11 +107,12 @@ void Front::regrow(const std::vector<bool>& dropped)
     run();
 }
 
-//! Last: the faces held back because they add a handle.
-void Front::finish()
+//! Last: the front grows again from the filled gaps, and with `handles` takes the faces held back
+//! because they add a handle.
+void Front::finish(bool handles)
 {
     reset_pieces();
-    allow_handles_ = true;
+    allow_handles_ = handles;
     edges_.clear(); // cached candidates predate the new rule
     grow_whole_front();
 }
