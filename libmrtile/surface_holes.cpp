@@ -729,24 +729,30 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
     return false;
 }
 
-// Whether the empty disc at `centre` of `radius` (in the plane of the unit vectors u and v) is a chance
-// gap of the sparser side of a density step, not a hole of the sample: where two samples of different
-// density meet (a dense scan of half a surface merged with a sparse scan of all of it), the tiles and
-// the points around a gap take the dense one's spacing, and the sparse sample's own gaps beside the
-// dense part look like holes. Judged on the points from `radius` to 3 × `radius` away (in space, so
-// that a curved surface keeps its points and a sheet far above, a roof over the ground, is left out),
-// in 8 sectors around the disc, each of about the disc's own area; the 4 emptiest are its sparser
-// half. Explained when
-//  - at the sparser half's density (its 4th-emptiest sector) the disc would hold fewer points than an
-//    empty region must miss to count as a hole (CoverageOptions::min_missing_points): there such a
-//    disc is empty by chance;
+// The sparser side of a density step around a disc (see sparse_side).
+struct SparseSide
+{
+    std::size_t sector_points = 0; //!< points of the sparser half's fullest sector (the 4th emptiest)
+    double spacing = 0.0;          //!< the sparser half's point spacing; 0: no density step found
+};
+
+// The sparser side of a density step around the disc at `centre` of `radius` (in the plane of the unit
+// vectors u and v): where two samples of different density meet (a dense scan of half a surface merged
+// with a sparse scan of all of it), the tiles and the points around a gap take the dense one's spacing,
+// and the sparse sample's own gaps beside the dense part look like holes. Judged on the points from
+// `radius` to 3 × `radius` away (in space, so that a curved surface keeps its points and a sheet far
+// above, a roof over the ground, is left out), in 8 sectors around the disc, each of about the disc's
+// own area; the 4 emptiest are its sparser half. A step is found when
 //  - at most one sector is empty: the border of a scan or a shadow beside a hole empties 3 or more, and
 //    then nothing tells the density of the sparse side;
 //  - the sparser half's points lie at least kMinStep times farther from their nearest neighbours
 //    (medians) than the denser half's: a sparse sample, not the frayed edge of a dense one (a roof's
 //    edge beside the ground of an airborne scan, whose few points in the sparse sectors have neighbours
 //    at the roof's spacing).
-bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v)
+// Its spacing is that of the sparser half's points over its 4 sectors' area. Not looked for (spacing
+// 0) when the sparser half's fullest sector holds `max_sector_points` or more.
+SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v,
+                       std::size_t max_sector_points)
 {
     constexpr int kSectors = 8;
     constexpr int kSparseSectors = 4; // the sparser half
@@ -756,8 +762,9 @@ bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double rad
     // would have filled.
     constexpr double kMinStep = 2.0;
     constexpr std::size_t kMaxJudged = 64; // points per half whose neighbours are looked for (a median)
+    SparseSide side;
     if (!(radius > 0.0))
-        return false;
+        return side;
     const double outer = kOuter * radius;
     // Out to a radius beyond the annulus, so that the annulus's points have their neighbours.
     const double reach = outer + radius;
@@ -785,10 +792,9 @@ bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double rad
         order[static_cast<std::size_t>(k)] = k;
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return counts[static_cast<std::size_t>(a)] < counts[static_cast<std::size_t>(b)]; });
-    const std::size_t sparse_points = counts[static_cast<std::size_t>(order[kSparseSectors - 1])];
-    if (counts[static_cast<std::size_t>(order[1])] == 0 ||
-        static_cast<double>(sparse_points) >= CoverageOptions{}.min_missing_points)
-        return false;
+    side.sector_points = counts[static_cast<std::size_t>(order[kSparseSectors - 1])];
+    if (counts[static_cast<std::size_t>(order[1])] == 0 || side.sector_points >= max_sector_points)
+        return side;
     // The median distance to the nearest other point of the annulus's points in the sparser or denser
     // half (every k-th of them, at most kMaxJudged). Neighbours within a hundredth of the radius count as
     // the same point: clumps of near-equal points (repeated frames) would make every distance 0.
@@ -815,7 +821,54 @@ bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double rad
         return std::sqrt(*middle);
     };
     const double sparse_nearest = median_nearest(true), dense_nearest = median_nearest(false);
-    return std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest;
+    if (!(std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest))
+        return side;
+    std::size_t sparse_points = 0;
+    for (int k = 0; k < kSparseSectors; ++k)
+        sparse_points += counts[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
+    const double sparse_area = kSparseSectors * pi * radius * radius; // a sector's area is the disc's
+    side.spacing = std::sqrt(sparse_area / static_cast<double>(std::max<std::size_t>(1, sparse_points)));
+    return side;
+}
+
+// Whether the empty disc at `centre` of `radius` is a chance gap of the sparser side of a density step
+// (sparse_side), not a hole of the sample: at that side's density (its 4th-emptiest sector) the disc
+// would hold fewer points than an empty region must miss to count as a hole
+// (CoverageOptions::min_missing_points).
+bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v)
+{
+    const auto min_missing = static_cast<std::size_t>(std::ceil(CoverageOptions{}.min_missing_points));
+    return sparse_side(h, centre, radius, u, v, min_missing).spacing > 0.0;
+}
+
+// Whether the points cover a hole too wide for the mean-width test (fill_holes) at the spacing of the
+// sparser side of a density step around it (sparse_side; the disc about the fill patch's centre, in its
+// plane, of radius its mean width, 2 area / perimeter: a disc's radius). The test's spacing is the
+// largest of the tiles around the hole, which at a density step are the dense side's or mixed: a 1:6
+// step (half a torus scanned densely, all of it sparsely, with noise) kept 3 holes of 15-23 edges open
+// along the seam, whose sparse points lie farther apart than 1.5 of those spacings; at the sparse
+// side's spacing (1.7-2.4 times theirs) all three are covered.
+bool covered_at_sparse_side(const Hierarchy& h, const std::vector<Vec3>& positions, const std::vector<Tri>& patch, double area,
+                            double perimeter, double spacing)
+{
+    Vec3 centre{0, 0, 0}, normal{0, 0, 0};
+    double weight = 0.0;
+    for (const Tri& t : patch) {
+        const Vec3 c = triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]);
+        const double a = norm(c);
+        normal += c;
+        centre += (positions[t[0]] + positions[t[1]] + positions[t[2]]) * (a / 3.0);
+        weight += a;
+    }
+    if (!(weight > 0.0) || !(norm(normal) > 0.0) || !(perimeter > 0.0))
+        return false;
+    normal = normalized(normal);
+    const Vec3 u = perpendicular_axis(normal), v = cross(normal, u);
+    const SparseSide side = sparse_side(h, centre / weight, 2.0 * area / perimeter, u, v, std::numeric_limits<std::size_t>::max());
+    // Covered: no spot of the patch is farther from the points than the radius of an empty disc that
+    // holds min_missing_points at the sparser side's density (coverage_gap.h: emptier discs are chance).
+    const double reach = std::sqrt(CoverageOptions{}.min_missing_points / kPi) * side.spacing;
+    return side.spacing > spacing && points_cover_hole(h, positions, patch, reach);
 }
 
 // Removes the candidates for which drop(triangle) holds, keeping the others' order. Judged in parallel
@@ -1067,7 +1120,8 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                 area += 0.5 * (projection.used ? std::abs(dot(c, projection.axis)) : norm(c));
             }
             if (!closing && options.max_gap_width > 0.0 && spacing > 0.0 &&
-                2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, 1.5 * spacing))
+                2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, 1.5 * spacing) &&
+                !covered_at_sparse_side(h, positions, patch, area, perimeter, spacing))
                 continue;
             // Tiles built from a sample leave gaps as wide as the sample's spacing, so the test above
             // misses holes narrower than that but wider than the points' own spacing (a hole in a flat
