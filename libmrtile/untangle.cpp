@@ -59,7 +59,8 @@ Box face_box(const Mesh& mesh, Mesh::FaceHandle f) { return corners_box(mesh, fa
 class FaceGrid
 {
 public:
-    FaceGrid(const Mesh& mesh, double cell) : mesh_(mesh), cell_(cell), stamp_(mesh.n_faces(), 0)
+    FaceGrid(const Mesh& mesh, double cell)
+        : mesh_(mesh), cell_(cell), stamp_(mesh.n_faces(), 0), oversized_(mesh.n_faces(), 0)
     {
         for (const auto f : mesh.faces())
             insert(f);
@@ -68,6 +69,13 @@ public:
     void insert(Mesh::FaceHandle f)
     {
         const Box b = face_box(mesh_, f);
+        if (cell_count(b) > kMaxCells) {
+            if (!oversized_[static_cast<std::size_t>(f.idx())]) {
+                oversized_[static_cast<std::size_t>(f.idx())] = 1;
+                oversized_faces_.push_back(f.idx());
+            }
+            return;
+        }
         for_cells(b, [&](std::int64_t key) {
             auto& list = cells_[key];
             if (list.empty() || list.back() != f.idx())
@@ -80,22 +88,45 @@ public:
     {
         ++round_;
         std::vector<int> out;
-        for_cells(b, [&](std::int64_t key) {
-            const auto it = cells_.find(key);
-            if (it == cells_.end())
-                return;
-            for (const int f : it->second)
-                if (stamp_[static_cast<std::size_t>(f)] != round_ && !is_deleted(mesh_, Mesh::FaceHandle(f))) {
-                    stamp_[static_cast<std::size_t>(f)] = round_;
-                    if (face_box(mesh_, Mesh::FaceHandle(f)).overlaps(b))
-                        out.push_back(f);
-                }
-        });
+        const auto consider = [&](int f) {
+            if (stamp_[static_cast<std::size_t>(f)] != round_ && !is_deleted(mesh_, Mesh::FaceHandle(f))) {
+                stamp_[static_cast<std::size_t>(f)] = round_;
+                if (face_box(mesh_, Mesh::FaceHandle(f)).overlaps(b))
+                    out.push_back(f);
+            }
+        };
+        if (cell_count(b) > std::max(kMaxCells, static_cast<double>(mesh_.n_faces()))) {
+            // A box over more cells than there are faces: every face is a candidate.
+            for (const auto f : mesh_.faces())
+                consider(f.idx());
+        } else {
+            for (const int f : oversized_faces_)
+                consider(f);
+            for_cells(b, [&](std::int64_t key) {
+                const auto it = cells_.find(key);
+                if (it == cells_.end())
+                    return;
+                for (const int f : it->second)
+                    consider(f);
+            });
+        }
         std::sort(out.begin(), out.end());
         return out;
     }
 
 private:
+    // A face over this many cells is kept apart and is a candidate of every query: a face reaching a
+    // stray point 10^6 cell sizes away would overlap 10^18 cells (QA round 34: 24 GB on 300 points).
+    static constexpr double kMaxCells = 4096.0;
+
+    double cell_count(const Box& b) const
+    {
+        double count = 1.0;
+        for (int k = 0; k < 3; ++k)
+            count *= std::floor(b.max[k] / cell_) - std::floor(b.min[k] / cell_) + 1.0;
+        return count;
+    }
+
     template <typename Visit>
     void for_cells(const Box& b, Visit visit) const
     {
@@ -115,6 +146,8 @@ private:
     std::unordered_map<std::int64_t, std::vector<int>> cells_;
     std::vector<unsigned> stamp_;
     unsigned round_ = 0;
+    std::vector<char> oversized_;   // per face: in oversized_faces_
+    std::vector<int> oversized_faces_;
 };
 
 class Untangler

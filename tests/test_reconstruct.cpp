@@ -392,6 +392,39 @@ TEST(Reconstruct, a_density_step_leaves_no_holes_along_it)
     expect_closed(mesh_at_tolerance(build_hierarchy(noisy), 0.002).result.mesh, 1);
 }
 
+// Strays millions of units from a unit sphere (QA round 34: a LAS file whose records a fuzzer shifted by
+// 3 bytes, 28 of its 300 points turned into these) make faces 10^6 cell sizes long: the face grids of
+// the island and closing tests and of untangling put each into every cell its box overlaps, 10^18 of
+// them, and the meshing filled 24 GB. Such faces are kept apart now; the mesh is made at once.
+TEST(Reconstruct, faces_reaching_strays_millions_of_units_away_are_meshed)
+{
+    PointCloud cloud;
+    const auto rounded = [](double x) { return std::round(x * 1000.0) / 1000.0; };
+    for (int i = 0; i < 272; ++i) { // the first 272 of 300 points of a Fibonacci sphere, in millimetres
+        const double z = 1.0 - 2.0 * (i + 0.5) / 300.0, r = std::sqrt(std::max(0.0, 1.0 - z * z)), a = i * 2.399963;
+        cloud.positions.push_back({rounded(r * std::cos(a)), rounded(r * std::sin(a)), rounded(z)});
+    }
+    const std::vector<Vec3> strays{
+        {-956301.312, -1644167.167, -805306.370}, {-1593835.520, 822083.583, -922746.878}, {-788529.152, 754974.718, -1023410.178},
+        {301989.888, -1979711.486, -1157627.904}, {620756.992, -67108.866, -1258291.200}, {-1325400.064, 268435.456, -1358954.498},
+        {-939524.096, -620756.992, -1493172.223}, {889192.448, 771751.934, -1577058.305}, {-721420.288, 1761607.681, -1694498.817},
+        {301989.888, -1560281.089, -1828716.543}, {-1744830.464, 939524.095, -1912602.626}, {1996488.704, 67108.865, -2046820.351},
+        {1224736.768, 1023410.174, 2130706.432}, {301989.888, -1241513.983, 2046820.350}, {335544.320, -1644167.168, 1912602.625},
+        {-469762.048, -402653.186, 1811939.326}, {-2147483.648, 251658.241, 1694498.816}, {-402653.184, -285212.674, 1577058.304},
+        {738197.504, -1526726.656, 1476395.006}, {-1090519.040, 251658.240, 1358954.497}, {-822083.584, -1090519.042, 1258291.199},
+        {-67108.864, 1828716.544, 1140850.687}, {-1342177.280, 16777.215, 1023410.177}, {-1744830.464, 620756.991, 922746.879},
+        {-956301.312, 1358954.496, 788529.152}, {1426063.360, 1073741.823, 687865.856}, {1090519.040, -2097152.000, 587202.559},
+        {352321.536, 1325400.064, 452984.832},
+    };
+    cloud.positions.insert(cloud.positions.end(), strays.begin(), strays.end());
+    const Hierarchy h = build_hierarchy(cloud);
+    const MeshResult r = mesh_at_tolerance(h, 0.002).result;
+    EXPECT_EQ(r.surface.refused_faces, 0u);
+    EXPECT_GT(r.mesh.n_faces(), 0u);
+    const TopologyStats t = topology_stats(r.mesh);
+    EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u);
+}
+
 // A camera cut of a torus (fine near the camera, coarse far away) is a closed genus-1 surface.
 TEST(Reconstruct, camera_cut_on_a_torus_is_closed_genus_1)
 {
