@@ -180,6 +180,10 @@ TEST(Cli, outputs_are_checked_before_any_work)
     expect_code("build " + in + " -o " + mesh, 2, "ends in .mrt");
     expect_code("reconstruct " + in + " -o " + mesh + " --alpha 1e-9", 1, "no surface is left");
     expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + mesh, 2, "two outputs");
+    // The same file by two spellings, one relative (QA round 34: both were written, the mesh lost).
+    const std::string relative = fs::relative(mesh).string();
+    expect_code("reconstruct " + in + " -o " + relative + " --stats-json ./" + relative, 2, "two outputs");
+    expect_code("reconstruct " + in + " -o " + relative + " --stats-json " + fs::absolute(mesh).string(), 2, "two outputs");
     ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "a.mrt").string(), dir).code, 0);
     expect_code("lods " + (dir / "a.mrt").string() + " -o " + (dir / "no" / "lods").string(), 1, "lods");
     expect_code("lods " + (dir / "a.mrt").string() + " -o " + in, 1, "not a directory");
@@ -863,6 +867,19 @@ TEST(Cli, demo_writes_what_it_says)
     const std::string glb = slurp(dir / "demo" / "mesh.glb");
     EXPECT_NE(glb.find("KHR_draco_mesh_compression"), std::string::npos);
     EXPECT_NE(r.out.find("mesh.glb: the same mesh"), std::string::npos) << r.out;
+    // Run again into the same directory: it replaces its own outputs.
+    EXPECT_EQ(mrtile("demo -o " + (dir / "demo").string(), dir).code, 0);
+    // A directory `tiles` of the user's stops the demo before it writes anything (QA round 34: the
+    // user's model.mrt and mesh.ply there had been replaced first).
+    fs::create_directories(dir / "mine" / "tiles");
+    write_text(dir / "mine" / "tiles" / "notes.txt", "n\n");
+    write_text(dir / "mine" / "mesh.ply", "mine\n");
+    const Result refused = mrtile("demo -o " + (dir / "mine").string(), dir);
+    EXPECT_EQ(refused.code, 1);
+    EXPECT_NE(refused.err.find("not a tileset"), std::string::npos) << refused.err;
+    EXPECT_EQ(slurp(dir / "mine" / "mesh.ply"), "mine\n");
+    EXPECT_FALSE(fs::exists(dir / "mine" / "model.mrt"));
+    EXPECT_FALSE(fs::exists(dir / "mine" / "mesh.glb"));
 }
 
 // --remove-outliers: the sphere with ten stray points far outside it keeps its 3,000 points in the

@@ -1600,6 +1600,18 @@ struct Output
     Kind kind = Kind::file;
 };
 
+// A path as it would be opened: absolute, links resolved as far as it exists. (weakly_canonical alone
+// leaves a relative path whose first part does not exist as it is: "o.ply" stayed "o.ply" while
+// "./o.ply" became "/cwd/o.ply", and `-o o.ply --stats-json ./o.ply` wrote both into one file, QA
+// round 34.)
+fs::path resolved(const fs::path& p, std::error_code& ec)
+{
+    const fs::path absolute = fs::absolute(p, ec);
+    if (ec)
+        return {};
+    return fs::weakly_canonical(absolute, ec);
+}
+
 // The same file, or (one of them not there yet) the same path once resolved: a scan a list names but
 // that is missing would be read as a scan the next time.
 bool same_file(const fs::path& a, const fs::path& b)
@@ -1607,10 +1619,10 @@ bool same_file(const fs::path& a, const fs::path& b)
     std::error_code ec;
     if (fs::equivalent(a, b, ec) && !ec)
         return true;
-    const fs::path ra = fs::weakly_canonical(a, ec);
+    const fs::path ra = resolved(a, ec);
     if (ec)
         return false;
-    const fs::path rb = fs::weakly_canonical(b, ec);
+    const fs::path rb = resolved(b, ec);
     return !ec && ra == rb;
 }
 
@@ -1618,10 +1630,10 @@ bool same_file(const fs::path& a, const fs::path& b)
 bool lies_inside(const fs::path& file, const fs::path& dir)
 {
     std::error_code ec;
-    const fs::path f = fs::weakly_canonical(file, ec);
+    const fs::path f = resolved(file, ec);
     if (ec)
         return false;
-    fs::path d = fs::weakly_canonical(dir, ec);
+    fs::path d = resolved(dir, ec);
     if (ec)
         return false;
     if (d.filename().empty()) // "DIR/"
@@ -1929,6 +1941,16 @@ int run(int argc, char** argv)
         if (exp_store_levels && exp_args.exp.lod_set())
             check_writable_file(exp_in); // rewritten with the levels: not if read-only
     }
+    if (*demo) {
+        // All five outputs before any work: a directory `tiles` of the user's stopped the demo only after
+        // it had replaced model.mrt and mesh.ply there (QA round 34).
+        ensure_directory(demo_out);
+        check_outputs({}, {{demo_out / "model.mrt", Output::Kind::model},
+                           {demo_out / "mesh.ply", Output::Kind::mesh},
+                           {demo_out / "mesh.json", Output::Kind::file},
+                           {demo_out / "mesh.glb", Output::Kind::mesh},
+                           {demo_out / "tiles", Output::Kind::tileset}});
+    }
 
     if (*build) {
         Hierarchy h;
@@ -2020,7 +2042,6 @@ int run(int argc, char** argv)
     }
     if (*demo) {
         // The built-in default input: the paper's "3Holes"-like genus-3 solid, 40,000 samples.
-        ensure_directory(demo_out);
         const auto start = Clock::now();
         PointCloud cloud = shapes::three_holes(40000);
         shapes::add_noise(cloud, 0.05);
