@@ -161,6 +161,10 @@ void install_signal_cleanup()
     sigemptyset(&action.sa_mask);
     for (const int signal : {SIGINT, SIGTERM, SIGHUP})
         ::sigaction(signal, &action, nullptr);
+    // Past a file size limit (ulimit -f) a write raises SIGXFSZ, whose default kills the process and
+    // left OUT.tmp.PID (QA round 34). Ignored, the write fails with EFBIG instead, and the error path
+    // reports it and removes the temporary.
+    ::signal(SIGXFSZ, SIG_IGN);
 }
 
 void check_writable_file(const std::filesystem::path& path)

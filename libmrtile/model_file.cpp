@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <fstream>
@@ -50,6 +51,23 @@ constexpr std::uint32_t kMaxCrsBytes = 1u << 20;
 // neighbours). Saving and loading hold Hierarchy::denoise_moves to it.
 double move_reach(const std::vector<Vec3>& positions) { return bounding_box(positions).diagonal(); }
 bool plausible_move(float move, double reach) { return move >= 0.0f && static_cast<double>(move) <= reach; }
+
+// What is wrong with a hierarchy's build record, or "" (saving and loading hold it to this; QA round
+// 34: a model with a tolerance of NaN, a build time of -1 or a min cluster of 0 loaded, and `info`
+// printed them). The build time counts only where it was recorded (`timed`).
+std::string bad_build_info(const BuildInfo& info, bool timed)
+{
+    if (!(std::isfinite(info.criterion_value) && info.criterion_value >= 0.0))
+        return "a stop criterion of " + std::to_string(info.criterion_value) + " (must be finite and >= 0)";
+    if (info.min_cluster == 0)
+        return "a min cluster of 0 (must be at least 1)";
+    if (timed && !(std::isfinite(info.build_seconds) && info.build_seconds >= 0.0))
+        return "a build time of " + std::to_string(info.build_seconds) + " s";
+    return {};
+}
+
+// A viewpoint the stages can measure from: its squared distances stay finite (1e300 was loaded).
+bool plausible_viewpoint(const Vec3& v) { return is_finite(v) && std::isfinite(dot(v, v)); }
 
 // Little-endian writer over a string (byte by byte through shifts: correct on any host).
 class Writer
@@ -533,6 +551,10 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
                                "one per point (" + std::to_string(n) + ", got " + std::to_string(h.denoise_moves.size()) +
                                "), each finite, >= 0 and within the cloud's diagonal");
     }
+    if (const std::string bad = bad_build_info(h.info, options.record_build_time && std::isfinite(h.info.build_seconds)); !bad.empty())
+        throw InvalidInput("save_model: the hierarchy's build info has " + bad);
+    if (h.cloud.viewpoint && !plausible_viewpoint(*h.cloud.viewpoint))
+        throw InvalidInput("save_model: the cloud's viewpoint is not finite or too far out to measure from");
     std::string out;
     out.reserve(kHeaderSize + n * (24 + 4 + (h.cloud.has_colors() ? 4 : 0)) + h.nodes.size() * kNodeSize + kTrailerSize);
     Writer w(out);
@@ -665,11 +687,16 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     h.info.criterion = static_cast<Criterion>(criterion);
     h.info.pca_limit = r.u32();
     h.info.min_cluster = r.u32();
-    h.info.reclassify = r.u32() != 0;
+    const std::uint32_t reclassify = r.u32();
+    if (reclassify > 1)
+        r.fail("bad reclassify flag " + std::to_string(reclassify));
+    h.info.reclassify = reclassify != 0;
     h.info.denoised = (flags & kFlagDenoised) != 0;
     h.info.criterion_value = r.f64();
     const double seconds = r.f64();
     h.info.build_seconds = (flags & kFlagBuildTime) ? seconds : std::numeric_limits<double>::quiet_NaN();
+    if (const std::string bad = bad_build_info(h.info, (flags & kFlagBuildTime) != 0); !bad.empty())
+        r.fail("build info with " + bad);
     const std::uint64_t payload = r.u64();
     if (kHeaderSize + payload != end)
         r.fail("payload size does not match the file size");
@@ -717,8 +744,12 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         v.x = r.f64();
         v.y = r.f64();
         v.z = r.f64();
-        if (!is_finite(v))
-            r.fail("non-finite viewpoint");
+        if (!plausible_viewpoint(v))
+        {
+            char text[96];
+            std::snprintf(text, sizeof text, "viewpoint not finite or too far out (%.6g, %.6g, %.6g)", v.x, v.y, v.z);
+            r.fail(text);
+        }
         h.cloud.viewpoint = v;
     }
     if (flags & kFlagCrs) {

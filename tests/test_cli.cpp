@@ -153,6 +153,21 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("line.mrt: the points are collinear or coincident"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "line.ply"));
+
+    // Past a file size limit the write fails like on a full disk: one line, exit 1, no temporary left
+    // (QA round 34: SIGXFSZ killed the process and left sphere.ply.tmp.PID).
+    ASSERT_EQ(mrtile("build " + sphere_xyz(dir).string() + " -o " + (dir / "s.mrt").string(), dir).code, 0);
+    const fs::path limited = dir / "limited";
+    fs::create_directories(limited);
+    const std::string command = "ulimit -f 4 && " + std::string(MRTILE_CLI) + " mesh " + (dir / "s.mrt").string() + " -o " +
+                                (limited / "sphere.ply").string() + " >/dev/null 2>" + (dir / "limit.txt").string();
+    const int status = std::system(command.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1);
+    const std::string err = slurp(dir / "limit.txt");
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("sphere.ply"), std::string::npos) << err;
+    EXPECT_TRUE(fs::is_empty(limited));
 }
 
 // Every output is checked before any work, so that a command that cannot write one of its outputs

@@ -451,6 +451,36 @@ TEST(ModelFile, forged_values_are_refused)
     refused(gap, -1.0, "errors do not fit");
     refused(gap, nan, "errors do not fit");
     refused(gap, 1e300, "errors do not fit");
+    // The build record (QA round 34: these loaded, and `info` printed "tolerance nan"): the stop
+    // criterion at 80, the build time at 88 (read only when recorded), min cluster and the reclassify
+    // flag at 72 and 76.
+    refused(80, nan, "stop criterion of nan");
+    refused(80, -1.0, "stop criterion of -1");
+    refused(80, inf, "stop criterion of inf");
+    auto refused_word = [&](std::size_t at, std::uint32_t value, const std::string& why) {
+        std::string forged = bytes;
+        std::memcpy(&forged[at], &value, 4);
+        refresh_checksum(forged);
+        EXPECT_THROW(
+            try { deserialize_model(forged, "forged.mrt"); } catch (const IoError& e) {
+                EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+                throw;
+            },
+            IoError)
+            << why;
+    };
+    refused_word(72, 0, "min cluster of 0");
+    refused_word(76, 7, "reclassify flag 7");
+    Hierarchy timed = sample();
+    timed.info.build_seconds = 1.5;
+    SaveOptions record;
+    record.record_build_time = true;
+    std::string with_time = serialize_model(timed, record);
+    EXPECT_EQ(deserialize_model(with_time, "timed.mrt").info.build_seconds, 1.5);
+    const double negative = -1.0;
+    std::memcpy(&with_time[88], &negative, 8);
+    refresh_checksum(with_time);
+    EXPECT_THROW(deserialize_model(with_time, "timed.mrt"), IoError);
 }
 
 // A node that no parent names (an orphan, the tree's structure otherwise intact) is refused, whatever
@@ -556,6 +586,19 @@ TEST(ModelFile, a_hierarchy_load_model_would_refuse_is_not_saved)
     EXPECT_THROW(save_model(moves, path), InvalidInput);
     EXPECT_FALSE(fs::exists(path));
     EXPECT_NO_THROW(deserialize_model(serialize_model(sample(true)), "sample"));
+    // The build record and the viewpoint, as the loader holds them.
+    Hierarchy info = sample();
+    info.info.criterion_value = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(serialize_model(info), InvalidInput);
+    info = sample();
+    info.info.min_cluster = 0;
+    EXPECT_THROW(serialize_model(info), InvalidInput);
+    info = sample();
+    info.cloud.viewpoint = Vec3{1e300, 0, 0};
+    EXPECT_THROW(save_model(info, path), InvalidInput);
+    EXPECT_FALSE(fs::exists(path));
+    info.cloud.viewpoint = Vec3{1e3, 0, 0};
+    EXPECT_EQ(deserialize_model(serialize_model(info), "sample").cloud.viewpoint->x, 1e3);
 }
 
 } // namespace

@@ -166,8 +166,9 @@ struct BuildArgs
         auto* t = cmd->add_option("--" + prefix + "tau", tau, "hierarchy stop criterion: the paper's tau (units^2)")
                       ->check(kPositive);
         tol->excludes(t);
+        // The model stores it in 32 bits (QA round 34: larger values were saturated without a word).
         cmd->add_option("--pca-limit", pca_limit, "clusters up to this size split along the PCA axis")
-            ->check(integer_check(0, 1ull << 40))
+            ->check(integer_check(0, std::numeric_limits<std::uint32_t>::max()))
             ->capture_default_str();
         // Below 8 points a leaf's plane fits a handful of points, and meshes of such leaves break into
         // hundreds of pieces (QA, session 17: 5 to 450 pieces for 1 to 6 on a clean sphere).
@@ -878,7 +879,8 @@ struct ExportArgs
                              ->check(kNonEmpty);
             geoid_option = cmd->add_option("--geoid-height", geoid_height,
                                            "3D Tiles placed by the model's CRS: metres added to every height (the geoid's "
-                                           "height above the ellipsoid, for orthometric heights; |M| <= 10000)");
+                                           "height above the ellipsoid, for orthometric heights; |M| <= 10000)")
+                               ->check(kNonEmpty); // '' read as 0 (QA round 34)
         }
         lod_options.push_back(cmd->add_option("--max-tile-triangles", max_tile_triangles,
                                               lods_command ? "level 0's budget: three quarters of this many triangles "
@@ -1463,6 +1465,10 @@ void naming_input(const std::string& input, Work work)
         if (what.rfind(input, 0) == 0)
             throw;
         throw InvalidInput(input + ": " + what);
+    } catch (const std::bad_alloc&) {
+        // Named like any other error of the input (QA round 34: "mrtile: error: out of memory", no file).
+        throw IoError(input + ": out of memory while working on it (more points, or a finer cut, than this "
+                              "machine's memory holds)");
     }
 }
 template <typename Work>
@@ -1483,6 +1489,8 @@ void naming_input(const std::vector<fs::path>& inputs, Work work)
             if (what.rfind(input.string() + ":", 0) == 0)
                 throw;
         naming_input(inputs_name(inputs), [&] { throw; }); // rethrown to be named by all the inputs
+    } catch (const std::bad_alloc&) {
+        naming_input(inputs_name(inputs), [&] { throw; });
     }
 }
 
