@@ -530,6 +530,37 @@ struct ColumnLayout
     const Separators* delimiters = &kCommaOrSemicolon; // besides blanks; see Fields
 };
 
+// Whether a data line is numbers with decimal commas separated by blanks ("0,5 -1,25 2"): three or
+// more blank-separated words, each a number whose one comma stands between digits (or a whole number),
+// with no point anywhere and at least one such comma. Read with commas as separators, such a line gave
+// (0, 5, -1) and so on without a word (QA round 34).
+bool blank_separated_decimal_commas(std::string_view content)
+{
+    std::size_t words = 0;
+    bool comma = false;
+    std::string_view word;
+    for (Tokens split(content, kBlanks); split.next(word); ++words) {
+        std::size_t i = (word[0] == '-' || word[0] == '+') ? 1 : 0;
+        const auto digits = [&] {
+            const std::size_t start = i;
+            while (i < word.size() && word[i] >= '0' && word[i] <= '9')
+                ++i;
+            return i > start;
+        };
+        if (!digits())
+            return false;
+        if (i < word.size() && word[i] == ',') {
+            ++i;
+            if (!digits())
+                return false;
+            comma = true;
+        }
+        if (i != word.size())
+            return false;
+    }
+    return words >= 3 && comma;
+}
+
 std::string lower_name(std::string_view token)
 {
     std::string name;
@@ -659,6 +690,19 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
     bool first_content_line = true;
     bool header_possible = true; // on the first content line, or on the line after a leading point count
     bool separators_known = false;
+    // A count line declares the points of the scan after it, up to the next count line or the end: a
+    // scan with fewer is truncated, one with more is no scan of that count (QA round 34: counts of 10
+    // and 99999999999 before 300 points were read without a word).
+    std::uint64_t declared = 0;
+    std::size_t declared_line = 0, scan_start = 0;
+    bool counted = false;
+    const auto check_count = [&] {
+        const std::size_t found = cloud.positions.size() - scan_start;
+        if (counted && found != declared)
+            throw IoError(in.name() + ": line " + std::to_string(declared_line) + " declares " + std::to_string(declared) +
+                          " points, but " + (found < declared ? "only " : "") + std::to_string(found) + " follow it" +
+                          (found < declared ? " (truncated?)" : ""));
+    };
     while (in.next_line(line)) {
         // The first line with data (not a comment, not a point count) says whether semicolons separate.
         if (!separators_known) {
@@ -667,7 +711,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
             std::uint64_t count = 0;
             for (Tokens words(line, kBlanks); words.next(token); ++tokens_seen)
                 content = line.substr(0, static_cast<std::size_t>(token.data() + token.size() - line.data()));
-            if (content.find(';') != std::string_view::npos) {
+            if (content.find(';') != std::string_view::npos || blank_separated_decimal_commas(content)) {
                 layout.delimiters = &kSemicolon;
                 layout.decimal_comma = true;
             }
@@ -683,6 +727,11 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         Fields rest = tokens;
         std::uint64_t count = 0;
         if ((first_content_line || pts) && !rest.next(second) && parse_count(token, count)) {
+            check_count();
+            counted = true;
+            declared = count;
+            declared_line = in.line_number();
+            scan_start = cloud.positions.size();
             // A header may follow the count ("3", then "x y z": it was read as a point, QA round 28).
             header_possible = first_content_line;
             first_content_line = false;
@@ -751,6 +800,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
             }
         }
     }
+    check_count();
     return cloud;
 }
 

@@ -361,6 +361,15 @@ TEST(ReadColumns, separators_comments_count_line_and_header)
         {"a.csv", "x,y,z,intensity\n0.5,-1.25,2,7\n3,4.75,-5.5,7\n-0.125,0,8,7\n1;1;1;7\n"},
         {"A.TXT", "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1"},
     });
+    // A count line that does not match the points after it: a truncated scan, or no count at all (QA
+    // round 34: 10 and 99999999999 before 300 points were read without a word).
+    const fs::path dir = test_dir();
+    const fs::path few = write_file(dir / "few.pts", "10\n0 0 0\n1 0 0\n0 1 0\n");
+    expect_error<IoError>([&] { read_points(few); }, {few.string(), "line 1 declares 10 points", "only 3 follow", "truncated"});
+    const fs::path many = write_file(dir / "many.pts", "2\n0 0 0\n1 0 0\n0 1 0\n1\n5 5 5\n");
+    expect_error<IoError>([&] { read_points(many); }, {many.string(), "line 1 declares 2 points, but 3 follow"});
+    const fs::path last = write_file(dir / "last.xyz", "3\n0 0 0\n1 0 0\n");
+    expect_error<IoError>([&] { read_points(last); }, {last.string(), "only 2 follow"});
 }
 
 // Files from spreadsheets and scanner software: a misread layout would give a wrong cloud with no error.
@@ -375,6 +384,10 @@ TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
         // A European spreadsheet: semicolons separate, commas are decimal points.
         {"eu.csv", "X;Y;Z\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
         {"eu.xyz", "0,5; -1,25; 2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
+        // Decimal commas between blanks (QA round 34: read as (0, 5, -1), ...), and commas with blanks
+        // after them, which still separate.
+        {"eu_blanks.xyz", "0,5 -1,25 2\n3 4,75 -5,5\n-0,125 0 8\n1 1 1\n"},
+        {"spaced.csv", "0.5, -1.25, 2\n3, 4.75, -5.5\n-0.125, 0, 8\n1, 1, 1\n"},
         // ... after a point count line, or a comment: the first line with data decides (both were
         // read with commas separating: (0, 5, -1) and so on; found by fuzzing).
         {"eu_count.pts", "4\n0,5;-1,25;2\n3;4,75;-5,5\n-0,125;0;8\n1;1;1\n"},
