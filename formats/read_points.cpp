@@ -53,6 +53,14 @@ std::string quote_token(std::string_view token)
     return s + "'";
 }
 
+// Whether a file's name ends in .gz (any case).
+bool is_gz_name(const fs::path& path)
+{
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext == ".gz";
+}
+
 // Buffered input with transparent gzip decompression, line splitting and byte access.
 class Input
 {
@@ -79,6 +87,10 @@ public:
             if (inflateInit2(&stream_->z, 16 + MAX_WBITS) != Z_OK)
                 throw IoError(name_ + ": cannot start decompressing (out of memory)");
             stream_->ready = true;
+        } else if (is_gz_name(path)) {
+            // A zlib stream or a plain file under a .gz name was read as text, and its first bytes were
+            // quoted as a number (QA round 34).
+            throw IoError(name_ + ": named .gz but not gzip-compressed (no gzip header)");
         } else if (fs::is_regular_file(status)) {
             // The size bounds what an uncompressed file can hold (checked against header counts).
             const auto size = fs::file_size(path, ec);

@@ -557,6 +557,10 @@ TEST(ReadPoints, gzip_compressed_files_read_like_plain_ones)
                   kPoints);
     expect_points(read_points(write_gz(dir / "a.off.gz", "OFF\n4 0 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n")),
                   kPoints);
+    // A .gz name on a file that is not gzip (plain text, a raw zlib stream): refused, not read as text
+    // (QA round 34: the zlib stream's bytes were quoted as a number).
+    const fs::path plain = write_file(dir / "plain.xyz.gz", "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n");
+    expect_error<IoError>([&] { read_points(plain); }, {plain.string(), "not gzip-compressed"});
 }
 
 // Uniform in the cube centre +- half.
