@@ -1494,9 +1494,28 @@ void naming_input(const std::vector<fs::path>& inputs, Work work)
     }
 }
 
+// A model and its stored levels, which are a cache: where only they are damaged (the hierarchy loads),
+// the model is used without them and a note says why. `info` failed on such a file and a default
+// export stopped, while `mesh` and `lods`, which do not read the levels, used it (QA round 34).
+// `damage` (if given) gets what is wrong with the levels, or stays empty.
+Model load_model_or_without_levels(const fs::path& path, std::string* damage = nullptr)
+{
+    try {
+        return load_model_with_levels(path);
+    } catch (const IoError& levels) {
+        Model model;
+        model.hierarchy = load_model(path); // throws if the damage is not the levels' alone
+        std::fprintf(stderr, "note: %s; the model is used without its stored levels\n", levels.what());
+        if (damage)
+            *damage = levels.what();
+        return model;
+    }
+}
+
 int run_info(const fs::path& model, bool json)
 {
-    const Model contents = load_model_with_levels(model);
+    std::string levels_damage;
+    const Model contents = load_model_or_without_levels(model, &levels_damage);
     const Hierarchy& h = contents.hierarchy;
     const StoredLevels& stored = contents.levels;
     const std::size_t stored_faces = level_faces(stored.levels);
@@ -1551,6 +1570,7 @@ int run_info(const fs::path& model, bool json)
         j["stored_levels"] = stored.levels.size();
         j["stored_level_faces"] = stored_faces;
         j["stored_level_recipe"] = stored.levels.empty() ? nlohmann::json(nullptr) : nlohmann::json(stored.recipe);
+        j["stored_levels_damage"] = levels_damage.empty() ? nlohmann::json(nullptr) : nlohmann::json(levels_damage);
         // The CRS is kept as the input gave it, and a .prj or a LAS WKT record in Latin-1 ("Zone \xE4")
         // is no UTF-8: dump() threw, and info --json failed with "[json.exception.type_error.316] invalid
         // UTF-8 byte" (QA round qa-fuzz). Such bytes are written as U+FFFD.
@@ -1594,6 +1614,8 @@ int run_info(const fs::path& model, bool json)
     if (!stored.levels.empty())
         std::printf("levels      %zu stored (%zu faces in all; `export` reuses them with: %s)\n", stored.levels.size(),
                     stored_faces, stored.recipe.c_str());
+    else if (!levels_damage.empty())
+        std::printf("levels      damaged, not used (see the note; `export --store-levels` stores them again)\n");
     else
         std::printf("levels      none stored (build with --store-levels for fast exports)\n");
     return 0;
@@ -2029,7 +2051,7 @@ int run(int argc, char** argv)
         const bool lod_set = exp_args.exp.lod_set();
         Model model;
         if (lod_set)
-            model = load_model_with_levels(exp_in);
+            model = load_model_or_without_levels(exp_in);
         else
             model.hierarchy = load_model(exp_in);
         Hierarchy& h = model.hierarchy;
