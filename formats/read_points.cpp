@@ -10,6 +10,8 @@
 
 #include <zlib.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -484,6 +486,32 @@ void check_max_points(const Input& in, std::uint64_t count, const ReadOptions& o
                            std::to_string(options.max_points));
 }
 
+// This machine's physical memory in bytes, 0 if unknown.
+std::uint64_t physical_memory()
+{
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    if (pages > 0 && page > 0)
+        return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page);
+#endif
+    return 0;
+}
+
+// A count a header declares: within max_points, and where the input's size is unknown (compressed, or
+// not a regular file) its positions alone (24 bytes each) within this machine's memory. A compressed
+// file's size bounds nothing: 1 MB of gzip expanding to 1 GiB of zeros under a LAS header declaring
+// 4,294,967,295 points took 1.6 GB before "truncated" (QA round 34); 10 MB would have taken 16 GB.
+// (An uncompressed file's size is checked against the count by each reader.)
+void check_declared_points(const Input& in, std::uint64_t count, const ReadOptions& options)
+{
+    check_max_points(in, count, options);
+    const std::uint64_t memory = physical_memory();
+    if (in.file_size() == 0 && memory > 0 && count > memory / sizeof(Vec3))
+        throw IoError(in.name() + ": the header declares " + std::to_string(count) + " points, whose positions alone (" +
+                           std::to_string(static_cast<std::uint64_t>(static_cast<double>(count) * sizeof(Vec3) / 1073741824.0)) + " GiB) exceed this machine's memory (" +
+                           std::to_string(memory >> 30) + " GiB)");
+}
+
 // Float32 keeps 24 significant bits: at a coordinate m, adjacent values lie 2^(e-24) apart (m in
 // [2^(e-1), 2^e)). Far from the origin that step can be a visible part of the object (the bunny 2e5
 // away: steps of 1/64 on a 0.15 object, most points stored as one): detail the file lost before it
@@ -890,7 +918,7 @@ PointCloud read_off(Input& in, const ReadOptions& options)
     std::uint64_t vertex_count = 0;
     if (!parse_count(token, vertex_count))
         fail_line(in, "expected the vertex count, found " + quote_token(token));
-    check_max_points(in, vertex_count, options);
+    check_declared_points(in, vertex_count, options);
     // The face count checks what follows the vertices (below); without one, any number of faces may follow.
     std::uint64_t face_count = UINT64_MAX;
     if (tokens.next(token) && !parse_count(token, face_count))
@@ -1282,7 +1310,7 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         throw InvalidInput(in.name() + ": PLY file has no vertex element");
     const PlyElement& vertex = header.elements[vertex_index];
     const VertexLayout layout = vertex_layout(in, vertex, options.keep_colors);
-    check_max_points(in, vertex.count, options);
+    check_declared_points(in, vertex.count, options);
 
     // Before allocating anything, check that an uncompressed binary file can hold what it declares,
     // the elements after the vertices too (their smallest size: a file cut off after its vertices is
@@ -1688,7 +1716,13 @@ PointCloud read_las(Input& in, const ReadOptions& options)
                 count = count64;
         }
     }
-    check_max_points(in, count, options);
+    // Formats 6-10 came with LAS 1.4, whose writers leave the legacy count 0 and give the 64-bit one,
+    // which an older header has no room for (QA round 34: a 1.0 header with format 6 was refused as
+    // "9000 bytes after the 0 points the header declares").
+    if (format >= 6 && minor < 4 && count == 0)
+        throw InvalidInput(in.name() + ": LAS point format " + std::to_string(format) + " is a LAS 1.4 format, but the header "
+                           "says version " + version + " and has no 1.4 point count (its legacy count is 0)");
+    check_declared_points(in, count, options);
     // Before allocating anything, check that an uncompressed file can hold what the header declares.
     const std::uint64_t needed = saturating_add(point_offset, saturating_mul(count, record_size));
     if (in.file_size() > 0 && needed > in.file_size())
@@ -2012,7 +2046,7 @@ bool lzf_decompress(const std::vector<unsigned char>& in, std::vector<unsigned c
 PointCloud read_pcd(Input& in, const ReadOptions& options)
 {
     const PcdHeader h = read_pcd_header(in);
-    check_max_points(in, h.points, options);
+    check_declared_points(in, h.points, options);
     const bool colors = options.keep_colors && h.rgb >= 0;
     const PcdField& fx = h.fields[static_cast<std::size_t>(h.x)];
     const PcdField& fy = h.fields[static_cast<std::size_t>(h.y)];
