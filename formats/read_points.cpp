@@ -1592,11 +1592,41 @@ constexpr std::uint16_t kLasRecordSize[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38
 constexpr std::uint16_t kLasColorOffset[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
 
 constexpr std::uint64_t kLasMaxRecordBytes = 16u << 20;
+constexpr std::uint64_t kLasExtendedRecordHeader = 60; // LAS 1.4's extended variable-length record header
+constexpr std::uint64_t kMaxLasWktBytes = 1u << 20;    // a WKT is a few kilobytes
 
 // The CRS of the LASF_Projection records: the OGC WKT record (2112) when the header says WKT is
 // authoritative or no EPSG code is given, else the EPSG code of the GeoTIFF keys (record 34735:
 // ProjectedCSTypeGeoKey 3072, else GeographicTypeGeoKey 2048). Malformed records are ignored: the CRS
 // only places the result on the globe, and the points themselves are still readable.
+// The WKT of a LAS 1.4 extended record (LASF_Projection, 2112) from `start`, which the stream has not
+// passed yet; "" if none among the first kMaxExtendedRecordsRead. Records are 60-byte headers (2
+// reserved bytes, a 16-byte user id, the record id, a 64-bit length, a 32-byte description) and data.
+std::string las_extended_wkt(Input& in, std::uint64_t start, std::uint32_t count, bool swap)
+{
+    constexpr std::uint32_t kMaxExtendedRecordsRead = 1024;
+    const auto truncated = [&] { return IoError(in.name() + ": truncated: the file ends inside its extended records"); };
+    if (start < in.offset() || !in.skip(start - in.offset()))
+        throw truncated();
+    for (std::uint32_t k = 0; k < std::min(count, kMaxExtendedRecordsRead); ++k) {
+        const char* header = in.take(kLasExtendedRecordHeader);
+        if (!header)
+            throw truncated();
+        const std::string user(header + 2, strnlen(header + 2, 16));
+        const std::uint16_t id = load<std::uint16_t>(header + 18, swap);
+        const std::uint64_t length = load<std::uint64_t>(header + 20, swap);
+        if (user == "LASF_Projection" && id == 2112 && length <= kMaxLasWktBytes) {
+            const char* data = in.take(static_cast<std::size_t>(length));
+            if (!data)
+                throw truncated();
+            return std::string(data, strnlen(data, static_cast<std::size_t>(length)));
+        }
+        if (!in.skip(length))
+            throw truncated();
+    }
+    return {};
+}
+
 std::string las_crs(const char* records, std::size_t size, std::uint32_t count, bool swap, bool wkt_flag)
 {
     constexpr std::size_t kRecordHeader = 54;
@@ -1696,6 +1726,7 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     // LAS 1.3 and 1.4 say where waveform data and extended records start, after the points: data
     // between the points' end and there, or the end of the file, is points the header does not count.
     std::uint64_t waveform_start = 0, evlr_start = 0;
+    std::uint32_t evlr_count = 0;
     if (minor >= 3 && header_size >= kLasHeader13) {
         const std::size_t extended_size = (minor >= 4 && header_size >= kLasHeader14 ? kLasHeader14 : kLasHeader13) -
                                           kLasHeaderMin;
@@ -1708,6 +1739,7 @@ PointCloud read_las(Input& in, const ReadOptions& options)
         // legacy 5,000 and a 64-bit 1,000 read 1,000 of the 5,000 points without a word).
         if (extended_size == kLasHeader14 - kLasHeaderMin) {
             evlr_start = load<std::uint64_t>(extended + (235 - kLasHeaderMin), swap);
+            evlr_count = load<std::uint32_t>(extended + (243 - kLasHeaderMin), swap);
             const std::uint64_t count64 = load<std::uint64_t>(extended + (247 - kLasHeaderMin), swap);
             if (count != 0 && count64 != 0 && count != count64)
                 throw InvalidInput(in.name() + ": malformed LAS 1.4 header: its legacy point count " + std::to_string(count) +
@@ -1728,6 +1760,19 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     if (in.file_size() > 0 && needed > in.file_size())
         throw IoError(in.name() + ": truncated: the header declares " + std::to_string(count) + " points (" +
                       std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) + " bytes");
+    // LAS 1.4's extended records follow the points (QA round 34: records said to start inside the
+    // points, or more of them than the file holds, were accepted).
+    if (evlr_count > 0) {
+        if (evlr_start < needed)
+            throw InvalidInput(in.name() + ": malformed LAS 1.4 header: its " + std::to_string(evlr_count) +
+                               " extended records start at byte " + std::to_string(evlr_start) +
+                               ", inside the point data (which ends at byte " + std::to_string(needed) + ")");
+        const std::uint64_t records_end = saturating_add(evlr_start, saturating_mul(evlr_count, kLasExtendedRecordHeader));
+        if (in.file_size() > 0 && records_end > in.file_size())
+            throw IoError(in.name() + ": truncated: the header declares " + std::to_string(evlr_count) +
+                          " extended records from byte " + std::to_string(evlr_start) + " but the file has " +
+                          std::to_string(in.file_size()) + " bytes");
+    }
     // The variable-length records between the header and the points may say where the points are
     // on the Earth; a region beyond kLasMaxRecordBytes (waveform tables and the like) is not searched.
     std::string crs;
@@ -1787,6 +1832,11 @@ PointCloud read_las(Input& in, const ReadOptions& options)
         throw InvalidInput(in.name() + ": " + std::to_string(rest) + " bytes after the " + std::to_string(count) +
                            " points the header declares: the header does not describe the data");
     }
+    // A LAS 1.4 file may keep its WKT in an extended record, after the points: read when the records
+    // before the points gave none (or gave GeoTIFF keys the WKT bit says not to use).
+    if (evlr_count > 0 && (cloud.crs.empty() || (wkt_flag && cloud.crs.rfind("EPSG:", 0) == 0)))
+        if (std::string wkt = las_extended_wkt(in, evlr_start, evlr_count, swap); !wkt.empty())
+            cloud.crs = std::move(wkt);
     if (count > 0 && cloud.positions.empty())
         throw InvalidInput(in.name() + ": no points: all " + std::to_string(count) +
                            " are withheld or classified as noise (classes 7 and 18), which are left out");

@@ -1141,6 +1141,8 @@ struct LasFile
     std::string records;        // variable-length records (replace the gap's filler when not empty)
     std::uint32_t record_count = 0;
     std::uint16_t global_encoding = 0;
+    std::string extended_records; // LAS 1.4: extended variable-length records after the points
+    std::uint32_t extended_count = 0;
 
     std::string bytes() const
     {
@@ -1174,7 +1176,9 @@ struct LasFile
         if (minor >= 3)
             h.data += std::string(8, '\0');
         if (minor >= 4) {
-            h.data += std::string(12, '\0');
+            const std::uint64_t points_end = static_cast<std::uint64_t>(header_size + gap) + count * static_cast<std::uint64_t>(record);
+            h.put(extended_count > 0 ? points_end : std::uint64_t{0});
+            h.put(extended_count);
             h.put(count);
             h.data += std::string(120, '\0');
         }
@@ -1200,7 +1204,7 @@ struct LasFile
                 }
             h.data += r.data;
         }
-        return h.data;
+        return h.data + extended_records;
     }
 };
 
@@ -1253,6 +1257,18 @@ std::string las_record(const std::string& user, std::uint16_t id, const std::str
     r.data += user + std::string(16 - user.size(), '\0');
     r.put(id);
     r.put(static_cast<std::uint16_t>(data.size()));
+    r.data += std::string(32, '\0');
+    return r.data + data;
+}
+
+// One extended variable-length record (LAS 1.4, after the points): the 60-byte header, then its data.
+std::string las_extended_record(const std::string& user, std::uint16_t id, const std::string& data)
+{
+    Bytes r;
+    r.put(static_cast<std::uint16_t>(0));
+    r.data += user + std::string(16 - user.size(), '\0');
+    r.put(id);
+    r.put(static_cast<std::uint64_t>(data.size()));
     r.data += std::string(32, '\0');
     return r.data + data;
 }
@@ -1314,6 +1330,31 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
         padding += las_record("padding", 1, std::string(60000, 'p'));
     EXPECT_EQ(crs_of(keys + padding, 1 + static_cast<std::uint32_t>(padding.size() / (54 + 60000))), "EPSG:32633");
     EXPECT_EQ(crs_of(padding + keys + wkt_record, 2 + static_cast<std::uint32_t>(padding.size() / (54 + 60000)), 0x10), wkt);
+    // LAS 1.4 may keep the WKT in an extended record after the points (QA round 34: ignored), behind
+    // another one; as a record, it is used under the WKT bit over GeoTIFF keys.
+    LasFile extended;
+    extended.minor = 4;
+    extended.format = 6;
+    extended.global_encoding = 0x10;
+    extended.extended_records = las_extended_record("other", 7, std::string(100, 'x')) +
+                                las_extended_record("LASF_Projection", 2112, wkt + std::string(1, '\0'));
+    extended.extended_count = 2;
+    const PointCloud from_extended = read_points(write_file(dir / "evlr.las", extended.bytes()));
+    expect_points(from_extended, kPoints);
+    EXPECT_EQ(from_extended.crs, wkt);
+    EXPECT_EQ(read_points(write_gz(dir / "evlr.las.gz", extended.bytes())).crs, wkt);
+    extended.records = keys;
+    extended.record_count = 1;
+    EXPECT_EQ(read_points(write_file(dir / "evlr_keys.las", extended.bytes())).crs, wkt);
+    // Declared records that are not there, or that start inside the points, are refused.
+    LasFile missing = extended;
+    missing.extended_count = 10;
+    const fs::path missing_path = write_file(dir / "evlr_missing.las", missing.bytes());
+    expect_error<IoError>([&] { read_points(missing_path); }, {missing_path.string(), "10 extended records"});
+    std::string inside = extended.bytes();
+    std::memset(&inside[235], 0, 8); // the records' start: byte 0
+    const fs::path inside_path = write_file(dir / "evlr_inside.las", inside);
+    expect_error<InvalidInput>([&] { read_points(inside_path); }, {inside_path.string(), "inside the point data"});
 
     // Files in two coordinate systems are not one cloud (QA round 29: merged, the CRS dropped, without a
     // word); the same code, or a file without one between, merge as before.
