@@ -1249,26 +1249,18 @@ TEST(ReadLas, versions_formats_scales_and_colours)
     EXPECT_EQ(b.colors[3][0], 9);
 }
 
-// One variable-length record: the 54-byte record header, then its data.
-std::string las_record(const std::string& user, std::uint16_t id, const std::string& data)
+// One variable-length record: the 54-byte record header, then its data; `extended`: LAS 1.4's
+// extended record after the points, whose header (60 bytes) has a 64-bit length.
+std::string las_record(const std::string& user, std::uint16_t id, const std::string& data, bool extended = false)
 {
     Bytes r;
     r.put(static_cast<std::uint16_t>(0));
     r.data += user + std::string(16 - user.size(), '\0');
     r.put(id);
-    r.put(static_cast<std::uint16_t>(data.size()));
-    r.data += std::string(32, '\0');
-    return r.data + data;
-}
-
-// One extended variable-length record (LAS 1.4, after the points): the 60-byte header, then its data.
-std::string las_extended_record(const std::string& user, std::uint16_t id, const std::string& data)
-{
-    Bytes r;
-    r.put(static_cast<std::uint16_t>(0));
-    r.data += user + std::string(16 - user.size(), '\0');
-    r.put(id);
-    r.put(static_cast<std::uint64_t>(data.size()));
+    if (extended)
+        r.put(static_cast<std::uint64_t>(data.size()));
+    else
+        r.put(static_cast<std::uint16_t>(data.size()));
     r.data += std::string(32, '\0');
     return r.data + data;
 }
@@ -1336,8 +1328,8 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
     extended.minor = 4;
     extended.format = 6;
     extended.global_encoding = 0x10;
-    extended.extended_records = las_extended_record("other", 7, std::string(100, 'x')) +
-                                las_extended_record("LASF_Projection", 2112, wkt + std::string(1, '\0'));
+    extended.extended_records = las_record("other", 7, std::string(100, 'x'), true) +
+                                las_record("LASF_Projection", 2112, wkt + std::string(1, '\0'), true);
     extended.extended_count = 2;
     const PointCloud from_extended = read_points(write_file(dir / "evlr.las", extended.bytes()));
     expect_points(from_extended, kPoints);
