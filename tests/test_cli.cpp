@@ -224,6 +224,10 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --tiles 18446744073709551616", "--tiles"},
         {a + " --camera ''", "must not be empty"},
         {a + " --stats-json ''", "must not be empty"},
+        // Numbers as whole-number options take them (QA round 34: " 5", "+5" and "0x10" were read).
+        {a + " --tolerance 0x10", "'0x10' is not a number"},
+        {a + " --alpha ' 5'", "' 5' is not a number"},
+        {tiles + " --geoid-height ''", "must not be empty"},
         {"mesh " + (dir / "a.mrt").string() + " -o " + (dir / "x.txt").string(), "unknown output extension"},
         {tiles + " --levels 10000000", "--levels"},
         // Zero levels or a zero alpha cannot work; both were taken as the default (QA round 27).

@@ -25,6 +25,7 @@
 #include <array>
 #include <cassert>
 #include <cctype>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -46,9 +47,12 @@ CLI::Validator number_check(bool allow_zero)
 {
     return CLI::Validator(
         [allow_zero](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double v = std::strtod(text.c_str(), &end);
-            const bool ok = end != text.c_str() && *end == '\0' && std::isfinite(v) && (allow_zero ? v >= 0 : v > 0);
+            // Plain decimal numbers, as whole-number options take them: strtod also took " 5", "+5" and
+            // "0x10" (16) but not "5 " (QA round 34).
+            double v = 0.0;
+            const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+            const bool ok = error == std::errc() && end == text.data() + text.size() && std::isfinite(v) &&
+                            (allow_zero ? v >= 0 : v > 0);
             return ok ? std::string() : "'" + text + "' is not a number " + (allow_zero ? ">= 0" : "> 0");
         },
         allow_zero ? "NUMBER >= 0" : "NUMBER > 0");
