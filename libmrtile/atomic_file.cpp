@@ -226,7 +226,10 @@ AtomicFile::AtomicFile(const std::filesystem::path& path)
     if (!out_) {
         const int error = errno;
         forget_temporary(temp_);
-        throw IoError(path_.string() + ": cannot create file (" + std::strerror(error) + ")");
+        // Through a link, the file made is its target's: name that too (QA round 34: a dangling link's
+        // error named the link only, whose own directory exists).
+        const std::string through = target_ != path_ ? " in " + target_.parent_path().string() + ", where the link leads" : "";
+        throw IoError(path_.string() + ": cannot create file" + through + " (" + std::strerror(error) + ")");
     }
 }
 

@@ -156,6 +156,16 @@ TEST(AtomicFile, a_symbolic_link_is_written_through)
     EXPECT_THROW(write_file_atomically(dir / "loop_a.ply", "x"), IoError);
     EXPECT_TRUE(fs::is_symlink(dir / "loop_a.ply"));
     EXPECT_TRUE(fs::is_symlink(dir / "loop_b.ply"));
+    // A link into a directory that does not exist: the error names where the link leads, not only the
+    // link, whose own directory is there (QA round 34).
+    fs::create_symlink("nowhere/x.ply", dir / "nowhere.ply");
+    try {
+        write_file_atomically(dir / "nowhere.ply", "x");
+        ADD_FAILURE() << "written";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("nowhere.ply: cannot create file in " + (dir / "nowhere").string()), std::string::npos)
+            << e.what();
+    }
 }
 
 // A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
