@@ -144,6 +144,9 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     expect_error("mesh " + (dir / "garbage.mrt").string() + " -o " + (dir / "m.ply").string(), "garbage.mrt");
     EXPECT_FALSE(fs::exists(dir / "m.ply"));
 
+    // --max-points bounds what is read (a service's guard on untrusted files).
+    expect_error("build " + sphere_xyz(dir).string() + " -o " + model.string() + " --max-points 100", "more than max_points 100");
+
     // A collinear cloud builds (a valid one-leaf model) but cannot be meshed: the error names the model.
     std::string line;
     for (int i = 0; i < 50; ++i)

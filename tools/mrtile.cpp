@@ -157,6 +157,7 @@ struct BuildArgs
     std::string denoise = "auto";
     bool keep_duplicates = false;
     bool skip_missing_scans = false;
+    std::size_t max_points = 0;
     std::string viewpoint;
     std::string crs;
 
@@ -183,6 +184,10 @@ struct BuildArgs
         cmd->add_flag("--keep-duplicates", keep_duplicates, "do not merge points at exactly the same position");
         cmd->add_flag("--skip-missing-scans", skip_missing_scans,
                       "scan lists (.conf): read the scans that exist, leave out the missing ones");
+        cmd->add_option("--max-points", max_points,
+                        "refuse inputs that declare or hold more points than this, before reading them where a header "
+                        "says how many (a service's bound on untrusted files; default: none)")
+            ->check(integer_check(1, std::numeric_limits<std::uint32_t>::max()));
         cmd->add_option("--viewpoint", viewpoint,
                         "X,Y,Z where the scanner stood, for a single view (input coordinates): open surfaces face "
                         "it, and gap faces do not span space it saw through (default: from the file, as a PTX scan or an "
@@ -1413,6 +1418,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     const auto start = Clock::now();
     ReadOptions read;
     read.skip_missing_scans = args.skip_missing_scans;
+    read.max_points = args.max_points;
     if (args.skip_missing_scans)
         note_missing_scans(points);
     std::optional<Vec3> viewpoint; // checked before the (possibly long) read
