@@ -409,11 +409,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     };
     if (options.fill_holes)
         fill(FillMode::BeforeHandles);
-    // A single view (the cloud has a viewpoint: every point was seen from there) is a depth image: a
-    // disc with holes, or several, and no handles. A face that would add one joins two borders of
-    // what the scanner saw (its outline, the shadows behind objects) over space it did not see: a
-    // terrestrial scan got genus 2-4, bridging the shadows of boxes.
-    front.finish(!h.cloud.viewpoint);
+    front.finish();
     if (options.fill_holes) {
         fill(FillMode::Gaps);
         std::vector<DroppedIsland> removed; // the islands dropped

@@ -107,12 +107,11 @@ void Front::regrow(const std::vector<bool>& dropped)
     run();
 }
 
-//! Last: the front grows again from the filled gaps, and with `handles` takes the faces held back
-//! because they add a handle.
-void Front::finish(bool handles)
+//! Last: the faces held back because they add a handle.
+void Front::finish()
 {
     reset_pieces();
-    allow_handles_ = handles;
+    allow_handles_ = true;
     edges_.clear(); // cached candidates predate the new rule
     grow_whole_front();
 }

@@ -634,7 +634,7 @@ public:
           const std::vector<int>& orientation);
     void rescue(const std::vector<bool>& stranded);
     void regrow(const std::vector<bool>& dropped);
-    void finish(bool handles);
+    void finish();
     void run();
 
 private:
