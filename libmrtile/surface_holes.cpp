@@ -10,6 +10,7 @@
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cassert>
 #include <cmath>
@@ -762,9 +763,12 @@ struct SparseSide
 //    edge beside the ground of an airborne scan, whose few points in the sparse sectors have neighbours
 //    at the roof's spacing).
 // Its spacing is that of the sparser half's points over its 4 sectors' area. Not looked for (spacing
-// 0) when the sparser half's fullest sector holds `max_sector_points` or more.
+// 0) when the sparser half's fullest sector holds `max_sector_points` or more, or when `worth` (if
+// given) says no to that spacing: the nearest-neighbour medians cost 64 searches of every point
+// around, and asked of every hole of a uniform sample they made meshing a 230k-point chair 4x slower
+// (QA round 35).
 SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v,
-                       std::size_t max_sector_points)
+                       std::size_t max_sector_points, const std::function<bool(double)>& worth = {})
 {
     constexpr int kSectors = 8;
     constexpr int kSparseSectors = 4; // the sparser half
@@ -807,6 +811,13 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
     side.sector_points = counts[static_cast<std::size_t>(order[kSparseSectors - 1])];
     if (counts[static_cast<std::size_t>(order[1])] == 0 || side.sector_points >= max_sector_points)
         return side;
+    std::size_t sparse_count = 0;
+    for (int k = 0; k < kSparseSectors; ++k)
+        sparse_count += counts[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
+    const double sparse_area = kSparseSectors * pi * radius * radius; // a sector's area is the disc's
+    const double spacing = std::sqrt(sparse_area / static_cast<double>(std::max<std::size_t>(1, sparse_count)));
+    if (worth && !worth(spacing))
+        return side;
     // The median distance to the nearest other point of the annulus's points in the sparser or denser
     // half (every k-th of them, at most kMaxJudged). Neighbours within a hundredth of the radius count as
     // the same point: clumps of near-equal points (repeated frames) would make every distance 0.
@@ -835,11 +846,7 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
     const double sparse_nearest = median_nearest(true), dense_nearest = median_nearest(false);
     if (!(std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest))
         return side;
-    std::size_t sparse_points = 0;
-    for (int k = 0; k < kSparseSectors; ++k)
-        sparse_points += counts[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
-    const double sparse_area = kSparseSectors * pi * radius * radius; // a sector's area is the disc's
-    side.spacing = std::sqrt(sparse_area / static_cast<double>(std::max<std::size_t>(1, sparse_points)));
+    side.spacing = spacing;
     return side;
 }
 
@@ -872,15 +879,24 @@ bool covered_at_sparse_side(const Hierarchy& h, const std::vector<Vec3>& positio
         centre += (positions[t[0]] + positions[t[1]] + positions[t[2]]) * (a / 3.0);
         weight += a;
     }
-    if (!(weight > 0.0) || !(norm(normal) > 0.0) || !(perimeter > 0.0))
+    // A chance gap of the sparser side is at most about 2.3 of its spacings in radius: at steps up to
+    // 80:1 in density (9:1 in spacing) that is within kMaxRadiusSpacings of the tiles' spacing. Wider
+    // holes are not judged (the sector counts cost a search of every point within 4 radii).
+    constexpr double kMaxRadiusSpacings = 20.0;
+    const double radius = perimeter > 0.0 ? 2.0 * area / perimeter : 0.0;
+    if (!(weight > 0.0) || !(norm(normal) > 0.0) || !(radius > 0.0) || radius > kMaxRadiusSpacings * spacing)
         return false;
     normal = normalized(normal);
     const Vec3 u = perpendicular_axis(normal), v = cross(normal, u);
-    const SparseSide side = sparse_side(h, centre / weight, 2.0 * area / perimeter, u, v, std::numeric_limits<std::size_t>::max());
     // Covered: no spot of the patch is farther from the points than the radius of an empty disc that
     // holds min_missing_points at the sparser side's density (coverage_gap.h: emptier discs are chance).
-    const double reach = std::sqrt(CoverageOptions{}.min_missing_points / kPi) * side.spacing;
-    return side.spacing > spacing && points_cover_hole(h, positions, patch, reach);
+    // Asked first, with the sparser side's spacing well above the tiles' (the 2x step the medians then
+    // confirm is 1.7-2.4x there): both are cheap beside the medians.
+    const auto reach = [](double sparse_spacing) { return std::sqrt(CoverageOptions{}.min_missing_points / kPi) * sparse_spacing; };
+    const auto worth = [&](double sparse_spacing) {
+        return sparse_spacing > spacing && points_cover_hole(h, positions, patch, reach(sparse_spacing));
+    };
+    return sparse_side(h, centre / weight, radius, u, v, std::numeric_limits<std::size_t>::max(), worth).spacing > 0.0;
 }
 
 // Removes the candidates for which drop(triangle) holds, keeping the others' order. Judged in parallel
@@ -1122,7 +1138,16 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                     known = &it->second;
             const std::vector<Tri> patch = known ? known->patch : fill_triangulation(s, positions, loop, projection);
             if (cache && !known)
-                cache->by_loop[loop] = FillCache::Entry{std::move(around), patch};
+                known = &(cache->by_loop[loop] = FillCache::Entry{std::move(around), patch});
+            // The loop and its patch decide covered_at_sparse_side: asked once per patch, not once per pass.
+            const auto sparse_cover = [&](double area, double perimeter, double spacing) {
+                if (known && known->sparse_cover >= 0)
+                    return known->sparse_cover == 1;
+                const bool covered = covered_at_sparse_side(h, positions, patch, area, perimeter, spacing);
+                if (known)
+                    known->sparse_cover = covered ? 1 : 0;
+                return covered;
+            };
             // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
             // point spacing wide, and a hole much wider than that (mean width 2 area / perimeter) is a
             // hole in the sample itself (the bunny's base), which stays open.
@@ -1133,7 +1158,7 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             }
             if (!closing && options.max_gap_width > 0.0 && spacing > 0.0 &&
                 2.0 * area > options.max_gap_width * spacing * perimeter && !points_cover_hole(h, positions, patch, 1.5 * spacing) &&
-                !covered_at_sparse_side(h, positions, patch, area, perimeter, spacing))
+                !sparse_cover(area, perimeter, spacing))
                 continue;
             // Tiles built from a sample leave gaps as wide as the sample's spacing, so the test above
             // misses holes narrower than that but wider than the points' own spacing (a hole in a flat

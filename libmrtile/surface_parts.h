@@ -806,6 +806,7 @@ struct FillCache
     {
         std::vector<Tri> around; // the faces at each loop vertex in the surface's order, vertex by vertex
         std::vector<Tri> patch;
+        signed char sparse_cover = -1; // covered_at_sparse_side of the patch: -1 not asked yet, else 0 or 1
     };
     std::map<std::vector<std::uint32_t>, Entry> by_loop;
 };
