@@ -1338,11 +1338,18 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
     extended.records = keys;
     extended.record_count = 1;
     EXPECT_EQ(read_points(write_file(dir / "evlr_keys.las", extended.bytes())).crs, wkt);
-    // Declared records that are not there, or that start inside the points, are refused.
-    LasFile missing = extended;
-    missing.extended_count = 10;
-    const fs::path missing_path = write_file(dir / "evlr_missing.las", missing.bytes());
-    expect_error<IoError>([&] { read_points(missing_path); }, {missing_path.string(), "10 extended records"});
+    // Records cut short after the points leave the points whole: read, without the records (QA round
+    // 35); records said to start inside the points or past the file's end are refused.
+    std::string cut = extended.bytes();
+    cut.resize(cut.size() - 20);
+    const PointCloud without = read_points(write_file(dir / "evlr_cut.las", cut));
+    expect_points(without, kPoints);
+    EXPECT_EQ(without.crs, "EPSG:32633"); // the GeoTIFF keys before the points, the WKT record being cut
+    std::string beyond = extended.bytes();
+    const std::uint64_t far = 1u << 30;
+    std::memcpy(&beyond[235], &far, 8);
+    const fs::path beyond_path = write_file(dir / "evlr_beyond.las", beyond);
+    expect_error<IoError>([&] { read_points(beyond_path); }, {beyond_path.string(), "2 extended records at byte 1073741824"});
     std::string inside = extended.bytes();
     std::memset(&inside[235], 0, 8); // the records' start: byte 0
     const fs::path inside_path = write_file(dir / "evlr_inside.las", inside);
