@@ -117,6 +117,20 @@ extern "C" void remove_temporaries_and_die(int signal)
 
 // An empty path names no file: the temporary was made as ".tmp.<pid>" in the working directory and
 // the rename failed with ": cannot rename temporary file into place", naming nothing.
+// Whether `target` (links followed) exists and is no regular file or directory: a character device
+// such as /dev/null, a pipe or a socket, which an output is written into as it is. Renamed over, it
+// was replaced by a regular file: `--stats-json /dev/null` run as root turned the system's /dev/null
+// into a file. A block device (a disk) is refused. `name` is the path as given, for messages.
+bool special_target(const std::filesystem::path& target, const std::filesystem::path& name)
+{
+    struct stat st;
+    if (::stat(target.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode))
+        return false;
+    if (S_ISBLK(st.st_mode))
+        throw IoError(name.string() + ": is a block device (a disk); not writing to it");
+    return true;
+}
+
 const std::filesystem::path& named(const std::filesystem::path& path, const char* what)
 {
     if (path.empty())
@@ -172,6 +186,10 @@ void check_writable_file(const std::filesystem::path& path)
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw IoError(path.string() + ": is a directory");
+    // A device or a pipe is written as it is, not replaced (AtomicFile): opened now, a pipe's reader
+    // would see its end before the output. It is checked as the output is opened.
+    if (special_target(path, path))
+        return;
     AtomicFile probe(path); // removed again, uncommitted (it refuses a read-only target)
 }
 
@@ -215,6 +233,21 @@ void TemporaryDirectory::write(const std::function<void()>& write) const
 AtomicFile::AtomicFile(const std::filesystem::path& path)
     : path_(named(path, "file")), target_(follow_links(path)), temp_(temporary_name(target_))
 {
+    if (special_target(path_, path_)) {
+        // Written as it is (see special_target). A pipe no process reads would block the write
+        // forever: refused instead.
+        const int probe = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+        if (probe < 0) {
+            const int error = errno;
+            throw IoError(path_.string() + (error == ENXIO ? ": is a pipe that no process reads" : ": cannot open for writing (" + std::string(std::strerror(error)) + ")"));
+        }
+        ::close(probe);
+        direct_ = true;
+        out_.open(path_, std::ios::binary);
+        if (!out_)
+            throw IoError(path_.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+        return;
+    }
     // Renaming over a file needs only the directory's permission: a file made read-only (no write
     // bit for anyone, or none for this user) would be replaced all the same.
     struct stat existing;
@@ -235,6 +268,8 @@ AtomicFile::AtomicFile(const std::filesystem::path& path)
 
 AtomicFile::~AtomicFile()
 {
+    if (direct_)
+        return;
     if (!committed_) {
         out_.close();
         std::error_code ec;
@@ -255,6 +290,10 @@ void AtomicFile::commit()
     out_.close();
     if (!ok || out_.fail())
         throw IoError(path_.string() + ": write failed (disk full or not writable?)");
+    if (direct_) {
+        committed_ = true;
+        return;
+    }
     std::error_code ec;
     // A file replaced keeps its permissions (a private model stays private); a new one gets the
     // process's defaults, as the temporary file has them.

@@ -6,7 +6,9 @@
 //! a failed run leaves either the old file or nothing. A target that exists keeps its permissions, and
 //! a read-only one (no write bit, or none for this user) is refused, not replaced. A target that is a
 //! symbolic link is written through: the file it points to is replaced (created when the link dangles)
-//! and the link stays, as a user who links an output name to a file expects.
+//! and the link stays, as a user who links an output name to a file expects. A target that is a
+//! character device or a pipe (/dev/null, a process substitution) is written as it is: replacing it
+//! would turn /dev/null into a file; a block device is refused.
 
 #include <cstddef>
 #include <filesystem>
@@ -37,6 +39,7 @@ private:
     std::filesystem::path temp_;
     std::ofstream out_;
     bool committed_ = false;
+    bool direct_ = false; //!< a device or pipe, written as it is (no temporary, no rename)
 };
 
 //! Writes a whole buffer atomically.
