@@ -51,6 +51,8 @@ CLI::Validator number_check(bool allow_zero)
             // "0x10" (16) but not "5 " (QA round 34).
             double v = 0.0;
             const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+            if (error == std::errc::result_out_of_range && end == text.data() + text.size())
+                return "'" + text + "' is out of the range of numbers (about 1e-308 to 1e308)";
             const bool ok = error == std::errc() && end == text.data() + text.size() && std::isfinite(v) &&
                             (allow_zero ? v >= 0 : v > 0);
             return ok ? std::string() : "'" + text + "' is not a number " + (allow_zero ? ">= 0" : "> 0");
@@ -67,7 +69,9 @@ const CLI::Validator kNonNegativeList(
         std::stringstream items(text + ",");
         std::string item;
         while (std::getline(items, item, ',')) {
-            std::string copy = item;
+            // Blanks around an item are allowed, as in the --focus and --camera lists ("0.02, 0.01").
+            const std::size_t first = item.find_first_not_of(" \t"), last = item.find_last_not_of(" \t");
+            std::string copy = first == std::string::npos ? std::string() : item.substr(first, last - first + 1);
             if (std::string why = kNonNegative(copy); !why.empty())
                 return why;
         }
@@ -190,8 +194,8 @@ struct BuildArgs
             ->check(integer_check(1, std::numeric_limits<std::uint32_t>::max()));
         cmd->add_option("--viewpoint", viewpoint,
                         "X,Y,Z where the scanner stood, for a single view (input coordinates): open surfaces face "
-                        "it, and gap faces do not span space it saw through (default: from the file, as a PTX scan or an "
-                        "organized PCD tells it)")
+                        "it, and gap faces do not span space it saw through (default: from the file, as a PTX scan or a "
+                        "PCD's VIEWPOINT tells it)")
             ->check(kNonEmpty);
         cmd->add_option("--crs", crs,
                         "coordinate system of the input: EPSG:N, WKT, or a .prj/.wkt file holding WKT (default: "
