@@ -387,6 +387,9 @@ TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
         // Decimal commas between blanks (QA round 34: read as (0, 5, -1), ...), and commas with blanks
         // after them, which still separate.
         {"eu_blanks.xyz", "0,5 -1,25 2\n3 4,75 -5,5\n-0,125 0 8\n1 1 1\n"},
+        // ... after names between blanks, and with exponents (QA round 35: both split at the commas).
+        {"eu_named.xyz", "x y z\n0,5 -1,25 2\n3 4,75 -5,5\n-0,125 0 8\n1 1 1\n"},
+        {"eu_exponents.xyz", "5,0e-01 -1,25E0 2\n3 4,75e+0 -5,5\n-1,25e-1 0 8\n1 1 1\n"},
         {"spaced.csv", "0.5, -1.25, 2\n3, 4.75, -5.5\n-0.125, 0, 8\n1, 1, 1\n"},
         // ... after a point count line, or a comment: the first line with data decides (both were
         // read with commas separating: (0, 5, -1) and so on; found by fuzzing).
