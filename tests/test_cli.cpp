@@ -1000,7 +1000,8 @@ TEST(Cli, stored_levels_make_the_same_tileset)
     write_text(damaged, bytes);
     const Result damaged_info = mrtile("info --json " + damaged.string(), dir);
     ASSERT_EQ(damaged_info.code, 0) << damaged_info.err;
-    EXPECT_NE(damaged_info.err.find("the model is used without its stored levels"), std::string::npos) << damaged_info.err;
+    EXPECT_NE(damaged_info.err.find("damaged.mrt: its stored levels are damaged (stored level"), std::string::npos) << damaged_info.err;
+    EXPECT_EQ(damaged_info.err.find("not a valid"), std::string::npos) << damaged_info.err;
     const auto dj = nlohmann::json::parse(damaged_info.out);
     EXPECT_EQ(dj["stored_levels"].get<int>(), 0);
     EXPECT_NE(dj["stored_levels_damage"].get<std::string>().find("gap flag"), std::string::npos) << damaged_info.out;

@@ -1519,9 +1519,15 @@ Model load_model_or_without_levels(const fs::path& path, std::string* damage = n
     } catch (const IoError& levels) {
         Model model;
         model.hierarchy = load_model(path); // throws if the damage is not the levels' alone
-        std::fprintf(stderr, "note: %s; the model is used without its stored levels\n", levels.what());
+        // The loader's words are of a whole model ("not a valid .mrt model: stored level 0: ..."): name
+        // the levels' part only, since the model itself is used.
+        std::string cause = levels.what();
+        if (const std::size_t at = cause.find("stored level"); at != std::string::npos)
+            cause = cause.substr(at);
+        std::fprintf(stderr, "note: %s: its stored levels are damaged (%s); the model is used without them\n",
+                     path.string().c_str(), cause.c_str());
         if (damage)
-            *damage = levels.what();
+            *damage = cause;
         return model;
     }
 }
