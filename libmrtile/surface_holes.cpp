@@ -890,8 +890,8 @@ bool covered_at_sparse_side(const Hierarchy& h, const std::vector<Vec3>& positio
     const Vec3 u = perpendicular_axis(normal), v = cross(normal, u);
     // Covered: no spot of the patch is farther from the points than the radius of an empty disc that
     // holds min_missing_points at the sparser side's density (coverage_gap.h: emptier discs are chance).
-    // Asked first, with the sparser side's spacing well above the tiles' (the 2x step the medians then
-    // confirm is 1.7-2.4x there): both are cheap beside the medians.
+    // Asked first (the sparser side's spacing from the sector counts must exceed the tiles'), since
+    // both are cheap beside the medians.
     const auto reach = [](double sparse_spacing) { return std::sqrt(CoverageOptions{}.min_missing_points / kPi) * sparse_spacing; };
     const auto worth = [&](double sparse_spacing) {
         return sparse_spacing > spacing && points_cover_hole(h, positions, patch, reach(sparse_spacing));
