@@ -763,6 +763,12 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
                 layout.decimal_comma = true;
             }
             separators_known = tokens_seen > 1 || (tokens_seen == 1 && !parse_count(content.substr(content.find_first_not_of(" \t")), count));
+        } else if (!layout.decimal_comma && line.find(',') != std::string_view::npos &&
+                   blank_separated_decimal_commas(line.substr(0, line.find('#')))) {
+            // Decimal commas after a first data line without any ("0 0 1", then "0,5 -1,25 2"): read
+            // with commas separating, such a line gave (0, 5, -1) without a word (QA round 35).
+            fail_line(in, "numbers with decimal commas, but the first data line had none and set commas to separate "
+                          "columns; write that line with decimal commas too (\"0,0 0,0 1,0\")");
         }
         Fields tokens(line, *layout.delimiters);
         std::string_view token;

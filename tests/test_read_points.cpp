@@ -406,6 +406,10 @@ TEST(ReadColumns, named_columns_decimal_commas_and_byte_order_mark)
         {"bom.csv", "\xEF\xBB\xBF" "x,y,z\n0.5,-1.25,2\n3,4.75,-5.5\n-0.125,0,8\n1,1,1\n"},
     });
     const fs::path dir = test_dir();
+    // Decimal commas after a first data line without any: refused, naming the line (QA round 35: read
+    // as (0, 5, -1), ...).
+    const fs::path late = write_file(dir / "late_commas.xyz", "0 0 1\n0,5 -1,25 2\n3 4,75 -5,5\n");
+    expect_error<InvalidInput>([&] { read_points(late); }, {late.string(), "line 2", "decimal commas"});
     // A header naming columns the data lines do not have.
     const fs::path short_line = write_file(dir / "short.csv", "a,b,x,y,z\n1,2,3,4,5\n1,2,3,4\n");
     expect_error<InvalidInput>([&] { read_points(short_line); }, {short_line.string(), "line 3", "expected 5 columns"});
