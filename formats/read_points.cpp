@@ -1782,8 +1782,8 @@ PointCloud read_las(Input& in, const ReadOptions& options)
     if (evlr_count > 0) {
         if (evlr_start < needed)
             throw InvalidInput(in.name() + ": malformed LAS 1.4 header: its " + std::to_string(evlr_count) +
-                               " extended records start at byte " + std::to_string(evlr_start) +
-                               ", inside the point data (which ends at byte " + std::to_string(needed) + ")");
+                               " extended records start at byte " + std::to_string(evlr_start) + ", before the point data ends (at byte " +
+                               std::to_string(needed) + ")");
         // Past the end they start at: a header that does not describe the file. (Records cut short after
         // the points leave the points whole: they are read, without those records; QA round 35.)
         if (in.file_size() > 0 && evlr_start > in.file_size())

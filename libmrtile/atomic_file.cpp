@@ -186,10 +186,20 @@ void check_writable_file(const std::filesystem::path& path)
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw IoError(path.string() + ": is a directory");
-    // A device or a pipe is written as it is, not replaced (AtomicFile): opened now, a pipe's reader
-    // would see its end before the output. It is checked as the output is opened.
-    if (special_target(path, path))
+    // A device or a pipe is written as it is, not replaced (AtomicFile). A pipe must have a reader
+    // now, not only when the output is written after all the work (QA round 36); the end opened to
+    // ask stays open until the program ends, since closing it would end the reader's input before
+    // the output comes.
+    if (special_target(path, path)) {
+        struct stat st;
+        if (::stat(path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode)) {
+            const int held = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+            if (held < 0)
+                throw IoError(path.string() + (errno == ENXIO ? ": is a pipe that no process reads"
+                                                              : ": cannot open for writing (" + std::string(std::strerror(errno)) + ")"));
+        }
         return;
+    }
     AtomicFile probe(path); // removed again, uncommitted (it refuses a read-only target)
 }
 

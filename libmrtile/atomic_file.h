@@ -50,7 +50,9 @@ void ensure_directory(const std::filesystem::path& dir);
 
 //! \brief Checks before any work that `path` can be written as AtomicFile writes it (its temporary file
 //! is created and removed again) and is not a directory. A program that writes several outputs checks
-//! each first, so that one unwritable output does not leave the others written.
+//! each first, so that one unwritable output does not leave the others written. A pipe must have a
+//! reader; the end opened to ask stays open until the program ends (closed, it would end the reader's
+//! input before the output comes).
 //! \throw IoError naming `path` and the cause.
 void check_writable_file(const std::filesystem::path& path);
 

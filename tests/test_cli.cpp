@@ -199,6 +199,12 @@ TEST(Cli, outputs_are_checked_before_any_work)
     expect_code("build " + in + " -o " + mesh, 2, "ends in .mrt");
     expect_code("reconstruct " + in + " -o " + mesh + " --alpha 1e-9", 1, "no surface is left");
     expect_code("reconstruct " + in + " -o " + mesh + " --stats-json " + mesh, 2, "two outputs");
+    // The standard output, where the command says what it wrote (QA round 36: a PLY with "wrote ..."
+    // after it), when it is a file.
+    const Result to_stdout = mrtile("reconstruct " + in + " -o " + mesh + " --stats-json /proc/self/fd/1", dir);
+    EXPECT_EQ(to_stdout.code, 2) << to_stdout.err;
+    EXPECT_NE(to_stdout.err.find("is the standard output"), std::string::npos) << to_stdout.err;
+    EXPECT_FALSE(fs::exists(mesh));
     // The same file by two spellings, one relative (QA round 34: both were written, the mesh lost).
     const std::string relative = fs::relative(mesh).string();
     expect_code("reconstruct " + in + " -o " + relative + " --stats-json ./" + relative, 2, "two outputs");

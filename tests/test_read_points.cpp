@@ -1360,7 +1360,7 @@ TEST(ReadLas, coordinate_system_from_geotiff_keys_or_wkt)
     std::string inside = extended.bytes();
     std::memset(&inside[235], 0, 8); // the records' start: byte 0
     const fs::path inside_path = write_file(dir / "evlr_inside.las", inside);
-    expect_error<InvalidInput>([&] { read_points(inside_path); }, {inside_path.string(), "inside the point data"});
+    expect_error<InvalidInput>([&] { read_points(inside_path); }, {inside_path.string(), "before the point data ends"});
 
     // Files in two coordinate systems are not one cloud (QA round 29: merged, the CRS dropped, without a
     // word); the same code, or a file without one between, merge as before.

@@ -37,6 +37,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace {
@@ -1773,6 +1774,15 @@ void check_outputs(const std::vector<fs::path>& inputs, const std::vector<Output
         for (std::size_t j = 0; j < i; ++j)
             if (outputs[j].path == o.path || same_file(outputs[j].path, o.path))
                 throw UsageError(o.path.string() + ": named for two outputs");
+        // The standard output carries what the command says it wrote: an output there would be mixed
+        // with those lines (QA round 36: a PLY with "wrote ..." after it).
+        // (A character device is let be: a terminal shows both, and /dev/null, where scripts send the
+        // lines, may also take an output.)
+        struct stat out_stat, path_stat;
+        if (::fstat(STDOUT_FILENO, &out_stat) == 0 && !S_ISCHR(out_stat.st_mode) && ::stat(o.path.c_str(), &path_stat) == 0 &&
+            out_stat.st_dev == path_stat.st_dev && out_stat.st_ino == path_stat.st_ino)
+            throw UsageError(o.path.string() + ": is the standard output, where mrtile says what it wrote; name a file, "
+                                               "or another pipe (such as >(...))");
         switch (o.kind) {
         case Output::Kind::file:
         case Output::Kind::mesh:
@@ -2023,7 +2033,13 @@ int run(int argc, char** argv)
                         level_faces(stored.levels), seconds_since(start));
         }
         save_model(h, build_out, s);
-        std::printf("wrote %s (%ju bytes)\n", build_out.string().c_str(), static_cast<std::uintmax_t>(fs::file_size(build_out)));
+        // A device or a pipe has no size (QA round 36: "filesystem error: cannot get file size").
+        std::error_code size_error;
+        const std::uintmax_t bytes = fs::file_size(build_out, size_error);
+        if (size_error)
+            std::printf("wrote %s\n", build_out.string().c_str());
+        else
+            std::printf("wrote %s (%ju bytes)\n", build_out.string().c_str(), bytes);
         return 0;
     }
     if (*info)
