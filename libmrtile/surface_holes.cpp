@@ -10,11 +10,11 @@
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
-#include <functional>
 #include <array>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -742,14 +742,7 @@ bool hole_among(const Hierarchy& h, const Layout& layout, const std::int32_t* ti
     return false;
 }
 
-// The sparser side of a density step around a disc (see sparse_side).
-struct SparseSide
-{
-    std::size_t sector_points = 0; //!< points of the sparser half's fullest sector (the 4th emptiest)
-    double spacing = 0.0;          //!< the sparser half's point spacing; 0: no density step found
-};
-
-// The sparser side of a density step around the disc at `centre` of `radius` (in the plane of the unit
+// The point spacing of the sparser side of a density step around the disc at `centre` of `radius` (in the plane of the unit
 // vectors u and v): where two samples of different density meet (a dense scan of half a surface merged
 // with a sparse scan of all of it), the tiles and the points around a gap take the dense one's spacing,
 // and the sparse sample's own gaps beside the dense part look like holes. Judged on the points from
@@ -762,13 +755,13 @@ struct SparseSide
 //    (medians) than the denser half's: a sparse sample, not the frayed edge of a dense one (a roof's
 //    edge beside the ground of an airborne scan, whose few points in the sparse sectors have neighbours
 //    at the roof's spacing).
-// Its spacing is that of the sparser half's points over its 4 sectors' area. Not looked for (spacing
-// 0) when the sparser half's fullest sector holds `max_sector_points` or more, or when `worth` (if
-// given) says no to that spacing: the nearest-neighbour medians cost 64 searches of every point
-// around, and asked of every hole of a uniform sample they made meshing a 230k-point chair 4x slower
-// (QA round 35).
-SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v,
-                       std::size_t max_sector_points, const std::function<bool(double)>& worth = {})
+// The spacing is that of the sparser half's points over its 4 sectors' area; 0 when no step is found,
+// and when it is not looked for: the sparser half's fullest sector holds `max_sector_points` or more,
+// or `worth` (if given) says no to that spacing (the nearest-neighbour medians cost 64 searches of every
+// point around, and asked of every hole of a uniform sample they made meshing a 230k-point chair 4x
+// slower, QA round 35).
+double sparse_side_spacing(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v,
+                           std::size_t max_sector_points, const std::function<bool(double)>& worth = {})
 {
     constexpr int kSectors = 8;
     constexpr int kSparseSectors = 4; // the sparser half
@@ -778,9 +771,8 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
     // would have filled.
     constexpr double kMinStep = 2.0;
     constexpr std::size_t kMaxJudged = 64; // points per half whose neighbours are looked for (a median)
-    SparseSide side;
     if (!(radius > 0.0))
-        return side;
+        return 0.0;
     const double outer = kOuter * radius;
     // Out to a radius beyond the annulus, so that the annulus's points have their neighbours.
     const double reach = outer + radius;
@@ -788,7 +780,6 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
     std::vector<Vec3> near;
     std::vector<int> sector_of; // per point near: its sector of the annulus, -1 outside it
     std::array<std::size_t, kSectors> counts{};
-    const double pi = std::acos(-1.0);
     for (const std::uint32_t i : points_in_box(h, box)) {
         const Vec3 d = h.cloud.positions[i] - centre;
         const double r2 = dot(d, d);
@@ -796,7 +787,7 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
             continue;
         int sector = -1;
         if (r2 > radius * radius && r2 <= outer * outer) {
-            sector = std::clamp(static_cast<int>(std::floor((std::atan2(dot(d, v), dot(d, u)) + pi) / (2.0 * pi) * kSectors)), 0,
+            sector = std::clamp(static_cast<int>(std::floor((std::atan2(dot(d, v), dot(d, u)) + kPi) / (2.0 * kPi) * kSectors)), 0,
                                 kSectors - 1);
             ++counts[static_cast<std::size_t>(sector)];
         }
@@ -808,16 +799,15 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
         order[static_cast<std::size_t>(k)] = k;
     std::stable_sort(order.begin(), order.end(),
                      [&](int a, int b) { return counts[static_cast<std::size_t>(a)] < counts[static_cast<std::size_t>(b)]; });
-    side.sector_points = counts[static_cast<std::size_t>(order[kSparseSectors - 1])];
-    if (counts[static_cast<std::size_t>(order[1])] == 0 || side.sector_points >= max_sector_points)
-        return side;
+    if (counts[static_cast<std::size_t>(order[1])] == 0 || counts[static_cast<std::size_t>(order[kSparseSectors - 1])] >= max_sector_points)
+        return 0.0;
     std::size_t sparse_count = 0;
     for (int k = 0; k < kSparseSectors; ++k)
         sparse_count += counts[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
-    const double sparse_area = kSparseSectors * pi * radius * radius; // a sector's area is the disc's
+    const double sparse_area = kSparseSectors * kPi * radius * radius; // a sector's area is the disc's
     const double spacing = std::sqrt(sparse_area / static_cast<double>(std::max<std::size_t>(1, sparse_count)));
     if (worth && !worth(spacing))
-        return side;
+        return 0.0;
     // The median distance to the nearest other point of the annulus's points in the sparser or denser
     // half (every k-th of them, at most kMaxJudged). Neighbours within a hundredth of the radius count as
     // the same point: clumps of near-equal points (repeated frames) would make every distance 0.
@@ -844,24 +834,22 @@ SparseSide sparse_side(const Hierarchy& h, const Vec3& centre, double radius, co
         return std::sqrt(*middle);
     };
     const double sparse_nearest = median_nearest(true), dense_nearest = median_nearest(false);
-    if (!(std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest))
-        return side;
-    side.spacing = spacing;
-    return side;
+    const bool step = std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest;
+    return step ? spacing : 0.0;
 }
 
 // Whether the empty disc at `centre` of `radius` is a chance gap of the sparser side of a density step
-// (sparse_side), not a hole of the sample: at that side's density (its 4th-emptiest sector) the disc
+// (sparse_side_spacing), not a hole of the sample: at that side's density (its 4th-emptiest sector) the disc
 // would hold fewer points than an empty region must miss to count as a hole
 // (CoverageOptions::min_missing_points).
 bool explained_by_sparse_side(const Hierarchy& h, const Vec3& centre, double radius, const Vec3& u, const Vec3& v)
 {
     const auto min_missing = static_cast<std::size_t>(std::ceil(CoverageOptions{}.min_missing_points));
-    return sparse_side(h, centre, radius, u, v, min_missing).spacing > 0.0;
+    return sparse_side_spacing(h, centre, radius, u, v, min_missing) > 0.0;
 }
 
 // Whether the points cover a hole too wide for the mean-width test (fill_holes) at the spacing of the
-// sparser side of a density step around it (sparse_side; the disc about the fill patch's centre, in its
+// sparser side of a density step around it (sparse_side_spacing; the disc about the fill patch's centre, in its
 // plane, of radius its mean width, 2 area / perimeter: a disc's radius). The test's spacing is the
 // largest of the tiles around the hole, which at a density step are the dense side's or mixed: a 1:6
 // step (half a torus scanned densely, all of it sparsely, with noise) kept 3 holes of 15-23 edges open
@@ -896,7 +884,7 @@ bool covered_at_sparse_side(const Hierarchy& h, const std::vector<Vec3>& positio
     const auto worth = [&](double sparse_spacing) {
         return sparse_spacing > spacing && points_cover_hole(h, positions, patch, reach(sparse_spacing));
     };
-    return sparse_side(h, centre / weight, radius, u, v, std::numeric_limits<std::size_t>::max(), worth).spacing > 0.0;
+    return sparse_side_spacing(h, centre / weight, radius, u, v, std::numeric_limits<std::size_t>::max(), worth) > 0.0;
 }
 
 // Removes the candidates for which drop(triangle) holds, keeping the others' order. Judged in parallel
