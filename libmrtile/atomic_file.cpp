@@ -115,22 +115,35 @@ extern "C" void remove_temporaries_and_die(int signal)
     ::raise(signal);
 }
 
-// An empty path names no file: the temporary was made as ".tmp.<pid>" in the working directory and
-// the rename failed with ": cannot rename temporary file into place", naming nothing.
-// Whether `target` (links followed) exists and is no regular file or directory: a character device
-// such as /dev/null, a pipe or a socket, which an output is written into as it is. Renamed over, it
-// was replaced by a regular file: `--stats-json /dev/null` run as root turned the system's /dev/null
-// into a file. A block device (a disk) is refused. `name` is the path as given, for messages.
-bool special_target(const std::filesystem::path& target, const std::filesystem::path& name)
+// What `path` (links followed) is when it exists and is no regular file or directory: a character
+// device such as /dev/null, a pipe or a socket, which an output is written into as it is (its st_mode);
+// 0 otherwise. Renamed over, it was replaced by a regular file: `--stats-json /dev/null` run as root
+// turned the system's /dev/null into a file. A block device (a disk) is refused.
+mode_t special_target(const std::filesystem::path& path)
 {
     struct stat st;
-    if (::stat(target.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode))
-        return false;
+    if (::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode))
+        return 0;
     if (S_ISBLK(st.st_mode))
-        throw IoError(name.string() + ": is a block device (a disk); not writing to it");
-    return true;
+        throw IoError(path.string() + ": is a block device (a disk); not writing to it");
+    return st.st_mode;
 }
 
+// Opens the writing end of a special target without blocking: a pipe that no process reads would
+// block the write forever, and is refused instead. Returns the descriptor.
+int open_without_blocking(const std::filesystem::path& path)
+{
+    const int fd = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        const int error = errno;
+        throw IoError(path.string() + (error == ENXIO ? ": is a pipe that no process reads"
+                                                      : ": cannot open for writing (" + std::string(std::strerror(error)) + ")"));
+    }
+    return fd;
+}
+
+// An empty path names no file: the temporary was made as ".tmp.<pid>" in the working directory and
+// the rename failed with ": cannot rename temporary file into place", naming nothing.
 const std::filesystem::path& named(const std::filesystem::path& path, const char* what)
 {
     if (path.empty())
@@ -190,14 +203,9 @@ void check_writable_file(const std::filesystem::path& path)
     // now, not only when the output is written after all the work (QA round 36); the end opened to
     // ask stays open until the program ends, since closing it would end the reader's input before
     // the output comes.
-    if (special_target(path, path)) {
-        struct stat st;
-        if (::stat(path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode)) {
-            const int held = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
-            if (held < 0)
-                throw IoError(path.string() + (errno == ENXIO ? ": is a pipe that no process reads"
-                                                              : ": cannot open for writing (" + std::string(std::strerror(errno)) + ")"));
-        }
+    if (const mode_t mode = special_target(path)) {
+        if (S_ISFIFO(mode))
+            (void)open_without_blocking(path); // held open (see above)
         return;
     }
     AtomicFile probe(path); // removed again, uncommitted (it refuses a read-only target)
@@ -243,15 +251,9 @@ void TemporaryDirectory::write(const std::function<void()>& write) const
 AtomicFile::AtomicFile(const std::filesystem::path& path)
     : path_(named(path, "file")), target_(follow_links(path)), temp_(temporary_name(target_))
 {
-    if (special_target(path_, path_)) {
-        // Written as it is (see special_target). A pipe no process reads would block the write
-        // forever: refused instead.
-        const int probe = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
-        if (probe < 0) {
-            const int error = errno;
-            throw IoError(path_.string() + (error == ENXIO ? ": is a pipe that no process reads" : ": cannot open for writing (" + std::string(std::strerror(error)) + ")"));
-        }
-        ::close(probe);
+    if (special_target(path_) != 0) {
+        // Written as it is (see special_target), once it is known not to block.
+        ::close(open_without_blocking(path_));
         direct_ = true;
         out_.open(path_, std::ios::binary);
         if (!out_)
