@@ -497,26 +497,28 @@ CoverageMap::CoverageMap(const std::vector<Vec3>& points, const Vec3& axis_u, co
     centre_ = std::move(grid.centre);
 }
 
-bool CoverageMap::in_gap(const Vec3& p, double min_radius) const
+std::size_t CoverageMap::gap_cell(const Vec3& p, double min_radius) const
 {
     if (counted_.empty())
-        return false;
+        return kNoCell;
     const P2 q = project(p, origin_, u_, v_);
     const double fi = (q.x - x0_) / g_, fj = (q.y - y0_) / g_;
     if (!(fi >= 0 && fj >= 0 && fi < nx_ && fj < ny_))
-        return false;
-    const float radius = counted_[static_cast<std::size_t>(static_cast<int>(fj)) * static_cast<std::size_t>(nx_) +
-                                  static_cast<std::size_t>(static_cast<int>(fi))];
-    return radius > 0.0f && radius >= min_radius;
+        return kNoCell;
+    const std::size_t c = static_cast<std::size_t>(static_cast<int>(fj)) * static_cast<std::size_t>(nx_) +
+                          static_cast<std::size_t>(static_cast<int>(fi));
+    const float radius = counted_[c];
+    return radius > 0.0f && radius >= min_radius ? c : kNoCell;
 }
+
+bool CoverageMap::in_gap(const Vec3& p, double min_radius) const { return gap_cell(p, min_radius) != kNoCell; }
 
 bool CoverageMap::gap_disc(const Vec3& p, double min_radius, Vec3& centre, double& radius) const
 {
-    if (!in_gap(p, min_radius))
+    const std::size_t c = gap_cell(p, min_radius);
+    if (c == kNoCell)
         return false;
     const P2 q = project(p, origin_, u_, v_);
-    const std::size_t c = static_cast<std::size_t>(static_cast<int>((q.y - y0_) / g_)) * static_cast<std::size_t>(nx_) +
-                          static_cast<std::size_t>(static_cast<int>((q.x - x0_) / g_));
     const std::size_t far = centre_[c];
     const double x = x0_ + (static_cast<double>(far % static_cast<std::size_t>(nx_)) + 0.5) * g_;
     const double y = y0_ + (static_cast<double>(far / static_cast<std::size_t>(nx_)) + 0.5) * g_;

@@ -107,6 +107,11 @@ public:
     bool gap_disc(const Vec3& p, double min_radius, Vec3& centre, double& radius) const;
 
 private:
+    static constexpr std::size_t kNoCell = static_cast<std::size_t>(-1);
+    //! The grid cell of p, projected into the plane, when it lies in a counted empty region of radius
+    //! at least min_radius; kNoCell otherwise.
+    std::size_t gap_cell(const Vec3& p, double min_radius) const;
+
     Vec3 origin_{0, 0, 0}, u_, v_;
     double x0_ = 0, y0_ = 0, g_ = 1, gap_ = 0;
     int nx_ = 0, ny_ = 0;
