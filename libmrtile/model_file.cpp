@@ -551,7 +551,8 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
                                "one per point (" + std::to_string(n) + ", got " + std::to_string(h.denoise_moves.size()) +
                                "), each finite, >= 0 and within the cloud's diagonal");
     }
-    if (const std::string bad = bad_build_info(h.info, options.record_build_time && std::isfinite(h.info.build_seconds)); !bad.empty())
+    const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
+    if (const std::string bad = bad_build_info(h.info, record_time); !bad.empty())
         throw InvalidInput("save_model: the hierarchy's build info has " + bad);
     if (h.cloud.viewpoint && !plausible_viewpoint(*h.cloud.viewpoint))
         throw InvalidInput("save_model: the cloud's viewpoint is not finite or too far out to measure from");
@@ -562,7 +563,6 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     w.u32(kModelFormatVersion);
     w.u32(kEndianMarker);
     w.u32(static_cast<std::uint32_t>(kHeaderSize));
-    const bool record_time = options.record_build_time && std::isfinite(h.info.build_seconds);
     const bool levels = options.levels != nullptr && !options.levels->levels.empty();
     const bool denoise_move = !h.denoise_moves.empty();
     w.u32((h.cloud.has_colors() ? kFlagColors : 0u) | (record_time ? kFlagBuildTime : 0u) |
@@ -744,8 +744,7 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
         v.x = r.f64();
         v.y = r.f64();
         v.z = r.f64();
-        if (!plausible_viewpoint(v))
-        {
+        if (!plausible_viewpoint(v)) {
             char text[96];
             std::snprintf(text, sizeof text, "viewpoint not finite or too far out (%.6g, %.6g, %.6g)", v.x, v.y, v.z);
             r.fail(text);
