@@ -55,12 +55,12 @@ std::string quote_token(std::string_view token)
     return s + "'";
 }
 
-// Whether a file's name ends in .gz (any case).
-bool is_gz_name(const fs::path& path)
+// A path's extension in lower case (".PLY" -> ".ply").
+std::string lower_extension(const fs::path& path)
 {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext == ".gz";
+    return ext;
 }
 
 // Buffered input with transparent gzip decompression, line splitting and byte access.
@@ -89,7 +89,7 @@ public:
             if (inflateInit2(&stream_->z, 16 + MAX_WBITS) != Z_OK)
                 throw IoError(name_ + ": cannot start decompressing (out of memory)");
             stream_->ready = true;
-        } else if (is_gz_name(path)) {
+        } else if (lower_extension(path) == ".gz") {
             // A zlib stream or a plain file under a .gz name was read as text, and its first bytes were
             // quoted as a number (QA round 34).
             throw IoError(name_ + ": named .gz but not gzip-compressed (no gzip header)");
@@ -1778,7 +1778,7 @@ PointCloud read_las(Input& in, const ReadOptions& options)
         throw IoError(in.name() + ": truncated: the header declares " + std::to_string(count) + " points (" +
                       std::to_string(needed) + " bytes) but the file has " + std::to_string(in.file_size()) + " bytes");
     // LAS 1.4's extended records follow the points (QA round 34: records said to start inside the
-    // points, or more of them than the file holds, were accepted).
+    // points were accepted).
     if (evlr_count > 0) {
         if (evlr_start < needed)
             throw InvalidInput(in.name() + ": malformed LAS 1.4 header: its " + std::to_string(evlr_count) +
@@ -2320,13 +2320,9 @@ enum class Format { ply, columns, pts, ptx, obj, off, las, pcd, conf };
 
 Format format_of(const fs::path& path, const std::string& name)
 {
-    const auto lower = [](std::string s) {
-        std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-        return s;
-    };
-    std::string ext = lower(path.extension().string());
+    std::string ext = lower_extension(path);
     if (ext == ".gz")
-        ext = lower(path.stem().extension().string());
+        ext = lower_extension(path.stem());
     if (ext == ".ply")
         return Format::ply;
     if (ext == ".pts")
