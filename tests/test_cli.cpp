@@ -19,6 +19,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <gnu/libc-version.h>
 
@@ -707,6 +708,18 @@ TEST(Cli, build_info_mesh_and_determinism)
     ASSERT_EQ(r.code, 0) << r.err;
     ASSERT_EQ(mrtile("build " + xyz.string() + " -o " + (dir / "b.mrt").string(), dir).code, 0);
     EXPECT_EQ(slurp(dir / "a.mrt"), slurp(dir / "b.mrt"));
+    // Into a pipe that a process reads: the same model comes out, the pipe stays a pipe, and the
+    // line saying what was written has no size (QA round 36: asking a pipe's size failed, exit 1).
+    const fs::path pipe = dir / "pipe.mrt";
+    ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+    const std::string piped = "cat " + pipe.string() + " > " + (dir / "piped.mrt").string() + " & " + std::string(MRTILE_CLI) +
+                              " build " + xyz.string() + " -o " + pipe.string() + " > " + (dir / "piped.txt").string() + "; code=$?; wait; exit $code";
+    const int status = std::system(piped.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0);
+    EXPECT_EQ(slurp(dir / "piped.mrt"), slurp(dir / "a.mrt"));
+    EXPECT_NE(slurp(dir / "piped.txt").find("wrote " + pipe.string() + "\n"), std::string::npos) << slurp(dir / "piped.txt");
+    EXPECT_TRUE(fs::is_fifo(pipe));
 
     r = mrtile("info --json " + (dir / "a.mrt").string(), dir);
     ASSERT_EQ(r.code, 0) << r.err;
