@@ -5,6 +5,7 @@
 // boundary loops.
 #include "libmrtile/surface_parts.h"
 
+#include "libmrtile/box_grid.h"
 #include "libmrtile/coverage_gap.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/parallel.h"
@@ -18,7 +19,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -153,15 +153,8 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const
 class FaceGrid
 {
 public:
-    FaceGrid(const Surface& s, const std::vector<Vec3>& positions) : s_(s), positions_(positions)
+    FaceGrid(const Surface& s, const std::vector<Vec3>& positions) : s_(s), positions_(positions), grid_(mean_edge_cell(s, positions))
     {
-        double length = 0.0;
-        std::size_t edges = 0;
-        for (std::uint32_t f = 0; f < s.faces().size(); ++f)
-            if (s.alive(f))
-                for (int k = 0; k < 3; ++k, ++edges)
-                    length += distance(positions[s.faces()[f][k]], positions[s.faces()[f][(k + 1) % 3]]);
-        cell_ = edges > 0 && length > 0.0 ? 2.0 * length / static_cast<double>(edges) : 1.0;
         for (std::uint32_t f = 0; f < s.faces().size(); ++f)
             if (s.alive(f))
                 insert(f);
@@ -171,12 +164,7 @@ public:
     void insert(std::uint32_t f)
     {
         ++alive_;
-        const BoundingBox box = box_of(s_.faces()[f]);
-        if (cell_count(box) > kMaxCellsPerFace) {
-            oversized_.push_back(f);
-            return;
-        }
-        for_each_cell(box, [&](std::uint64_t k) { cells_[k].push_back(f); });
+        grid_.insert(f, box_of(s_.faces()[f]));
     }
 
     //! Whether a live face of the surface comes within r of c.
@@ -188,24 +176,13 @@ public:
         };
         const Vec3 reach{r, r, r};
         const BoundingBox box{c - reach, c + reach};
-        if (cell_count(box) > static_cast<double>(alive_)) { // a reach as large as the surface: ask every face
+        if (grid_.cell_count(box) > static_cast<double>(alive_)) { // a reach as large as the surface: ask every face
             for (std::uint32_t f = 0; f < s_.faces().size(); ++f)
                 if (near(f))
                     return true;
             return false;
         }
-        bool found = std::any_of(oversized_.begin(), oversized_.end(), near);
-        for_each_cell(box, [&](std::uint64_t k) {
-            if (found)
-                return;
-            if (const auto it = cells_.find(k); it != cells_.end())
-                for (const std::uint32_t f : it->second)
-                    if (near(f)) {
-                        found = true;
-                        return;
-                    }
-        });
-        return found;
+        return grid_.any_candidate(box, near);
     }
 
     // Whether a face of `patch` meets a face of the surface with which it shares no corner.
@@ -219,16 +196,12 @@ public:
             box = {min(box.min, bt.min), max(box.max, bt.max)};
         }
         std::vector<std::uint32_t> near;
-        if (cell_count(box) > static_cast<double>(alive_)) { // a cap as large as the surface: every face is near
+        if (grid_.cell_count(box) > static_cast<double>(alive_)) { // a cap as large as the surface: every face is near
             for (std::uint32_t f = 0; f < s_.faces().size(); ++f)
                 if (s_.alive(f))
                     near.push_back(f);
         } else {
-            near = oversized_;
-            for_each_cell(box, [&](std::uint64_t k) {
-                if (const auto it = cells_.find(k); it != cells_.end())
-                    near.insert(near.end(), it->second.begin(), it->second.end());
-            });
+            grid_.for_each_candidate(box, [&](std::uint32_t f) { near.push_back(f); });
             std::sort(near.begin(), near.end());
             near.erase(std::unique(near.begin(), near.end()), near.end());
         }
@@ -250,45 +223,27 @@ public:
     }
 
 private:
+    // Cells twice the surface's mean edge: a face overlaps a few, and a query near a face a few more.
+    static double mean_edge_cell(const Surface& s, const std::vector<Vec3>& positions)
+    {
+        double length = 0.0;
+        std::size_t edges = 0;
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+            if (s.alive(f))
+                for (int k = 0; k < 3; ++k, ++edges)
+                    length += distance(positions[s.faces()[f][k]], positions[s.faces()[f][(k + 1) % 3]]);
+        return edges > 0 && length > 0.0 ? 2.0 * length / static_cast<double>(edges) : 1.0;
+    }
     BoundingBox box_of(const Tri& t) const
     {
         const Vec3 &a = positions_[t[0]], &b = positions_[t[1]], &c = positions_[t[2]];
         return {min(min(a, b), c), max(max(a, b), c)};
     }
-    std::pair<std::array<std::int64_t, 3>, std::array<std::int64_t, 3>> cells(const BoundingBox& b) const
-    {
-        const auto c = [&](double x) { return static_cast<std::int64_t>(std::floor(x / cell_)); };
-        return {{c(b.min.x), c(b.min.y), c(b.min.z)}, {c(b.max.x), c(b.max.y), c(b.max.z)}};
-    }
-    double cell_count(const BoundingBox& b) const
-    {
-        const auto [lo, hi] = cells(b);
-        return static_cast<double>(hi[0] - lo[0] + 1) * static_cast<double>(hi[1] - lo[1] + 1) * static_cast<double>(hi[2] - lo[2] + 1);
-    }
-    // Calls visit(key) for every cell the box overlaps (keys of far cells may coincide: more candidates,
-    // never fewer, since every pair is tested exactly).
-    template <typename Visit>
-    void for_each_cell(const BoundingBox& b, Visit visit) const
-    {
-        const auto [lo, hi] = cells(b);
-        const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffu; };
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                    visit(u(x) << 42 | u(y) << 21 | u(z));
-    }
-
-    // A face over this many cells is kept apart and tested by every query: a face reaching a stray
-    // point 10^6 cell sizes away would overlap 10^18 cells (QA round 34: a 300-point sphere with 28
-    // such strays filled 24 GB).
-    static constexpr double kMaxCellsPerFace = 4096.0;
 
     const Surface& s_;
     const std::vector<Vec3>& positions_;
-    double cell_ = 1.0;
     std::size_t alive_ = 0;
-    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
-    std::vector<std::uint32_t> oversized_; // faces over kMaxCellsPerFace cells
+    BoxGrid grid_;
 };
 
 // An island is dropped on the grounds that it broke off a larger surface which, once the island is gone,

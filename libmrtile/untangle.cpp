@@ -7,6 +7,7 @@
 // round only the faces an edit changed are tested again: every other pair is as it was.
 #include "libmrtile/untangle.h"
 
+#include "libmrtile/box_grid.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 
@@ -15,7 +16,6 @@
 #include <cmath>
 #include <limits>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace mrt {
@@ -59,29 +59,13 @@ Box face_box(const Mesh& mesh, Mesh::FaceHandle f) { return corners_box(mesh, fa
 class FaceGrid
 {
 public:
-    FaceGrid(const Mesh& mesh, double cell)
-        : mesh_(mesh), cell_(cell), stamp_(mesh.n_faces(), 0), oversized_(mesh.n_faces(), 0)
+    FaceGrid(const Mesh& mesh, double cell) : mesh_(mesh), grid_(cell), stamp_(mesh.n_faces(), 0)
     {
         for (const auto f : mesh.faces())
             insert(f);
     }
 
-    void insert(Mesh::FaceHandle f)
-    {
-        const Box b = face_box(mesh_, f);
-        if (cell_count(b) > kMaxCells) {
-            if (!oversized_[static_cast<std::size_t>(f.idx())]) {
-                oversized_[static_cast<std::size_t>(f.idx())] = 1;
-                oversized_faces_.push_back(f.idx());
-            }
-            return;
-        }
-        for_cells(b, [&](std::int64_t key) {
-            auto& list = cells_[key];
-            if (list.empty() || list.back() != f.idx())
-                list.push_back(f.idx());
-        });
-    }
+    void insert(Mesh::FaceHandle f) { grid_.insert(static_cast<std::uint32_t>(f.idx()), bounding(face_box(mesh_, f))); }
 
     // Faces whose current box overlaps `b`, each once, in increasing index order.
     std::vector<int> near(const Box& b)
@@ -95,59 +79,28 @@ public:
                     out.push_back(f);
             }
         };
-        if (cell_count(b) > std::max(kMaxCells, static_cast<double>(mesh_.n_faces()))) {
+        const BoundingBox box = bounding(b);
+        if (grid_.cell_count(box) > std::max(BoxGrid::kMaxCellsPerItem, static_cast<double>(mesh_.n_faces()))) {
             // A box over more cells than there are faces: every face is a candidate.
             for (const auto f : mesh_.faces())
                 consider(f.idx());
         } else {
-            for (const int f : oversized_faces_)
-                consider(f);
-            for_cells(b, [&](std::int64_t key) {
-                const auto it = cells_.find(key);
-                if (it == cells_.end())
-                    return;
-                for (const int f : it->second)
-                    consider(f);
-            });
+            grid_.for_each_candidate(box, [&](std::uint32_t f) { consider(static_cast<int>(f)); });
         }
         std::sort(out.begin(), out.end());
         return out;
     }
 
 private:
-    // A face over this many cells is kept apart and is a candidate of every query: a face reaching a
-    // stray point 10^6 cell sizes away would overlap 10^18 cells (QA round 34: 24 GB on 300 points).
-    static constexpr double kMaxCells = 4096.0;
-
-    double cell_count(const Box& b) const
+    static BoundingBox bounding(const Box& b)
     {
-        double count = 1.0;
-        for (int k = 0; k < 3; ++k)
-            count *= std::floor(b.max[k] / cell_) - std::floor(b.min[k] / cell_) + 1.0;
-        return count;
-    }
-
-    template <typename Visit>
-    void for_cells(const Box& b, Visit visit) const
-    {
-        std::array<std::int64_t, 3> lo{}, hi{};
-        for (int k = 0; k < 3; ++k) {
-            lo[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(std::floor(b.min[k] / cell_));
-            hi[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(std::floor(b.max[k] / cell_));
-        }
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                    visit(((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff));
+        return {{b.min[0], b.min[1], b.min[2]}, {b.max[0], b.max[1], b.max[2]}};
     }
 
     const Mesh& mesh_;
-    double cell_;
-    std::unordered_map<std::int64_t, std::vector<int>> cells_;
+    BoxGrid grid_;
     std::vector<unsigned> stamp_;
     unsigned round_ = 0;
-    std::vector<char> oversized_;   // per face: in oversized_faces_
-    std::vector<int> oversized_faces_;
 };
 
 class Untangler
