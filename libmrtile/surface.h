@@ -16,9 +16,11 @@
 
 #include "libmrtile/hierarchy.h"
 #include "libmrtile/mesh.h"
+#include "libmrtile/single_view.h"
 #include "libmrtile/tiles.h"
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 namespace mrt {
@@ -136,6 +138,9 @@ struct SurfaceStats
     //! airborne scan's (ground and roofs facing up z, walls left out): HeightField::On may fit better.
     bool looks_airborne = false;
     double alpha = 0.0;              //!< global alpha used (model units)
+    //! With a viewpoint: how many points hide behind others from it (single_view.h); where none to
+    //! speak of, the cloud is one view (view->single_view) and no face added a handle.
+    std::optional<SingleViewStats> view;
     double seconds = 0.0;
 };
 

@@ -107,11 +107,18 @@ void Front::regrow(const std::vector<bool>& dropped)
     run();
 }
 
-//! Last: the faces held back because they add a handle.
-void Front::finish()
+//! Last: the faces held back because they add a handle, or for a single view (no handles: a depth image
+//! is a disc with holes) those of them that add none now. Then a handle is what the surface as
+//! split_pinches will leave it says it is (split_view_verdict): a face that joins two fans touching at
+//! a pinched vertex only joins two pieces. makes_handle, which sees one piece there, is asked only where
+//! that walk cannot tell (QA round 35: a box's wall, pinched to the ground, came out as its own piece).
+void Front::finish(bool handles)
 {
     reset_pieces();
-    allow_handles_ = true;
+    allow_handles_ = handles;
+    precise_handles_ = !handles;
+    if (!handles)
+        std::fill(held_.begin(), held_.end(), false);
     edges_.clear(); // cached candidates predate the new rule
     grow_whole_front();
 }
@@ -351,23 +358,23 @@ void Front::reset_pieces()
 // vertices are split (makes_handle walks loops through a pinched vertex from whichever fan it
 // arrives by, and sees one piece where the fans may lie in two). The face is glued along the free
 // half-edge b -> a and along a -> c and c -> b where those are free; a handle needs two glued
-// half-edges on different cycles of one piece.
-bool Front::split_view_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c)
+// half-edges on different cycles of one piece. Unknown where the walk meets no plain cycle.
+Front::Verdict Front::split_view_verdict(std::uint32_t a, std::uint32_t b, std::uint32_t c)
 {
     if (!surface_.on_surface(c))
-        return false;
+        return Verdict::no;
     const std::uint32_t fac = surface_.face_of(c, a), fcb = surface_.face_of(b, c);
     if (fac == kNone && fcb == kNone)
-        return false;
+        return Verdict::no;
     const std::uint32_t fab = surface_.face_of(a, b);
     if (fab == kNone)
-        return false; // not a front edge (cannot happen: the front runs along faces' half-edges)
+        return Verdict::unknown; // not a front edge (cannot happen: the front runs along faces' half-edges)
     // Glued half-edges of another piece join two pieces: no handle.
     sync_pieces();
     const std::uint32_t mine = pieces_.find(fab);
     const bool ac = fac != kNone && pieces_.find(fac) == mine, cb = fcb != kNone && pieces_.find(fcb) == mine;
     if (!ac && !cb)
-        return false;
+        return Verdict::no;
     // Walk the split-view cycle of b -> a both ways at once (the glued half-edges are usually a step
     // or two away): arriving at v by u -> v, leave by the other end of the same fan's arc.
     bool seen_ac = false, seen_cb = false;
@@ -381,25 +388,25 @@ bool Front::split_view_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c)
     for (std::size_t steps = 0; steps <= 3 * surface_.faces().size(); ++steps) {
         const std::uint32_t w = next_in_fan(surface_, u, v);
         if (w == kNone)
-            return false; // not a plain cycle here: leave it to makes_handle
+            return Verdict::unknown; // not a plain cycle here: leave it to makes_handle
         u = v;
         v = w;
         if (see(u, v))
-            return false; // every glued half-edge of this piece on this cycle: it splits or shortens
+            return Verdict::no; // every glued half-edge of this piece on this cycle: it splits or shortens
         if (u == x && v == y)
-            return true; // the whole cycle seen: a glued half-edge on another cycle of the same piece
+            return Verdict::yes; // the whole cycle seen: a glued half-edge on another cycle of the same piece
         const std::uint32_t z = previous_in_fan(surface_, x, y);
         if (z == kNone)
-            return false;
+            return Verdict::unknown;
         y = x;
         x = z;
         if (see(x, y))
-            return false;
+            return Verdict::no;
         if (u == x && v == y)
-            return true;
+            return Verdict::yes;
     }
     assert(false); // a boundary cycle has at most 3 F half-edges
-    return false;
+    return Verdict::unknown;
 }
 
 // Whether face (b, a, c) on the front half-edge a -> b would join two different boundary loops of
@@ -572,7 +579,14 @@ void Front::grow()
         // handle once the surface has closed around it; a spurious one across a local gap is
         // usually made impossible by the faces that fill the gap first. Fallback faces never add one.
         // Handles are looked for in the surface as it is and as split_pinches will leave it.
-        if (!allow_handles_ && (makes_handle(a, b, c) || split_view_handle(a, b, c))) {
+        const auto adds_handle = [&] {
+            if (precise_handles_) {
+                const Verdict v = split_view_verdict(a, b, c);
+                return v == Verdict::yes || (v == Verdict::unknown && makes_handle(a, b, c));
+            }
+            return makes_handle(a, b, c) || split_view_verdict(a, b, c) == Verdict::yes;
+        };
+        if (!allow_handles_ && adds_handle()) {
             (fallback_[top.index] ? banned_ : held_)[top.index] = true;
             e.evaluated = false; // the cached best is the candidate just set aside
             push_best(a, b);

@@ -634,7 +634,7 @@ public:
           const std::vector<int>& orientation);
     void rescue(const std::vector<bool>& stranded);
     void regrow(const std::vector<bool>& dropped);
-    void finish();
+    void finish(bool handles);
     void run();
 
 private:
@@ -650,7 +650,8 @@ private:
     bool folds_ok(std::uint32_t x, std::uint32_t y, const Vec3& nt) const;
     void sync_pieces();
     void reset_pieces();
-    bool split_view_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c);
+    enum class Verdict { no, yes, unknown };
+    Verdict split_view_verdict(std::uint32_t a, std::uint32_t b, std::uint32_t c);
     bool makes_handle(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::size_t* loop_edges = nullptr);
     void recount_parts();
     void grow_whole_front();
@@ -695,6 +696,7 @@ private:
     std::vector<bool> banned_;   // fallback candidates found to add a handle
     std::vector<bool> held_;     // consensus candidates found to add a handle (wait for finish)
     bool allow_handles_ = false;
+    bool precise_handles_ = false; // finish(false): split_view_verdict decides, makes_handle where it cannot
     std::vector<bool> rescuing_; // fallback candidates in use (they touch a stranded tile)
     UnionFind pieces_;                  // see sync_pieces
     std::uint32_t pieces_synced_ = 0;

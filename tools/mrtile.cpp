@@ -630,6 +630,9 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["relaxed_moves"] = r.fit.relax.moves;
     j["height_field"] = r.surface.height_field_used;
     j["alpha"] = r.surface.alpha;
+    // With a viewpoint: whether the cloud is one view from it (no handles made), and why not.
+    j["single_view"] = r.surface.view ? nlohmann::json(r.surface.view->single_view) : nlohmann::json(nullptr);
+    j["hidden_share"] = r.surface.view ? nlohmann::json(r.surface.view->hidden_share) : nlohmann::json(nullptr);
     if (q) {
         j["boundary_loops"] = q->topology.boundary_loops;
         j["genus"] = q->topology.genus;
@@ -833,6 +836,13 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                                        : "no finer cut tried joined them");
     if (r.surface.looks_airborne)
         note_airborne(r.mesh);
+    if (r.surface.view && !r.surface.view->single_view && h.cloud.viewpoint) {
+        const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
+        std::printf("note: the viewpoint (%.6g, %.6g, %.6g) is not where every point was seen from: %.0f%% of them "
+                    "lie behind others from there (several views merged?), so handles are allowed as without a "
+                    "viewpoint (README: Choices, single views)\n",
+                    v.x, v.y, v.z, 100.0 * r.surface.view->hidden_share);
+    }
     // Tiles of a tolerance, region or camera cut that only their noise floor kept from refining: of
     // the cut as made, not as mesh_cut refined it (refined children can be rougher than their parent's
     // bound). A region or camera cut is made again here (without the region notes of its first making).
