@@ -42,6 +42,27 @@ std::filesystem::path follow_links(const std::filesystem::path& path)
     throw IoError(path.string() + ": too many levels of symbolic links (a loop?)");
 }
 
+// The directory an output directory names: written as given, "tiles/" or "./tiles/." named no
+// directory entry (their file name is empty or "."), and the temporary beside it became "tiles/.tmp.PID",
+// inside it (QA round 38: "cannot create the directory", or a whole export lost to "cannot replace");
+// and a symbolic link is written through, as for files: the directory it leads to is replaced and the
+// link stays (QA round 38: `-o public/tiles` linked to the served tree replaced the link).
+std::filesystem::path directory_target(const std::filesystem::path& dir)
+{
+    std::filesystem::path at = dir.lexically_normal();
+    if (!at.has_filename() && at.has_relative_path())
+        at = at.parent_path();
+    if (at.filename() == "." || at.filename() == "..") {
+        std::error_code ec;
+        const std::filesystem::path absolute = std::filesystem::absolute(at, ec);
+        if (!ec)
+            at = absolute.lexically_normal();
+        if (!at.has_filename() && at.has_relative_path())
+            at = at.parent_path();
+    }
+    return follow_links(at);
+}
+
 std::filesystem::path temporary_name(const std::filesystem::path& path)
 {
     const std::string suffix = ".tmp." + std::to_string(static_cast<long>(::getpid()));
@@ -217,7 +238,7 @@ void check_writable_directory(const std::filesystem::path& dir)
 }
 
 TemporaryDirectory::TemporaryDirectory(const std::filesystem::path& dir)
-    : path_(temporary_name(named(dir, "directory"))), dir_(dir)
+    : path_(temporary_name(directory_target(named(dir, "directory")))), dir_(dir)
 {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec); // a stale leftover of a killed run with the same pid
@@ -337,14 +358,15 @@ void ensure_directory(const std::filesystem::path& dir)
                       (ec ? ec.message() : std::string("exists and is not a directory")) + ")");
 }
 
-void replace_directory(const std::filesystem::path& built, const std::filesystem::path& dir, const std::string& what)
+void replace_directory(const std::filesystem::path& built, const std::filesystem::path& given, const std::string& what)
 {
     namespace fs = std::filesystem;
+    const fs::path dir = directory_target(given);
     std::error_code ec;
     if (!fs::exists(dir, ec)) {
         fs::rename(built, dir, ec);
         if (ec)
-            throw IoError(dir.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
+            throw IoError(given.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
         return;
     }
     // Atomic exchange where the file system supports it; otherwise two renames with a roll-back.
@@ -356,12 +378,12 @@ void replace_directory(const std::filesystem::path& built, const std::filesystem
     old += ".old." + std::to_string(static_cast<long>(::getpid()));
     fs::rename(dir, old, ec);
     if (ec)
-        throw IoError(dir.string() + ": cannot replace the existing " + what + " (" + ec.message() + ")");
+        throw IoError(given.string() + ": cannot replace the existing " + what + " (" + ec.message() + ")");
     fs::rename(built, dir, ec);
     if (ec) {
         std::error_code ignored;
         fs::rename(old, dir, ignored);
-        throw IoError(dir.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
+        throw IoError(given.string() + ": cannot move the " + what + " into place (" + ec.message() + ")");
     }
     fs::remove_all(old, ec);
 }
@@ -378,6 +400,23 @@ void check_replaceable_directory(const std::filesystem::path& dir, const std::st
     if (!entry.empty())
         throw IoError(dir.string() + ": holds " + entry + ", which is not part of a " + what + " we write; refusing "
                       "to replace the directory (move it away or write elsewhere)");
+    // The previous output is removed once the new one is in place: where its files cannot be removed
+    // (another user's directory), it was left behind as "<dir>.tmp.PID" after a run that said nothing
+    // (QA round 38). Refused first instead, as a read-only file is: a directory without a write bit
+    // for anyone, or one this user may not change.
+    const auto removable = [&](const std::filesystem::path& d) {
+        struct stat mode;
+        const bool read_only = ::stat(d.c_str(), &mode) == 0 && (mode.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0;
+        if (read_only || ::access(d.c_str(), W_OK | X_OK) != 0)
+            throw IoError(dir.string() + ": cannot remove the previous " + what + "'s files in " + d.string() + " (" +
+                          (read_only ? std::string("read-only") : std::string(std::strerror(errno))) +
+                          "); not replacing it");
+    };
+    removable(dir);
+    for (auto it = std::filesystem::recursive_directory_iterator(dir, ec); !ec && it != std::filesystem::recursive_directory_iterator();
+         it.increment(ec))
+        if (it->is_directory(ec) && !it->is_symlink(ec))
+            removable(it->path());
 }
 
 } // namespace mrt

@@ -93,7 +93,10 @@ void replace_directory(const std::filesystem::path& built, const std::filesystem
 //! \brief Before any work: whether replace_directory may replace what is at `dir` (it removes the old
 //! directory whole, so a user's own files in it must stop the write). Nothing there passes; else `dir`
 //! must be a directory whose entries are all an output's own: `foreign(dir)` names the first that is
-//! not ("" for none). `what` names the output in the message ("tileset").
+//! not ("" for none), and whose directories can all be emptied (a write bit set, and this user may
+//! change them). `what` names the output in the message ("tileset"). A directory `dir` names with a
+//! trailing "/" or "/." is that directory, and one reached through a symbolic link is replaced where
+//! the link leads (the link stays), as replace_directory and TemporaryDirectory do.
 //! \throw IoError naming `dir` and the foreign entry (or what `foreign` throws).
 void check_replaceable_directory(const std::filesystem::path& dir, const std::string& what,
                                  const std::function<std::string(const std::filesystem::path&)>& foreign);

@@ -260,5 +260,71 @@ TEST(AtomicFile, a_tileset_directory_with_other_files_is_not_replaced)
     EXPECT_FALSE(fs::exists(dir / "new"));
 }
 
+// An output directory is the directory it names: with a trailing "/" or "/." the temporary was made
+// inside it (QA round 38: "tiles/" failed, or failed after the whole export when it existed); through
+// a symbolic link the directory where it leads is replaced and the link stays, as for files (QA round
+// 38: the link was replaced by a directory, and the tree it served kept the old tileset).
+TEST(AtomicFile, an_output_directory_is_what_its_name_names)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file_dirs");
+    const auto write_into = [](const fs::path& out, const std::string& text) {
+        const TemporaryDirectory temporary(out);
+        write_text(temporary.path() / "tileset.json", text);
+        replace_directory(temporary.path(), out, "tileset");
+    };
+    const auto read = [](const fs::path& file) {
+        std::ifstream in(file);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    fs::create_directories(dir / "existing");
+    write_text(dir / "existing" / "tileset.json", "old");
+    fs::create_directories(dir / "real");
+    write_text(dir / "real" / "tileset.json", "old");
+    fs::create_directory_symlink("real", dir / "link");
+    fs::create_directory_symlink("nowhere", dir / "dangling");
+    for (const auto& [given, file] : {std::pair{dir / "new" / "", dir / "new" / "tileset.json"},
+                                      std::pair{dir / "existing" / "", dir / "existing" / "tileset.json"},
+                                      std::pair{dir / "dot" / ".", dir / "dot" / "tileset.json"},
+                                      std::pair{dir / "link", dir / "real" / "tileset.json"},
+                                      std::pair{dir / "dangling", dir / "nowhere" / "tileset.json"}}) {
+        SCOPED_TRACE(given.string());
+        check_tileset_directory(given);
+        write_into(given, "new");
+        EXPECT_EQ(read(file), "new");
+        EXPECT_EQ(entries(file.parent_path()), 1u); // no temporary inside
+    }
+    EXPECT_TRUE(fs::is_symlink(dir / "link"));
+    EXPECT_TRUE(fs::is_symlink(dir / "dangling"));
+    std::size_t top = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
+        ++top;
+    }
+    EXPECT_EQ(top, 7u); // new existing real link dangling dot nowhere: nothing left beside them
+}
+
+// A previous tileset whose files cannot be removed is refused before any work, as a read-only file is:
+// it was left behind as "<dir>.tmp.PID" by a run that said nothing (QA round 38).
+TEST(AtomicFile, a_tileset_that_cannot_be_removed_is_not_replaced)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file_locked") / "ts";
+    fs::create_directories(dir / "tiles");
+    write_text(dir / "tileset.json", "{}");
+    write_text(dir / "tiles" / "0.glb", "glTF");
+    fs::permissions(dir / "tiles", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                       fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+    try {
+        check_tileset_directory(dir);
+        ADD_FAILURE() << "a tileset with a read-only directory passed";
+    } catch (const IoError& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("tiles"), std::string::npos) << message;
+        EXPECT_NE(message.find("read-only"), std::string::npos) << message;
+        EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+    fs::permissions(dir / "tiles", fs::perms::owner_write, fs::perm_options::add);
+    check_tileset_directory(dir);
+}
+
 } // namespace
 } // namespace mrt

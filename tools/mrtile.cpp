@@ -1227,8 +1227,8 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
             ++contents;
             triangles += tile.mesh.n_faces();
         }
-    std::printf("wrote %s/tileset.json: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
-                dir.string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+    std::printf("wrote %s: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
+                (dir / "tileset.json").string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
@@ -1300,7 +1300,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
     temporary.write([&] { write_file_atomically(built / "lods.json", index.dump(2) + "\n"); });
     replace_directory(built, dir, "LOD chain");
-    std::printf("wrote %s/lods.json and %zu levels (%.2f s)\n", dir.string().c_str(), quality.size(), seconds_since(start));
+    std::printf("wrote %s and %zu levels (%.2f s)\n", (dir / "lods.json").string().c_str(), quality.size(), seconds_since(start));
 }
 
 // The options every producing command shares, and the one place that picks the writer.
