@@ -605,8 +605,13 @@ private:
         if (candidates.empty())
             return {};
         // Points taken so far, in a grid of cells as wide as the largest separation: a point can be too
-        // near only to points in its own cell and the eight around it.
-        const double cell = std::max(*std::max_element(separation.begin(), separation.end()), 1e-300);
+        // near only to points in its own cell and the eight around it. Wider cells change nothing but
+        // the work; a separation of 0 (or next to it) made cells so narrow that the cell indices
+        // overflowed (QA round 37, UBSan), so a cell spans at least 1e-12 of the farthest coordinate.
+        double farthest = 0.0;
+        for (const NewPoint& c : candidates)
+            farthest = std::max({farthest, std::abs(c.uv[0]), std::abs(c.uv[1])});
+        const double cell = std::max({*std::max_element(separation.begin(), separation.end()), 1e-12 * farthest, 1e-300});
         auto cell_of = [&](const Point2& p) {
             return std::array<std::int64_t, 2>{static_cast<std::int64_t>(std::floor(p[0] / cell)),
                                                static_cast<std::int64_t>(std::floor(p[1] / cell))};

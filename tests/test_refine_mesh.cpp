@@ -476,5 +476,22 @@ TEST(RefineMesh, a_result_cut_that_is_no_partition_and_bad_tile_options_are_refu
     }
 }
 
+// A separation of 0 is allowed (every descendant point inside the outline taken): its grid cells were
+// so narrow that their indices overflowed (QA round 37, UBSan; the sanitizer build runs this test).
+TEST(RefineMesh, no_separation_keeps_every_point_inside)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(30000));
+    const MeshResult base = mesh_cut(h, cut_by_tolerance(h, 0.01));
+    const Cut finer = cut_by_tolerance(h, 0.0025);
+    LocalRefineOptions none;
+    none.min_separation = 0.0;
+    MeshResult dense = base, spaced = base;
+    const LocalRefineStats with_none = refine_mesh(h, dense, finer, none);
+    refine_mesh(h, spaced, finer);
+    EXPECT_GE(with_none.refined, base.cut.size() * 9 / 10);
+    expect_manifold(dense.mesh, 0, 0);
+    EXPECT_GT(dense.mesh.n_vertices(), spaced.mesh.n_vertices()); // the points 0.5 spacings apart too
+}
+
 } // namespace
 } // namespace mrt
