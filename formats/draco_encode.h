@@ -30,9 +30,14 @@ struct QuantizationGrid
     double range = 0.0; //!< > 0; every position must lie inside the cube
 };
 
+//! The finest position quantization allowed: Draco's encoder takes memory in proportion to 2^bits,
+//! whatever the mesh's size (30 bits: 4.2 GB per thread; 24 bits: 64 MB, steps of 6e-8 of the grid).
+constexpr int kMaxPositionBits = 24;
+
 struct DracoOptions
 {
-    int position_bits = 14;  //!< 1..30; quantization step = extent / (2^bits - 1)
+    //! 1..kMaxPositionBits; quantization step = extent / (2^bits - 1)
+    int position_bits = 14;
     int normal_bits = 10;    //!< 1..30
     //! 0 (best compression) .. 10 (fastest). Default 3/3 = `draco_encoder`'s default -cl 7.
     int encoding_speed = 3;

@@ -256,6 +256,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {glb + " --enu 7,45,0", "no effect"},
         {glb + " --format ply", "does not match"},
         {glb + " --quantize 12", "add --draco"},
+        {glb + " --draco --quantize 25", "not in range 1 to 24"}, // 30 bits took 4.2 GB (QA round 38)
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "3dtiles not in"},
         // Options the output would ignore (session 15 QA: all were accepted).
         {a + " --draco", "a .ply file has no Draco"},

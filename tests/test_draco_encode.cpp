@@ -244,6 +244,7 @@ TEST(DracoEncode, rejects_bad_options_and_positions_outside_the_grid)
     const fs::path path = fs::path(MRTILE_BINARY_DIR) / "test_draco_encode_never_written.drc";
     for (auto change : std::vector<void (*)(DracoOptions&)>{
              [](DracoOptions& o) { o.position_bits = 0; }, [](DracoOptions& o) { o.position_bits = 31; },
+             [](DracoOptions& o) { o.position_bits = kMaxPositionBits + 1; }, // gigabytes whatever the mesh (QA round 38)
              [](DracoOptions& o) { o.normal_bits = 0; }, [](DracoOptions& o) { o.encoding_speed = 11; },
              [](DracoOptions& o) { o.decoding_speed = -1; },
              [](DracoOptions& o) { o.grid = QuantizationGrid{{0, 0, 0}, 0.0}; },

@@ -498,7 +498,7 @@ struct OutputArgs
     {
         cmd->add_flag("--draco", draco, "Draco-compress glTF/GLB and 3D Tiles content");
         quantize_option = cmd->add_option("--quantize", quantize, "Draco position quantization bits (with --draco or .drc)")
-                              ->check(CLI::Range(1, 30))
+                              ->check(CLI::Range(1, kMaxPositionBits))
                               ->capture_default_str();
         cmd->add_option("--up", up, "up axis of the input (glTF is y-up): z or y")->check(CLI::IsMember({"z", "y"}))->capture_default_str();
     }
