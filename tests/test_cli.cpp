@@ -947,10 +947,9 @@ TEST(Cli, build_removes_outliers_on_request)
     EXPECT_EQ(nlohmann::json::parse(info.out)["points"].get<int>(), 3000);
 }
 
-// `mrtile lods` on a real scan: every level file exists and the measured mean error never rises from a
-
 // A tileset of projected coordinates (UTM-like, far from the origin but not on the Earth's surface in
-// ECEF) says how to place it on the globe; with --enu, or near the origin, nothing is said.
+// ECEF) says how to place it on the globe; near the origin nothing is said, and with --enu what --enu
+// does with such coordinates, or with the model's own CRS.
 TEST(Cli, tileset_placement_note)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
@@ -968,9 +967,23 @@ TEST(Cli, tileset_placement_note)
                                  dir);
     ASSERT_EQ(placed.code, 0) << placed.err;
     EXPECT_EQ(placed.out.find(note), std::string::npos) << placed.out;
+    // --enu takes the coordinates as metres from its anchor: UTM metres put the model 4,100 km away
+    // without a word, and a model's own CRS was dropped silently (QA round 38).
+    const std::string far_from_anchor = "note: --enu takes the input's coordinates as metres from the anchor: the model's centre lies 41";
+    EXPECT_NE(placed.out.find(far_from_anchor), std::string::npos) << placed.out;
+    const Result with_crs = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "d").string() +
+                                       " --format 3dtiles --crs EPSG:32632 --enu 7.45,46.95,540",
+                                   dir);
+    ASSERT_EQ(with_crs.code, 0) << with_crs.err;
+    EXPECT_NE(with_crs.out.find("its own coordinate system (EPSG:32632) is not used"), std::string::npos) << with_crs.out;
     const Result local = mrtile("reconstruct " + (dir / "sphere.xyz").string() + " -o " + (dir / "c").string() + " --format 3dtiles", dir);
     ASSERT_EQ(local.code, 0) << local.err;
     EXPECT_EQ(local.out.find(note), std::string::npos) << local.out;
+    const Result local_enu = mrtile("reconstruct " + (dir / "sphere.xyz").string() + " -o " + (dir / "e").string() +
+                                        " --format 3dtiles --enu 7.45,46.95,540",
+                                    dir);
+    ASSERT_EQ(local_enu.code, 0) << local_enu.err;
+    EXPECT_EQ(local_enu.out.find("note: --enu"), std::string::npos) << local_enu.out;
 }
 
 // `build --store-levels` keeps the LOD levels in the model; an export with the same options uses them

@@ -1186,6 +1186,18 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         // a model whose points lie away from 0 (the origin is their median) landed that far off.
         const std::array<double, 3> v = e.enu_anchor();
         std::array<double, 16> m = enu_to_ecef_transform(v[0], v[1], v[2]);
+        // --enu takes the input's coordinates as metres east, north and up of the anchor: a model in a
+        // projected CRS (UTM metres) given --enu landed 1,169 km up without a word (QA round 38).
+        if (!h.cloud.crs.empty())
+            std::printf("note: --enu places the model's coordinates as east-north-up metres at %.7g, %.7g; its own "
+                        "coordinate system (%s) is not used (leave --enu out to place the tileset by it)\n",
+                        v[0], v[1], crs_label(h.cloud.crs).c_str());
+        const double away = norm(h.bbox().centre() + h.cloud.origin);
+        if (away > 100000.0)
+            std::printf("note: --enu takes the input's coordinates as metres from the anchor: the model's centre lies "
+                        "%.0f km from it (projected coordinates? give the input's CRS instead: --crs EPSG:N on build or "
+                        "reconstruct)\n",
+                        away / 1000.0);
         const Vec3 o = from_output_frame(to_output_frame(h.cloud.origin, t.gltf.up_axis), UpAxis::Z); // tileset frame
         for (int row = 0; row < 3; ++row)
             m[static_cast<std::size_t>(12 + row)] += m[static_cast<std::size_t>(row)] * o.x +
