@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace mrt {
 
@@ -41,6 +42,31 @@ QuantizationGrid tileset_grid(const LodSet& set)
     grid.min = box.min - Vec3{1, 1, 1} * (1e-6 * side);
     grid.range = side * (1.0 + 2e-6);
     return grid;
+}
+
+int tileset_position_bits(const Hierarchy& h, const LodSet& set, const QuantizationGrid& grid, double unit_scale, int least)
+{
+    if (least < 1 || least > kMaxPositionBits)
+        throw InvalidInput("tileset_position_bits: least must lie in [1, " + std::to_string(kMaxPositionBits) + "]");
+    if (!(unit_scale > 0.0) || !std::isfinite(unit_scale))
+        throw InvalidInput("tileset_position_bits: unit_scale must be positive and finite");
+    if (set.levels.empty() || !(grid.range > 0.0))
+        return least;
+    check_node_ids(h, set.levels.back().cut);
+    double sum = 0.0, points = 0.0;
+    for (const std::int32_t id : set.levels.back().cut) {
+        const Node& n = h.nodes[static_cast<std::size_t>(id)];
+        sum += n.rms_plane_distance * static_cast<double>(n.count());
+        points += static_cast<double>(n.count());
+    }
+    const double accuracy = points > 0.0 ? unit_scale * sum / points : 0.0;
+    if (!(accuracy > 0.0))
+        return least;
+    const double largest_step = 0.5 * accuracy / (0.5 * std::sqrt(3.0));
+    int bits = least;
+    while (bits < kMaxPositionBits && grid.range / (std::ldexp(1.0, bits) - 1.0) > largest_step)
+        ++bits;
+    return bits;
 }
 
 GeoPlacement georeference(LodSet& set, const Vec3& origin, const BoundingBox& model_box, const ProjectedCrs& crs,

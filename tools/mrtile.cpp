@@ -1224,9 +1224,23 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         t.root_transform = placed->root_transform;
         origin = Vec3{0, 0, 0};
     }
+    int bits = o.quantize;
+    if (o.draco) {
+        // One grid over the whole set, fine enough for its finest levels unless --quantize says otherwise.
+        const QuantizationGrid grid = tileset_grid(set);
+        t.gltf.draco_options.grid = grid;
+        if (!given(o.quantize_option)) {
+            bits = tileset_position_bits(h, set, grid, crs ? crs->projection.unit_to_metre : 1.0, o.quantize);
+            t.gltf.draco_options.position_bits = bits;
+            if (bits > o.quantize)
+                std::printf("Draco positions quantized to %d bits (steps of %.3g on the tileset's %.3g-wide grid), under "
+                            "half the finest level's accuracy; --quantize N sets it\n",
+                            bits, grid.range / (std::ldexp(1.0, bits) - 1.0), grid.range);
+        }
+    }
     write_lod_tileset(set, origin, dir, t);
     if (o.draco) // one grid over the whole set: the finest level is where a coarse step shows
-        note_coarse_quantization(set.levels.back().mesh, o.quantize, dir);
+        note_coarse_quantization(set.levels.back().mesh, bits, dir);
     if (placed)
         std::printf("placed on the globe by %s: local east-north-up metres at longitude %.7f, latitude %.7f, "
                     "height %.2f m (WGS 84)\n",
