@@ -418,6 +418,10 @@ std::vector<bool> refine_dropped_tiles(const Hierarchy& h, const MeshOptions& op
 
 MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& options)
 {
+    // A default-constructed hierarchy is a partition by every empty cut, and build_surface then spoke of
+    // its own stage (QA round 37).
+    if (h.nodes.empty() || h.cloud.size() == 0)
+        throw InvalidInput("mesh: the hierarchy is empty (no points); build it from a point cloud first (build_hierarchy)");
     if (const std::string problem = cut_problem(h, given); !problem.empty())
         throw InvalidInput("mesh: the cut is not a partition of the model's points: " + problem);
     // A cut is a set of nodes: meshed in point order (the order every cut of cut.h comes in), so that

@@ -845,6 +845,14 @@ TEST(Reconstruct, untangle_and_flip_options_out_of_range_are_refused)
     EXPECT_NO_THROW(mesh_cut(h, cut, off));
     EXPECT_THROW(mesh_to_triangle_count(Hierarchy{}, 100), InvalidInput);
     EXPECT_THROW(mesh_mended(h, std::function<Cut(int)>{}), InvalidInput);
+    // An empty hierarchy's empty cut is named as such, not as a later stage's "no tiles" (QA round 37).
+    try {
+        const Hierarchy empty;
+        mesh_cut(empty, cut_by_tolerance(empty, 0.01));
+        ADD_FAILURE() << "an empty hierarchy was meshed";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("the hierarchy is empty"), std::string::npos) << e.what();
+    }
 }
 
 // Two sheets 3 spacings apart: the default cut is nearly all leaves (1,346 tiles of 1,358), in two pieces
