@@ -727,6 +727,8 @@ TEST(Cli, build_info_mesh_and_determinism)
     const auto info = nlohmann::json::parse(r.out);
     for (const char* key : {"points", "nodes", "leaves", "depth", "bbox_min", "bbox_max", "build_seconds"})
         EXPECT_TRUE(info.contains(key)) << key;
+    EXPECT_TRUE(info["single_view"].is_null()); // no viewpoint
+    EXPECT_TRUE(info["hidden_share"].is_null());
     EXPECT_EQ(info["points"], 3000);
     EXPECT_NEAR(info["bbox_max"][2].get<double>(), 1.0, 1e-3);
 
@@ -1385,6 +1387,10 @@ TEST(Cli, a_depth_image_faces_its_camera)
     ASSERT_EQ(mrtile("build " + (dir / "depth.pcd").string() + " -o " + (dir / "d.mrt").string(), dir).code, 0);
     const Result info = mrtile("info " + (dir / "d.mrt").string(), dir);
     EXPECT_NE(info.out.find("viewpoint   0 0 0"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("one view, so no handles: 0% of the points hidden from it"), std::string::npos) << info.out;
+    const auto json = nlohmann::json::parse(mrtile("info --json " + (dir / "d.mrt").string(), dir).out);
+    EXPECT_TRUE(json["single_view"].get<bool>());
+    EXPECT_EQ(json["hidden_share"].get<double>(), 0.0);
     EXPECT_EQ(mrtile("build " + (dir / "depth.pcd").string() + " --viewpoint 1,2 -o " + (dir / "e.mrt").string(), dir).code, 2);
 }
 

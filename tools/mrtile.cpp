@@ -17,6 +17,7 @@
 #include "libmrtile/parallel.h"
 #include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
+#include "libmrtile/single_view.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -1597,6 +1598,10 @@ int run_info(const fs::path& model, bool json)
             hole_max = std::max(hole_max, n.coverage_gap);
         }
     const double hole_share = h.scale > 0 ? hole_max / h.scale : 0.0;
+    // With a viewpoint: whether the points are one view from it, as meshing judges it (single_view.h).
+    std::optional<SingleViewStats> view;
+    if (h.cloud.viewpoint)
+        view = single_view_stats(h.cloud.positions, *h.cloud.viewpoint);
     if (json) {
         nlohmann::json j;
         j["file"] = model.string();
@@ -1617,6 +1622,8 @@ int run_info(const fs::path& model, bool json)
         j["denoise_move"] = h.scale > 0 ? typical_move(h, 0, h.denoise_moves.size()) / h.scale : 0.0;
         j["colors"] = h.cloud.has_colors();
         j["viewpoint"] = h.cloud.viewpoint ? vec_json(*h.cloud.viewpoint + h.cloud.origin) : nlohmann::json(nullptr);
+        j["single_view"] = view ? nlohmann::json(view->single_view) : nlohmann::json(nullptr);
+        j["hidden_share"] = view ? nlohmann::json(view->hidden_share) : nlohmann::json(nullptr);
         j["crs"] = h.cloud.crs.empty() ? nlohmann::json(nullptr) : nlohmann::json(h.cloud.crs);
         j["build_seconds"] = timed ? nlohmann::json(h.info.build_seconds) : nlohmann::json(nullptr);
         j["scale"] = h.scale;
@@ -1643,7 +1650,9 @@ int run_info(const fs::path& model, bool json)
     std::printf("scale       %.17g (tolerances are relative to it)\n", h.scale);
     if (h.cloud.viewpoint) {
         const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
-        std::printf("viewpoint   %.17g %.17g %.17g (open surfaces face it)\n", v.x, v.y, v.z);
+        std::printf("viewpoint   %.17g %.17g %.17g (open surfaces face it; %s: %.2g%% of the points hidden from it)\n",
+                    v.x, v.y, v.z, view->single_view ? "one view, so no handles" : "no single view, handles allowed",
+                    100.0 * view->hidden_share);
     }
     if (!h.cloud.crs.empty())
         std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
