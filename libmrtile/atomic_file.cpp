@@ -49,6 +49,13 @@ std::filesystem::path follow_links(const std::filesystem::path& path)
 // link stays (QA round 38: `-o public/tiles` linked to the served tree replaced the link).
 std::filesystem::path directory_target(const std::filesystem::path& dir)
 {
+    // "FILE/" names a directory: where FILE is anything else (a regular file, a link to one), it is
+    // refused here, before it could be taken for the directory to replace (QA round 39: `-o in.ply/`
+    // replaced the input with a tileset).
+    struct stat status;
+    const std::string text = dir.string();
+    if (!text.empty() && (text.back() == '/' || dir.filename() == ".") && ::stat(text.c_str(), &status) != 0 && errno == ENOTDIR)
+        throw IoError(text + ": is not a directory (a file is named there)");
     std::filesystem::path at = dir.lexically_normal();
     if (!at.has_filename() && at.has_relative_path())
         at = at.parent_path();
@@ -363,6 +370,9 @@ void replace_directory(const std::filesystem::path& built, const std::filesystem
     namespace fs = std::filesystem;
     const fs::path dir = directory_target(given);
     std::error_code ec;
+    struct stat status;
+    if (::lstat(dir.c_str(), &status) == 0 && !S_ISDIR(status.st_mode))
+        throw IoError(given.string() + ": exists and is not a directory; not replacing it");
     if (!fs::exists(dir, ec)) {
         fs::rename(built, dir, ec);
         if (ec)
@@ -392,9 +402,11 @@ void check_replaceable_directory(const std::filesystem::path& dir, const std::st
                                  const std::function<std::string(const std::filesystem::path&)>& foreign)
 {
     std::error_code ec;
-    if (!std::filesystem::exists(dir, ec))
+    const std::filesystem::path target = directory_target(dir); // what replace_directory replaces
+    struct stat status;
+    if (::lstat(target.c_str(), &status) != 0)
         return;
-    if (!std::filesystem::is_directory(dir, ec))
+    if (!S_ISDIR(status.st_mode))
         throw IoError(dir.string() + ": exists and is not a directory");
     const std::string entry = foreign(dir);
     if (!entry.empty())

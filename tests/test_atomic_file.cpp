@@ -301,6 +301,20 @@ TEST(AtomicFile, an_output_directory_is_what_its_name_names)
         ++top;
     }
     EXPECT_EQ(top, 7u); // new existing real link dangling dot nowhere: nothing left beside them
+
+    // "FILE/" names a directory: a regular file there (or a link to one) is refused, not replaced by
+    // the tileset (QA round 39: `-o in.ply/` replaced the input).
+    write_text(dir / "file", "keep me");
+    fs::create_symlink("file", dir / "to_file");
+    for (const fs::path& given : {dir / "file" / "", dir / "file" / ".", dir / "to_file" / ""}) {
+        SCOPED_TRACE(given.string());
+        EXPECT_THROW(check_tileset_directory(given), IoError);
+        EXPECT_THROW(write_into(given, "new"), IoError);
+        EXPECT_EQ(read(dir / "file"), "keep me");
+    }
+    EXPECT_THROW(replace_directory(dir / "real", dir / "file", "tileset"), IoError); // never over a file
+    EXPECT_EQ(read(dir / "file"), "keep me");
+    EXPECT_TRUE(fs::is_symlink(dir / "to_file"));
 }
 
 // A previous tileset whose files cannot be removed is refused before any work, as a read-only file is:
