@@ -462,6 +462,14 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     const std::vector<bool> away = refine_dropped_tiles(h, options, surface_options, result, tiles);
     result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);
+    {
+        // The sample's own spacing: a tile is built from a sample of its points (TileOptions::max_points),
+        // whose spacing (Tile::spacing) is coarser.
+        std::unordered_map<std::int32_t, double> spacing_of;
+        for (const Tile& t : tiles)
+            spacing_of[t.node] = std::sqrt(t.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(t.node)].count())));
+        result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
+    }
     const FitOptions fit = along_height_field(options.fit, result.surface);
     const SliverOptions slivers = along_height_field(options.slivers, result.surface);
     const UntangleOptions untangle_options = along_height_field(options.untangle, result.surface);

@@ -11,6 +11,7 @@
 
 #include "libmrtile/color_vertices.h"
 #include "libmrtile/cut.h"
+#include "libmrtile/fill_notches.h"
 #include "libmrtile/fit_vertices.h"
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
@@ -42,6 +43,9 @@ struct MeshOptions
     UntangleOptions untangle;
     //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
     ColorOptions colors;
+    //! notches of open borders that the points cover filled, before the slivers (fill_notches.h);
+    //! rounds 0 = off
+    NotchOptions notches;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
     //! of at most three tiles, while other pieces exist, are refined (replaced by their children) up to
@@ -81,6 +85,7 @@ struct MeshResult
     Cut cut;
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
+    std::size_t notches = 0;        //!< faces filling notches of open borders (fill_notches)
     //! Tiles meshed in all: the cut's, and the refined cut's again in each round that remeshed it
     //! (MeshOptions::piece_rounds, dropped_rounds). The surface costs about the same per tile, so this
     //! is the meshing's work, counted the same on every machine.

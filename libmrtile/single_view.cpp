@@ -73,8 +73,8 @@ void check_options(const SingleViewOptions& o)
     const auto bad = [](const std::string& what) { throw InvalidInput("single_view_stats: " + what); };
     if (!(o.points_per_cell >= 1.0) || !std::isfinite(o.points_per_cell))
         bad("points_per_cell must be at least 1");
-    if (!(o.layer_ratio > 1.0) || !std::isfinite(o.layer_ratio))
-        bad("layer_ratio must be above 1");
+    if (!(o.layer_ratio >= 1.0) || !std::isfinite(o.layer_ratio))
+        bad("layer_ratio must be 1 or more");
     if (!(o.min_gap_cells >= 0.0) || !std::isfinite(o.min_gap_cells))
         bad("min_gap_cells must be 0 or more");
     if (!(o.max_hidden_share >= 0.0) || !(o.max_hidden_share <= 1.0))

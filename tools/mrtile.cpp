@@ -622,6 +622,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["holes_filled"] = r.surface.holes_filled;
     j["closings_refused"] = r.surface.closings_refused;
     j["refined_points"] = r.refined_points;
+    j["notches"] = r.notches;
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
     j["fit_flips"] = r.fit.flips;
@@ -1194,7 +1195,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
                         "coordinate system (%s) is not used (leave --enu out to place the tileset by it)\n",
                         v[0], v[1], crs_label(h.cloud.crs).c_str());
         const double away = norm(h.bbox().centre() + h.cloud.origin);
-        if (away > 100000.0)
+        if (away > 100000.0 && h.cloud.crs.empty()) // with a CRS, the note above says what to do
             std::printf("note: --enu takes the input's coordinates as metres from the anchor: the model's centre lies "
                         "%.0f km from it (projected coordinates? give the input's CRS instead: --crs EPSG:N on build or "
                         "reconstruct)\n",
@@ -1255,7 +1256,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
             triangles += tile.mesh.n_faces();
         }
     std::printf("wrote %s: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
-                (dir / "tileset.json").string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+                (dir / "tileset.json").lexically_normal().string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
@@ -1327,7 +1328,7 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
     temporary.write([&] { write_file_atomically(built / "lods.json", index.dump(2) + "\n"); });
     replace_directory(built, dir, "LOD chain");
-    std::printf("wrote %s and %zu levels (%.2f s)\n", (dir / "lods.json").string().c_str(), quality.size(), seconds_since(start));
+    std::printf("wrote %s and %zu levels (%.2f s)\n", (dir / "lods.json").lexically_normal().string().c_str(), quality.size(), seconds_since(start));
 }
 
 // The options every producing command shares, and the one place that picks the writer.
