@@ -840,9 +840,9 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
         note_airborne(r.mesh);
     if (r.surface.view && !r.surface.view->single_view && h.cloud.viewpoint) {
         const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
-        std::printf("note: the viewpoint (%.6g, %.6g, %.6g) is not where every point was seen from: %.0f%% of them "
-                    "lie behind others from there (several views merged?), so handles are allowed as without a "
-                    "viewpoint (README: Choices, single views)\n",
+        std::printf("note: the points are not clearly one view from the viewpoint (%.6g, %.6g, %.6g): %.2g%% of them "
+                    "lie behind others from there (several views merged, or a noisy view?), so handles are allowed as "
+                    "without a viewpoint (README: Choices, single views)\n",
                     v.x, v.y, v.z, 100.0 * r.surface.view->hidden_share);
     }
     // Tiles of a tolerance, region or camera cut that only their noise floor kept from refining: of
