@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <tuple>
+#include <unordered_map>
 #include <utility>
 
 namespace mrt {
@@ -116,28 +118,76 @@ SingleViewStats single_view_stats(const std::vector<Vec3>& points, const Vec3& v
     }
     const CellGrid grid(width);
 
-    std::vector<std::pair<std::uint64_t, double>> keyed; // (cell, depth)
-    keyed.reserve(samples.size());
-    for (const Sample& s : samples)
-        keyed.push_back({grid.key(s.direction), s.depth});
-    std::sort(keyed.begin(), keyed.end());
-    for (std::size_t i = 0; i < keyed.size();) {
+    // Samples by cell, nearest first.
+    std::vector<std::uint64_t> key_of(samples.size());
+    for (std::size_t k = 0; k < samples.size(); ++k)
+        key_of[k] = grid.key(samples[k].direction);
+    std::vector<std::uint32_t> order(samples.size());
+    for (std::uint32_t k = 0; k < order.size(); ++k)
+        order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return std::make_tuple(key_of[a], samples[a].depth, a) < std::make_tuple(key_of[b], samples[b].depth, b);
+    });
+    std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> cell_range; // key -> [begin, end) of order
+    for (std::size_t i = 0; i < order.size();) {
         std::size_t j = i;
-        while (j < keyed.size() && keyed[j].first == keyed[i].first)
+        while (j < order.size() && key_of[order[j]] == key_of[order[i]])
             ++j;
-        // The cell's angle is about width / (1 + u² + v²) at its centre (the cube map's stretch).
-        const std::uint64_t key = keyed[i].first;
+        cell_range.emplace(key_of[order[i]], std::make_pair(i, j));
+        i = j;
+    }
+    // The cell's angle is about width / (1 + u² + v²) at its centre (the cube map's stretch).
+    const auto cell_angle = [&](std::uint64_t key) {
         const double cu = (static_cast<double>(key / grid.per_side % grid.per_side) + 0.5) * width - 1.0;
         const double cv = (static_cast<double>(key % grid.per_side) + 0.5) * width - 1.0;
-        const double angle = width / (1.0 + cu * cu + cv * cv);
-        for (std::size_t k = i + 1; k < j; ++k) {
-            const double near = keyed[k - 1].second, far = keyed[k].second;
-            if (far >= options.layer_ratio * near && far - near >= options.min_gap_cells * angle * near) {
-                stats.hidden += j - k; // this one and every farther one lie behind the nearer layer
+        return width / (1.0 + cu * cu + cv * cv);
+    };
+    const auto behind = [&](double near, double far, double angle) {
+        return far >= options.layer_ratio * near && far - near >= options.min_gap_cells * angle * near;
+    };
+    // A point behind a nearer layer is hidden when that layer lies all round it in direction (nearer
+    // points within 1.5 cell widths in each of the four quadrants around it, in its own and the eight
+    // cells beside it on its face): a surface in front of it. At a silhouette the nearer layer lies on
+    // one side only, and the point beside it was seen past the edge (noisy views with mixed pixels had
+    // 1.6-6% of such points, a sparse merged scan 2%: QA round 39).
+    const double reach = 1.5 * width;
+    const auto surrounded = [&](std::uint32_t p, double angle) {
+        const Sample& sp = samples[p];
+        const std::uint64_t key = key_of[p];
+        const auto face = static_cast<std::int64_t>(key / (grid.per_side * grid.per_side));
+        const auto iu = static_cast<std::int64_t>(key / grid.per_side % grid.per_side);
+        const auto iv = static_cast<std::int64_t>(key % grid.per_side);
+        const auto side = static_cast<std::int64_t>(grid.per_side);
+        unsigned quadrants = 0;
+        for (std::int64_t du = -1; du <= 1; ++du)
+            for (std::int64_t dv = -1; dv <= 1; ++dv) {
+                const std::int64_t u = iu + du, v = iv + dv;
+                if (u < 0 || v < 0 || u >= side || v >= side)
+                    continue;
+                const auto it = cell_range.find(static_cast<std::uint64_t>((face * side + u) * side + v));
+                if (it == cell_range.end())
+                    continue;
+                for (std::size_t k = it->second.first; k < it->second.second; ++k) {
+                    const Sample& q = samples[order[k]];
+                    if (!behind(q.depth, sp.depth, angle))
+                        break; // nearest first: the rest of the cell is no nearer layer
+                    const double ou = q.direction.u - sp.direction.u, ov = q.direction.v - sp.direction.v;
+                    if (ou * ou + ov * ov <= reach * reach)
+                        quadrants |= 1u << ((ou >= 0.0 ? 1 : 0) + (ov >= 0.0 ? 2 : 0));
+                }
+                if (quadrants == 15u)
+                    return true;
+            }
+        return false;
+    };
+    for (const auto& [key, range] : cell_range) {
+        const double angle = cell_angle(key);
+        for (std::size_t k = range.first + 1; k < range.second; ++k)
+            if (behind(samples[order[k - 1]].depth, samples[order[k]].depth, angle)) {
+                for (std::size_t f = k; f < range.second; ++f) // this one and every farther one
+                    stats.hidden += surrounded(order[f], angle) ? 1 : 0;
                 break;
             }
-        }
-        i = j;
     }
     stats.hidden_share = static_cast<double>(stats.hidden) / n;
     stats.single_view = stats.hidden_share <= options.max_hidden_share;
