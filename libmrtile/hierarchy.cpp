@@ -277,6 +277,9 @@ void update_derived(Hierarchy& h)
         }
     });
     h.scale = tolerance_scale(h.cloud.positions);
+    h.view.reset();
+    if (h.cloud.viewpoint)
+        h.view = single_view_stats(h.cloud.positions, *h.cloud.viewpoint);
     derive_noise_floor(h);
 }
 

@@ -12,8 +12,10 @@
 
 #include "libmrtile/pca.h"
 #include "libmrtile/point_cloud.h"
+#include "libmrtile/single_view.h"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -110,6 +112,10 @@ struct Hierarchy
     //! The length scale-free tolerances are relative to: tolerance_scale(cloud.positions) (the largest
     //! side of the bounding box, far stray points aside; point_cloud.h). Derived (update_derived).
     double scale = 0.0;
+    //! With cloud.viewpoint: how many points hide behind others from it, and whether the cloud is one
+    //! view from there (single_view_stats, single_view.h), which build_surface asks of every meshing.
+    //! Derived (update_derived): set the viewpoint before, or call update_derived after changing it.
+    std::optional<SingleViewStats> view;
 
     std::size_t leaf_count() const;
     std::uint32_t max_depth() const;
@@ -124,7 +130,7 @@ struct Hierarchy
 std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& box, std::size_t stride = 1);
 
 //! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, then
-//! scale and the nodes' noise floors (derive_noise_floor).
+//! scale, view and the nodes' noise floors (derive_noise_floor).
 void update_derived(Hierarchy& h);
 
 //! \brief Sets every node's noise_floor (update_derived calls it).

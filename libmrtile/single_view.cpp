@@ -7,6 +7,7 @@
 #include "libmrtile/errors.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -54,10 +55,10 @@ struct CellGrid
         const auto i = static_cast<std::uint64_t>(std::max(0.0, std::floor((t + 1.0) / cell)));
         return std::min(i, per_side - 1);
     }
-    std::uint64_t key(const CubeDirection& d) const
-    {
-        return (static_cast<std::uint64_t>(d.face) * per_side + index(d.u)) * per_side + index(d.v);
-    }
+    std::uint64_t key_at(std::uint64_t face, std::uint64_t iu, std::uint64_t iv) const { return (face * per_side + iu) * per_side + iv; }
+    std::uint64_t key(const CubeDirection& d) const { return key_at(static_cast<std::uint64_t>(d.face), index(d.u), index(d.v)); }
+    //! The face and the two indices of a cell's key (key_at's inverse).
+    std::array<std::uint64_t, 3> indices(std::uint64_t key) const { return {key / (per_side * per_side), key / per_side % per_side, key % per_side}; }
 };
 
 std::size_t occupied_cells(const std::vector<Sample>& samples, const CellGrid& grid)
@@ -138,8 +139,9 @@ SingleViewStats single_view_stats(const std::vector<Vec3>& points, const Vec3& v
     }
     // The cell's angle is about width / (1 + u² + v²) at its centre (the cube map's stretch).
     const auto cell_angle = [&](std::uint64_t key) {
-        const double cu = (static_cast<double>(key / grid.per_side % grid.per_side) + 0.5) * width - 1.0;
-        const double cv = (static_cast<double>(key % grid.per_side) + 0.5) * width - 1.0;
+        const std::array<std::uint64_t, 3> c = grid.indices(key);
+        const double cu = (static_cast<double>(c[1]) + 0.5) * width - 1.0;
+        const double cv = (static_cast<double>(c[2]) + 0.5) * width - 1.0;
         return width / (1.0 + cu * cu + cv * cv);
     };
     const auto behind = [&](double near, double far, double angle) {
@@ -153,18 +155,11 @@ SingleViewStats single_view_stats(const std::vector<Vec3>& points, const Vec3& v
     const double reach = 1.5 * width;
     const auto surrounded = [&](std::uint32_t p, double angle) {
         const Sample& sp = samples[p];
-        const std::uint64_t key = key_of[p];
-        const auto face = static_cast<std::int64_t>(key / (grid.per_side * grid.per_side));
-        const auto iu = static_cast<std::int64_t>(key / grid.per_side % grid.per_side);
-        const auto iv = static_cast<std::int64_t>(key % grid.per_side);
-        const auto side = static_cast<std::int64_t>(grid.per_side);
+        const std::array<std::uint64_t, 3> c = grid.indices(key_of[p]);
         unsigned quadrants = 0;
-        for (std::int64_t du = -1; du <= 1; ++du)
-            for (std::int64_t dv = -1; dv <= 1; ++dv) {
-                const std::int64_t u = iu + du, v = iv + dv;
-                if (u < 0 || v < 0 || u >= side || v >= side)
-                    continue;
-                const auto it = cell_range.find(static_cast<std::uint64_t>((face * side + u) * side + v));
+        for (std::uint64_t u = c[1] > 0 ? c[1] - 1 : 0; u <= std::min(c[1] + 1, grid.per_side - 1); ++u)
+            for (std::uint64_t v = c[2] > 0 ? c[2] - 1 : 0; v <= std::min(c[2] + 1, grid.per_side - 1); ++v) {
+                const auto it = cell_range.find(grid.key_at(c[0], u, v));
                 if (it == cell_range.end())
                     continue;
                 for (std::size_t k = it->second.first; k < it->second.second; ++k) {

@@ -414,10 +414,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     // space it did not see: terrestrial scans got genus 1-4, bridging the shadows of boxes. Only where
     // the viewpoint is where every point was seen from (single_view.h): PCL keeps a sensor origin through
     // merges, and a torus sampled all round lost its handle to one (QA round 35).
-    std::optional<SingleViewStats> view;
-    if (h.cloud.viewpoint)
-        view = single_view_stats(h.cloud.positions, *h.cloud.viewpoint);
-    front.finish(!(view && view->single_view));
+    front.finish(!(h.view && h.view->single_view));
     if (options.fill_holes) {
         fill(FillMode::Gaps);
         std::vector<DroppedIsland> removed; // the islands dropped
@@ -678,7 +675,7 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     st.height_field_axis = projection.axis;
     st.looks_airborne = projection.looks_airborne;
     st.alpha = alpha;
-    st.view = view;
+    st.view = h.view;
     if (mesh.n_faces() == 0) {
         // Every piece was a small detached island (see SurfaceOptions): the tiles never joined.
         char why[200];

@@ -1600,9 +1600,7 @@ int run_info(const fs::path& model, bool json)
         }
     const double hole_share = h.scale > 0 ? hole_max / h.scale : 0.0;
     // With a viewpoint: whether the points are one view from it, as meshing judges it (single_view.h).
-    std::optional<SingleViewStats> view;
-    if (h.cloud.viewpoint)
-        view = single_view_stats(h.cloud.positions, *h.cloud.viewpoint);
+    const std::optional<SingleViewStats>& view = h.view;
     if (json) {
         nlohmann::json j;
         j["file"] = model.string();
