@@ -99,6 +99,18 @@ protected:
     static inline Pyramid* pyramid_ = nullptr;
 };
 
+// Tests of their own scratch directories: each removes this process's scratch directory when it ends
+// (ctest runs every test in a process of its own, and left them behind in the build tree).
+class WriteTilesets : public ::testing::Test
+{
+protected:
+    void TearDown() override
+    {
+        std::error_code ec;
+        fs::remove_all(scratch_dir(), ec);
+    }
+};
+
 // The node structural check: 1.1 asset, refine on the root, errors never growing, child boxes inside
 // parent boxes, every content present, valid (no validator error or warning; the only infos are
 // those of the Draco extension, see test_write_gltf) and inside its tile's box.
@@ -178,7 +190,7 @@ TEST_F(Tilesets, draco_tiles_on_a_shared_grid_have_bit_identical_borders)
 // vertices 0.7 apart (no short binary fractions), store their shared border as the same
 // world positions, float + translation, bit for bit. With each tile's own centre as its offset, the
 // floats of the two sides rounded differently (QA, session 19: 749 of 992 shared vertices off by an ulp).
-TEST(WriteTilesets, plain_tiles_share_their_border_bit_for_bit)
+TEST_F(WriteTilesets, plain_tiles_share_their_border_bit_for_bit)
 {
     const fs::path dir = scratch_dir().string() + ".plain_borders";
     fs::remove_all(dir);
@@ -257,7 +269,7 @@ std::vector<std::string> listing(const fs::path& dir)
 
 // A failed write leaves the previous tileset untouched and nothing beside it; a successful one
 // replaces it whole; a directory that is not a tileset is never replaced.
-TEST(WriteTilesets, replace_only_on_success)
+TEST_F(WriteTilesets, replace_only_on_success)
 {
     const fs::path base = scratch_dir() / "replace";
     fs::remove_all(base);
@@ -291,7 +303,7 @@ TEST(WriteTilesets, replace_only_on_success)
     fs::remove_all(base);
 }
 
-TEST(WriteTilesets, bad_paths_throw_io_error_naming_the_path_and_leave_nothing)
+TEST_F(WriteTilesets, bad_paths_throw_io_error_naming_the_path_and_leave_nothing)
 {
     Pyramid pyramid;
     const fs::path base = scratch_dir() / "bad";
@@ -310,7 +322,7 @@ TEST(WriteTilesets, bad_paths_throw_io_error_naming_the_path_and_leave_nothing)
     fs::remove_all(scratch_dir() / "bad");
 }
 
-TEST(WriteTilesets, rejects_malformed_trees)
+TEST_F(WriteTilesets, rejects_malformed_trees)
 {
     Pyramid pyramid;
     const fs::path dir = scratch_dir() / "never";
