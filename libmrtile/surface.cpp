@@ -524,7 +524,10 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     // A component that is one tile's fan alone, while that tile has surface neighbours and the surface
     // goes on elsewhere, was passed over by its neighbours' gap triangles (at a sharp edge, say): the
     // surface already covers it, and it would be a loose disk on top. Unless it is an island put back
-    // because the rest does not cover it.
+    // because the rest does not cover it, or one the rest does not cover now that holds as many points
+    // as a small island put back must (lone_fans_to_keep): a flat L-shaped sample cut into two tiles
+    // along a diagonal, their hulls a sliver apart, was two lone fans, and the one that drop_islands had
+    // not taken for the island was dropped here, half the sample with it (QA round 40).
     std::vector<std::int32_t> lone_tile(faces.size(), -2); // per root: the one tile, -1 if more or a gap face
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
@@ -533,13 +536,27 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     }
     std::vector<bool> dropped(faces.size(), false);
     std::size_t dropped_components = 0;
-    if (roots.size() > 1)
+    if (roots.size() > 1) {
+        std::vector<std::uint32_t> lone_roots;
+        std::vector<std::int32_t> lone_tiles;
         for (std::uint32_t r : roots)
             if (lone_tile[r] >= 0 && !restored_tiles[static_cast<std::size_t>(lone_tile[r])] &&
                 !tiles[static_cast<std::size_t>(lone_tile[r])].neighbours.empty()) {
-                dropped[r] = true;
-                ++dropped_components;
+                lone_roots.push_back(r);
+                lone_tiles.push_back(lone_tile[r]);
             }
+        if (!lone_roots.empty()) {
+            std::vector<Vec3> vertex_positions(origin.size());
+            for (std::size_t v = 0; v < origin.size(); ++v)
+                vertex_positions[v] = pos(static_cast<std::uint32_t>(v));
+            const std::vector<bool> keep = lone_fans_to_keep(surface, vertex_positions, layout.tiles, lone_tiles);
+            for (std::size_t k = 0; k < lone_roots.size(); ++k)
+                if (!keep[k]) {
+                    dropped[lone_roots[k]] = true;
+                    ++dropped_components;
+                }
+        }
+    }
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
         // Closed surfaces face outward. Open ones face the sensor where the input tells where it stood

@@ -153,6 +153,8 @@ std::vector<bool> drop_islands(Surface& s, const std::vector<Tile>& tiles, const
 class FaceGrid
 {
 public:
+    static constexpr std::int32_t kNoTile = -2; // any_within: no tile's faces skipped (gap faces are -1)
+
     FaceGrid(const Surface& s, const std::vector<Vec3>& positions) : s_(s), positions_(positions), grid_(mean_edge_cell(s, positions))
     {
         for (std::uint32_t f = 0; f < s.faces().size(); ++f)
@@ -167,12 +169,13 @@ public:
         grid_.insert(f, box_of(s_.faces()[f]));
     }
 
-    //! Whether a live face of the surface comes within r of c.
-    bool any_within(const Vec3& c, double r) const
+    //! Whether a live face of the surface, other than those of tile `skip_tile`, comes within r of c.
+    bool any_within(const Vec3& c, double r, std::int32_t skip_tile = kNoTile) const
     {
         const auto near = [&](std::uint32_t f) {
             const Tri& t = s_.faces()[f];
-            return s_.alive(f) && point_triangle_distance(c, positions_[t[0]], positions_[t[1]], positions_[t[2]]) <= r;
+            return s_.alive(f) && (skip_tile == kNoTile || s_.face_tile()[f] != skip_tile) &&
+                   point_triangle_distance(c, positions_[t[0]], positions_[t[1]], positions_[t[2]]) <= r;
         };
         const Vec3 reach{r, r, r};
         const BoundingBox box{c - reach, c + reach};
@@ -321,6 +324,30 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<DroppedIslan
         }
     }
     return restored;
+}
+
+std::vector<bool> lone_fans_to_keep(const Surface& s, const std::vector<Vec3>& positions,
+                                    const std::vector<TileLoop>& loops, const std::vector<std::int32_t>& tiles, double reach)
+{
+    std::vector<bool> keep(tiles.size(), false);
+    std::unique_ptr<FaceGrid> grid; // made at the first fan that needs it
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const TileLoop& tl = loops[static_cast<std::size_t>(tiles[k])];
+        if (tl.centre == kNone || tl.share < kMinRestoredShare)
+            continue;
+        if (!grid)
+            grid = std::make_unique<FaceGrid>(s, positions);
+        const double r = reach * tl.spacing;
+        if (grid->any_within(positions[tl.centre], r, tiles[k]))
+            continue;
+        // Or its rim: two hemisphere fans of a sphere cut into two tiles share their rim at the equator,
+        // while their centres stand apart (fitted apexes, half a radius off the other disc).
+        std::size_t rim_covered = 0;
+        for (std::uint32_t v : tl.loop)
+            rim_covered += grid->any_within(positions[v], r, tiles[k]) ? 1 : 0;
+        keep[k] = 2 * rim_covered < tl.loop.size();
+    }
+    return keep;
 }
 
 namespace {

@@ -782,6 +782,15 @@ std::size_t restore_uncovered_islands(Surface& s, const std::vector<DroppedIslan
                                       const std::vector<Vec3>& positions, const std::vector<TileLoop>& loops,
                                       std::vector<bool>& restored_tiles, double reach = 2.0);
 
+//! Of `tiles` (each a fan standing alone as a component, which step 5 drops as passed over by its
+//! neighbours' gap triangles), those to keep: the rest of the surface does not cover them (neither the
+//! fan's centre, the terms on which restore_uncovered_islands counts an island as covered, nor half its
+//! rim lie within `reach` × the tile's spacing of a live face of another tile), and they hold a share of
+//! the points an island that small needs to be put back. `positions` covers every vertex of `s`.
+std::vector<bool> lone_fans_to_keep(const Surface& s, const std::vector<Vec3>& positions,
+                                    const std::vector<TileLoop>& loops, const std::vector<std::int32_t>& tiles,
+                                    double reach = 2.0);
+
 struct FillResult
 {
     std::size_t holes = 0;
