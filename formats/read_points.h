@@ -17,8 +17,9 @@
 //!    translation in the last row; refused unless its 3x3 part is orthonormal); "0 0 0" points (no
 //!    return) are left out; x y z intensity r g b colours are kept when every point has them.
 //!  - PCD (the Point Cloud Library's format), DATA ascii, binary or binary_compressed (LZF, stored field
-//!    by field), any field layout with x, y, z (F, I or U of 1-8 bytes; padding fields "_"; an ASCII
-//!    line holds exactly the values FIELDS x COUNT declare, a point at most 64 KB); PCL's
+//!    by field), any field layout with x, y, z (F of 4 or 8 bytes; I or U of 1-4 bytes for x, y and z,
+//!    of 1-8 for other fields; padding fields "_"; an ASCII line holds exactly the values FIELDS x
+//!    COUNT declare, a point at most 64 KB); PCL's
 //!    packed 32-bit colour ("rgb" or "rgba", as float bits or, in ASCII, an unsigned integer). Points of
 //!    an organized cloud without a measurement (a NaN coordinate) are left out; VIEWPOINT is metadata
 //!    (PCL does not apply it either). A binary_compressed block is one LZF stream, so it is held whole.

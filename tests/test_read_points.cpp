@@ -1501,6 +1501,7 @@ TEST(ReadScanList, placement_paths_and_malformed_lists)
         {"zero.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 0\n", "line 1: the quaternion has length 0", false},
         {"nested.conf", "bmesh scene.conf 0 0 0 0 0 0 1\n", "line 1: a scan list may not list another", false},
         {"kind.conf", "bmesh scans/a.e57 0 0 0 0 0 0 1\n", "unknown point file extension", false},
+        {"dir.conf", "bmesh scans 0 0 0 0 0 0 1\n", "line 1: " + (dir / "scans").string() + " is a directory", false},
     };
     expect_read_errors(dir, cases);
     const fs::path gone = write_file(dir / "gone.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/c.xyz 0 0 0 0 0 0 1\n");
@@ -1520,7 +1521,9 @@ TEST(ReadScanList, placement_paths_and_malformed_lists)
     expect_error<IoError>([&] { read_points(none, skip); }, {none.string(), "none of the scans"});
     const fs::path bad_scan = write_file(dir / "bad.conf", "bmesh scans/d.xyz 0 0 0 0 0 0 1\n");
     write_file(dir / "scans" / "d.xyz", "1 2\n");
-    expect_error<InvalidInput>([&] { read_points(bad_scan); }, {(dir / "scans" / "d.xyz").string(), "line 1"});
+    // The scan's error names the list and its line too (QA round 42: only the scan).
+    expect_error<InvalidInput>([&] { read_points(bad_scan); },
+                               {bad_scan.string() + ": line 1: " + (dir / "scans" / "d.xyz").string() + ": line 1"});
     skip.max_points = 3;
     const fs::path twice = write_file(dir / "twice.conf", "bmesh scans/a.xyz 0 0 0 0 0 0 1\nbmesh scans/b.xyz 0 0 0 0 0 0 1\n");
     expect_error<InvalidInput>([&] { read_points(twice, skip); }, {twice.string(), "4 points", "max_points 3"});
@@ -1799,6 +1802,12 @@ TEST(ReadErrors, malformed_ply_headers)
         {"ply\nformat ascii 1.0\nproperty float x\n", "line 3"},
         {"ply\nformat ascii 1.0\nvertex 1\n", "line 3"},
         {"ply\nelement vertex 1\n" + xyz + "end_header\n1 2 3\n", "no format"},
+        // Ambiguous or run-together header lines (QA round 42: the first x was read, "400 12" was 400).
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "property float x\nend_header\n1 2 3 4\n",
+         "line 7: a second property 'x' in element 'vertex'"},
+        {"ply\nformat ascii 1.0\nelement vertex 1 12\n" + xyz + "end_header\n1 2 3\n", "line 3"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x extra\n", "line 4"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "property list uchar int l m\n", "line 7"},
     };
     for (std::size_t i = 0; i < cases.size(); ++i) {
         SCOPED_TRACE(cases[i].body);
@@ -1831,6 +1840,19 @@ TEST(ReadErrors, bad_values_name_the_line)
         {"many_list.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty list uchar int l\n"
                           "property float y\nproperty float z\nend_header\n1 0 2 3\n4 2 7 7 5 6 9\n",
          "line 10: vertex 1 has 7 values, the header declares 4 properties (6 values with the list lengths"},
+        // ASCII values their declared type cannot hold (QA round 42: read as 3.7, 300 and -5).
+        {"int.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty int x\nproperty int y\nproperty int z\n"
+                    "end_header\n1 2 3\n3.7 5 6\n", "line 9: vertex 1: x '3.7' is no int value"},
+        {"uchar.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty uchar y\nproperty float z\n"
+                      "end_header\n1 300 3\n", "line 8: vertex 0: y '300' is no uchar value"},
+        {"uint.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty uint z\n"
+                     "end_header\n1 2 -5\n", "line 8: vertex 0: z '-5' is no uint value"},
+        // A damaged vertex line of an OBJ file was skipped as another statement, its point lost.
+        {"nul.obj", "v 1 2 3\n" + std::string("\0v 4 5 6\n", 9), "line 2: a NUL byte"},
+        {"v1.obj", "v 1 2 3\nv4 5 6\n", "line 2: 'v4': expected 'v x y z'"},
+        // Lines ending in a carriage return alone: the whole file is one line.
+        {"cr.obj", "v 1 2 3\rv 4 5 6\rv 7 8 9\r", "carriage return alone"},
+        {"cr.xyz", "1 2 3\r4 5 6\r7 8 9\r", "carriage return alone"},
         {"off1.off", "OFF\n2 0 0\n1 2 3\n4 x 6\n", "line 4"},
         {"off2.off", "4OFF\n2 0 0\n1 2 3 4\n", "line 1"},
         {"off3.off", "PLY\n", "line 1"},
