@@ -10,6 +10,8 @@
 
 #include <zlib.h>
 
+#include <fcntl.h>
+#include <poll.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -67,7 +69,9 @@ std::string lower_extension(const fs::path& path)
 class Input
 {
 public:
-    Input(const fs::path& path, std::string name) : name_(std::move(name)), buffer_(kBufferSize)
+    //! `pipe_wait_seconds`: how long a named pipe may go without a writer (ReadOptions).
+    Input(const fs::path& path, std::string name, double pipe_wait_seconds = ReadOptions{}.pipe_wait_seconds)
+        : name_(std::move(name)), buffer_(kBufferSize)
     {
         std::error_code ec;
         const fs::file_status status = fs::status(path, ec);
@@ -78,7 +82,10 @@ public:
         if (fs::is_directory(status))
             throw IoError(name_ + ": is a directory, not a point file");
         errno = 0;
-        file_.reset(std::fopen(path.c_str(), "rb"));
+        if (fs::is_fifo(status))
+            file_.reset(open_pipe(path, pipe_wait_seconds));
+        else
+            file_.reset(std::fopen(path.c_str(), "rb"));
         if (!file_)
             throw IoError(name_ + ": cannot open (" + (errno ? std::strerror(errno) : "unknown error") + ")");
         // gzip's magic bytes make a compressed file, whatever its name (as gzopen read them).
@@ -212,6 +219,32 @@ public:
     }
 
 private:
+    // A named pipe blocks its reader's open until a writer opens it, forever if none does (QA round 42:
+    // `mkfifo p.xyz` and no writer hung the command). It is opened without waiting and given
+    // `wait_seconds` to deliver its first byte or close; then read like a file. An error leaves errno set.
+    std::FILE* open_pipe(const fs::path& path, double wait_seconds)
+    {
+        const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+        if (fd < 0)
+            return nullptr;
+        pollfd ready{fd, POLLIN, 0};
+        const int waited = ::poll(&ready, 1, static_cast<int>(std::min(wait_seconds, 86400.0) * 1000.0));
+        const int flags = ::fcntl(fd, F_GETFL);
+        if (waited <= 0 || flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) < 0) {
+            const int error = errno;
+            ::close(fd);
+            if (waited == 0)
+                throw IoError(name_ + ": a named pipe that nothing wrote to in " + std::to_string(std::lround(wait_seconds)) +
+                              " s (no writer?)");
+            errno = error;
+            return nullptr;
+        }
+        std::FILE* file = ::fdopen(fd, "rb");
+        if (!file)
+            ::close(fd);
+        return file;
+    }
+
     // Makes at least n bytes of the file itself available at raw_[raw_begin_]; false if it ends first.
     bool request_raw(std::size_t n)
     {
@@ -2436,7 +2469,7 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
         recenter(cloud);
         return cloud;
     }
-    Input in(path, name);
+    Input in(path, name, options.pipe_wait_seconds);
     PointCloud cloud;
     switch (format) {
     case Format::conf: break; // read above: a list of files, not points

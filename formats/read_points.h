@@ -71,6 +71,9 @@ struct ReadOptions
     //! Stanford lists name every scan of an object while downloads often hold a few). Off by default:
     //! a misspelt name should not silently lose a scan. read_scan_list() tells which files exist.
     bool skip_missing_scans = false;
+    //! A named pipe (FIFO) as input is read once something writes to it; if nothing does within this
+    //! many seconds (no writer), reading fails instead of waiting forever.
+    double pipe_wait_seconds = 30.0;
 };
 
 //! \brief One scan of a scan list: its file and the rigid motion that puts it into the common frame.

@@ -5,6 +5,7 @@
 #include "tests/test_dir.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace mrt {
@@ -1544,6 +1546,27 @@ TEST(ReadErrors, missing_file_directory_and_unknown_extension)
     expect_error<InvalidInput>([&] { read_points(e57); }, {e57.string(), "'.e57'"});
     const fs::path none = write_file(dir / "scan", "1 2 3\n");
     expect_error<InvalidInput>([&] { read_points(none); }, {none.string(), "extension"});
+}
+
+// A named pipe is read once something writes to it; without a writer the read fails after
+// ReadOptions::pipe_wait_seconds instead of waiting forever (QA round 42: the command hung).
+TEST(ReadErrors, a_named_pipe_without_a_writer_fails_in_time)
+{
+    const fs::path dir = test_dir();
+    const fs::path pipe = dir / "pipe.xyz";
+    fs::remove(pipe);
+    ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0) << std::strerror(errno);
+    ReadOptions quick;
+    quick.pipe_wait_seconds = 0.2;
+    expect_error<IoError>([&] { read_points(pipe, quick); }, {pipe.string(), "named pipe", "no writer"});
+    std::thread writer([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        std::ofstream(pipe) << "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    });
+    const PointCloud c = read_points(pipe); // the default wait: the writer comes within it
+    writer.join();
+    expect_points(c, kPoints);
+    fs::remove(pipe);
 }
 
 TEST(ReadErrors, truncated_and_oversized_binary_ply)
