@@ -443,7 +443,9 @@ struct MeshArgs
         cmd->add_flag("--keep-steps", keep_steps, "height fields: keep step discontinuities open (paper Fig. 9b)");
         if (one_mesh)
             cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file")->check(kNonEmpty);
-        cmd->add_flag("--no-quality", no_quality, "skip the point-to-mesh distance measurement");
+        cmd->add_flag("--no-quality", no_quality,
+                      one_mesh ? "skip the point-to-mesh distance measurement"
+                               : "refused here: lods measures every level (a finer level measured worse ends the set)");
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
             ->check(kNonNegative);
@@ -1875,7 +1877,7 @@ int run(int argc, char** argv)
     bool store_levels = false;
     build->add_flag("--store-levels", store_levels,
                     "also mesh the levels a default `export` makes and store them in the model, so that exports of it "
-                    "only cut tiles (about a minute per million points; adds about 50 bytes per point)");
+                    "only cut tiles (about a minute per million points; adds about 50-65 bytes per point)");
 
     // info
     auto* info = app.add_subcommand("info", "describe a .mrt model");
@@ -2162,7 +2164,7 @@ int run(int argc, char** argv)
         PointCloud cloud = shapes::three_holes(40000);
         shapes::add_noise(cloud, 0.05);
         recenter(cloud);
-        std::printf("demo input: genus-3 plate with three holes, %zu noisy samples (built in)\n", cloud.size());
+        std::printf("demo input: genus-3 plate with three holes, %zu samples with slight noise (built in)\n", cloud.size());
         const Hierarchy h = build_hierarchy(std::move(cloud));
         save_model(h, demo_out / "model.mrt");
         std::printf("wrote %s: %zu nodes, %zu leaves, depth %u\n", (demo_out / "model.mrt").string().c_str(), h.nodes.size(),
@@ -2173,6 +2175,7 @@ int run(int argc, char** argv)
         OutputArgs o, draco;
         draco.draco = true;
         mesh_and_write(h, cut, m, o, demo_out / "mesh.ply", {AlsoWrite{demo_out / "mesh.glb", draco}});
+        std::printf("wrote %s: the mesh's statistics and measured quality (JSON)\n", m.stats_json.c_str());
         o.draco = true;
         ExportArgs e;
         LevelStore none;
