@@ -922,7 +922,13 @@ struct ExportArgs
                                                            : "largest number of triangles in one 3D Tiles tile")
                                   ->check(integer_check(64, 1ull << 31))
                                   ->capture_default_str());
-        auto* l = cmd->add_option("--levels", levels, "number of levels of detail (default: down to the hierarchy's leaves)")
+        auto* l = cmd->add_option("--levels", levels,
+                                  lods_command ? "number of levels of detail: level 0 (the best cut of at most three quarters "
+                                                 "of --max-tile-triangles, at most 4096), then the tolerance halved per level "
+                                                 "(default: down to the hierarchy's leaves)"
+                                               : "number of levels of detail: level 0 (the best cut whose mesh fits one tile, "
+                                                 "three quarters of --max-tile-triangles), then the tolerance halved per level; "
+                                                 "the tiles refine down to the last (default: down to the hierarchy's leaves)")
                       ->check(integer_check(1, kMaxLevels));
         auto* t = cmd->add_option("--lod-tolerances", tolerance_list, "explicit level tolerances, coarse to fine")
                       ->check(kNonNegativeList);
