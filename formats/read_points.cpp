@@ -11,24 +11,26 @@
 #include <zlib.h>
 
 #include <fcntl.h>
-#include <poll.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <charconv>
 #include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <future>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <thread>
 #include <vector>
 
 namespace mrt {
@@ -188,6 +190,11 @@ public:
                 if (available() == 0)
                     return false;
                 line = std::string_view(data(), available());
+                // A first line that is the whole file, with more after a carriage return: its lines end
+                // in one alone ("'3.9975\r1.2' is not a number" said nothing of why). A file with line
+                // feeds and a stray carriage return in its first line is read as before.
+                if (line_number_ == 0 && carriage_returns_alone(line))
+                    throw_carriage_returns_alone();
                 begin_ = end_;
                 break;
             }
@@ -197,10 +204,6 @@ public:
         // Windows tools open text files with a UTF-8 byte order mark.
         if (line_number_ == 0 && line.substr(0, 3) == "\xEF\xBB\xBF")
             line.remove_prefix(3);
-        // A first line holding more after a carriage return: the file's lines end in one alone, and
-        // its first "line" is the whole file ("'3.9975\r1.2' is not a number" said nothing of why).
-        if (line_number_ == 0 && carriage_returns_alone(line))
-            throw_carriage_returns_alone();
         ++line_number_;
         return true;
     }
@@ -220,22 +223,33 @@ public:
 
 private:
     // A named pipe blocks its reader's open until a writer opens it, forever if none does (QA round 42:
-    // `mkfifo p.xyz` and no writer hung the command). It is opened without waiting and given
-    // `wait_seconds` to deliver its first byte or close; then read like a file. An error leaves errno set.
+    // `mkfifo p.xyz` and no writer hung the command). The open waits on a thread of its own for
+    // `wait_seconds`; without a writer by then, the pipe is opened for writing here, which ends that
+    // open, and reading fails. A writer that opened the pipe may take as long as it likes to write
+    // (QA round 44: polling for the first byte refused a slow producer). An error leaves errno set.
     std::FILE* open_pipe(const fs::path& path, double wait_seconds)
     {
-        const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-        if (fd < 0)
-            return nullptr;
-        pollfd ready{fd, POLLIN, 0};
-        const int waited = ::poll(&ready, 1, static_cast<int>(std::min(wait_seconds, 86400.0) * 1000.0));
-        const int flags = ::fcntl(fd, F_GETFL);
-        if (waited <= 0 || flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) < 0) {
-            const int error = errno;
-            ::close(fd);
-            if (waited == 0)
-                throw IoError(name_ + ": a named pipe that nothing wrote to in " + std::to_string(std::lround(wait_seconds)) +
-                              " s (no writer?)");
+        // The opener owns its end of the result, so that it may outlive this call if it cannot be woken.
+        auto opened = std::make_shared<std::promise<std::pair<int, int>>>(); // descriptor, errno
+        std::future<std::pair<int, int>> result = opened->get_future();
+        std::thread([opened, file = path.string()] {
+            const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+            opened->set_value({fd, fd < 0 ? errno : 0});
+        }).detach();
+        if (result.wait_for(std::chrono::duration<double>(std::min(wait_seconds, 1e6))) != std::future_status::ready) {
+            const int writer = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+            if (writer >= 0 && result.wait_for(std::chrono::seconds(1)) == std::future_status::ready) {
+                const int fd = result.get().first; // the opener's open returned once a writer was there
+                if (fd >= 0)
+                    ::close(fd);
+            }
+            if (writer >= 0)
+                ::close(writer);
+            throw IoError(name_ + ": a named pipe that nothing opened for writing in " +
+                          std::to_string(std::lround(wait_seconds)) + " s (no writer?)");
+        }
+        const auto [fd, error] = result.get();
+        if (fd < 0) {
             errno = error;
             return nullptr;
         }
@@ -927,8 +941,15 @@ PointCloud read_obj(Input& in, const ReadOptions& options)
         // Statements other than "v" are skipped, so a damaged vertex line would go without a word: a NUL
         // byte (binary data in the text) and a vertex keyword run into its first number ("v1 2 3") are
         // refused (QA round 42: both were skipped, the point lost).
-        if (std::memchr(line.data(), '\0', line.size()))
-            fail_line(in, "a NUL byte (binary data in a text file?)");
+        if (std::memchr(line.data(), '\0', line.size())) {
+            std::string without(line);
+            without.erase(std::remove(without.begin(), without.end(), '\0'), without.end());
+            Tokens words(without, kBlanks);
+            std::string_view first;
+            if (words.next(first) && first[0] == 'v' && (first.size() == 1 || std::strchr("0123456789+-.", first[1])))
+                fail_line(in, "a NUL byte in a vertex line (binary data in a text file?)");
+            continue; // in a comment, another statement or padding: no point lost
+        }
         Tokens tokens(line, kBlanks);
         std::string_view token;
         if (!tokens.next(token))
@@ -1203,7 +1224,11 @@ PlyHeader read_ply_header(Input& in)
     std::string_view line;
     // "ply" up to trailing blanks, as every other header line is read: "ply \n" (a writer's trailing
     // space) and "ply\r\r\n" were refused as no PLY file, though rply, tinyply and plyfile read them.
-    if (!in.next_line(line) || without_trailing_blanks(line) != "ply")
+    // A binary body can hold a line feed, so a header of carriage returns alone is told by its start.
+    if (in.next_line(line) && line.substr(0, 4) == "ply\r" && line.find_first_not_of(kPlyTrailingBlanks, 3) != std::string_view::npos)
+        throw InvalidInput(in.name() + ": its lines end in a carriage return alone (classic Mac OS text); convert them "
+                                       "to line feeds (\\n or \\r\\n)");
+    if (without_trailing_blanks(line) != "ply")
         throw InvalidInput(in.name() + ": not a PLY file (no 'ply' on the first line)");
     PlyHeader header;
     bool have_format = false;
@@ -1270,11 +1295,6 @@ PlyHeader read_ply_header(Input& in)
                 property.offset = element.min_size;
                 element.min_size += type_size(property.type);
             }
-            // Two properties of one name (two x): which one holds the coordinate is anyone's guess.
-            for (const PlyProperty& other : element.properties)
-                if (other.name == property.name)
-                    fail_line(in, "a second property " + quote_token(property.name) + " in element " +
-                                      quote_token(element.name) + ": the header is ambiguous");
             element.properties.push_back(std::move(property));
         } else {
             fail_line(in, "unexpected " + quote_token(keyword) + " in the PLY header");
@@ -1308,6 +1328,12 @@ struct VertexLayout
 VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_colors)
 {
     VertexLayout layout;
+    // Two vertex properties of a name the reader uses (two x): which one holds the coordinate is
+    // anyone's guess, and the first was read without a word (QA round 42). Other names may repeat.
+    for (const char* used : {"x", "y", "z", "red", "green", "blue", "alpha"})
+        if (std::count_if(vertex.properties.begin(), vertex.properties.end(),
+                          [&](const PlyProperty& p) { return p.name == used; }) > 1)
+            throw InvalidInput(in.name() + ": the PLY vertex element has two '" + used + "' properties: the header is ambiguous");
     const char* axes[3] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i) {
         layout.xyz[i] = vertex.find(axes[i]);
@@ -1463,9 +1489,11 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         for (int c : layout.rgba)
             if (c >= 0)
                 fields.push_back(c);
-    std::vector<bool> kept(vertex.properties.size(), false);
+    std::vector<bool> kept(vertex.properties.size(), false), is_coordinate(vertex.properties.size(), false);
     for (int f : fields)
         kept[static_cast<std::size_t>(f)] = true;
+    for (int f : layout.xyz)
+        is_coordinate[static_cast<std::size_t>(f)] = true;
     const auto store = [&](const double* v) {
         cloud.positions.push_back({v[layout.xyz[0]], v[layout.xyz[1]], v[layout.xyz[2]]});
         if (layout.colors) {
@@ -1526,7 +1554,9 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
                     list_items += n;
                 } else if (kept[p]) {
                     values[p] = number_on_line(in, token);
-                    if (!fits_type(values[p], property.type))
+                    // Coordinates only: colours of any value are clamped as before (a uchar alpha of
+                    // 0.5 is a writer's unit scale, not another layout).
+                    if (is_coordinate[p] && !fits_type(values[p], property.type))
                         fail_line(in, "vertex " + std::to_string(i) + ": " + property.name + " " + quote_token(token) +
                                           " is no " + type_name(property.type) + " value, as the header declares it");
                 }

@@ -524,10 +524,13 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
     // A component that is one tile's fan alone, while that tile has surface neighbours and the surface
     // goes on elsewhere, was passed over by its neighbours' gap triangles (at a sharp edge, say): the
     // surface already covers it, and it would be a loose disk on top. Unless it is an island put back
-    // because the rest does not cover it, or one the rest does not cover now that holds as many points
-    // as a small island put back must (lone_fans_to_keep): a flat L-shaped sample cut into two tiles
-    // along a diagonal, their hulls a sliver apart, was two lone fans, and the one that drop_islands had
-    // not taken for the island was dropped here, half the sample with it (QA round 40).
+    // because the rest does not cover it, or a leaf's that the rest does not cover now and that holds as
+    // many points as a small island put back must (lone_fans_to_keep): a flat L-shaped sample cut into
+    // two tiles, leaves, along a diagonal, their hulls a sliver apart, was two lone fans, and the one
+    // that drop_islands had not taken for the island was dropped here, half the sample with it (QA
+    // round 40). Other tiles' fans are dropped: mesh_cut refines a dropped tile and meshes again
+    // (MeshOptions::dropped_rounds), which does better than a loose disc (QA round 44: a cube's two-tile
+    // cut kept a disc reaching a diagonal past the points).
     std::vector<std::int32_t> lone_tile(faces.size(), -2); // per root: the one tile, -1 if more or a gap face
     for (std::uint32_t f = 0; f < face_count; ++f) {
         const std::uint32_t r = components.find(f);
@@ -542,8 +545,13 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
         for (std::uint32_t r : roots)
             if (lone_tile[r] >= 0 && !restored_tiles[static_cast<std::size_t>(lone_tile[r])] &&
                 !tiles[static_cast<std::size_t>(lone_tile[r])].neighbours.empty()) {
-                lone_roots.push_back(r);
-                lone_tiles.push_back(lone_tile[r]);
+                if (h.nodes[static_cast<std::size_t>(tiles[static_cast<std::size_t>(lone_tile[r])].node)].is_leaf()) {
+                    lone_roots.push_back(r);
+                    lone_tiles.push_back(lone_tile[r]);
+                } else {
+                    dropped[r] = true;
+                    ++dropped_components;
+                }
             }
         if (!lone_roots.empty()) {
             std::vector<Vec3> vertex_positions(origin.size());

@@ -1566,7 +1566,40 @@ TEST(ReadErrors, a_named_pipe_without_a_writer_fails_in_time)
     const PointCloud c = read_points(pipe); // the default wait: the writer comes within it
     writer.join();
     expect_points(c, kPoints);
+    // A writer that opened the pipe may be slow to write (QA round 44: waiting for the first byte
+    // refused a producer silent for longer than the wait).
+    std::thread slow([&] {
+        std::ofstream out(pipe);
+        std::this_thread::sleep_for(std::chrono::milliseconds(600));
+        out << "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    });
+    const PointCloud late = read_points(pipe, quick);
+    slow.join();
+    expect_points(late, kPoints);
     fs::remove(pipe);
+}
+
+// The refusals above stay where points would be misread (QA round 44): repeated properties the reader
+// does not use, NUL bytes outside vertex lines, colours off their declared type and a stray carriage
+// return in a first line that ends in a line feed are read as before.
+TEST(ReadPoints, harmless_oddities_still_read)
+{
+    const fs::path dir = test_dir();
+    const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+    const std::string rows = "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    expect_points(read_points(write_file(dir / "dup_scalar.ply", "ply\nformat ascii 1.0\nelement vertex 4\n" + xyz +
+                                                                    "property float s\nproperty float s\nend_header\n"
+                                                                    "0.5 -1.25 2 0 0\n3 4.75 -5.5 0 0\n-0.125 0 8 0 0\n1 1 1 0 0\n")),
+                  kPoints);
+    const PointCloud alpha = read_points(write_file(dir / "alpha.ply", "ply\nformat ascii 1.0\nelement vertex 4\n" + xyz +
+                                                                         "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                                                                         "end_header\n0.5 -1.25 2 0.5 0 1\n3 4.75 -5.5 0 0 0\n"
+                                                                         "-0.125 0 8 0 0 0\n1 1 1 0 0 0\n"));
+    expect_points(alpha, kPoints);
+    const std::string obj = std::string("v 0.5 -1.25 2\nv 3 4.75 -5.5\n# a comment") + '\0' +
+                            " with a NUL\nv -0.125 0 8\nv 1 1 1\n" + std::string(8, '\0');
+    expect_points(read_points(write_file(dir / "nul_comment.obj", obj)), kPoints);
+    expect_points(read_points(write_file(dir / "cr_in_comment.xyz", "# exported\rby a tool\n" + rows)), kPoints);
 }
 
 TEST(ReadErrors, truncated_and_oversized_binary_ply)
@@ -1827,7 +1860,7 @@ TEST(ReadErrors, malformed_ply_headers)
         {"ply\nelement vertex 1\n" + xyz + "end_header\n1 2 3\n", "no format"},
         // Ambiguous or run-together header lines (QA round 42: the first x was read, "400 12" was 400).
         {"ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "property float x\nend_header\n1 2 3 4\n",
-         "line 7: a second property 'x' in element 'vertex'"},
+         "the PLY vertex element has two 'x' properties"},
         {"ply\nformat ascii 1.0\nelement vertex 1 12\n" + xyz + "end_header\n1 2 3\n", "line 3"},
         {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x extra\n", "line 4"},
         {"ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "property list uchar int l m\n", "line 7"},
