@@ -2488,21 +2488,30 @@ Format format_of(const fs::path& path, const std::string& name)
                        "scan list");
 }
 
-} // namespace
-
-PointCloud read_points(const std::filesystem::path& path, const ReadOptions& options)
+// A file without an extension (a pipe such as <(zcat scan.ply.gz), which is /dev/fd/63, or a download
+// saved without one) is read when it opens with a header that names its format: "ply", LAS's "LASF",
+// PCD's "# .PCD" or "VERSION". Nothing is guessed for text columns: any text would pass for them.
+std::optional<Format> format_by_header(Input& in)
 {
-    const std::string name = path.string();
-    const Format format = format_of(path, name);
-    if (format == Format::conf) {
-        PointCloud cloud = read_conf(path, name, options);
-        recenter(cloud);
-        return cloud;
-    }
-    Input in(path, name, options.pipe_wait_seconds);
+    if (!in.request(1))
+        return std::nullopt;
+    in.request(8); // fewer at the end of a short input
+    const std::string_view start(in.data(), in.available());
+    const auto opens = [&](std::string_view magic) { return start.substr(0, magic.size()) == magic; };
+    if (opens("ply\n") || opens("ply\r") || opens("ply "))
+        return Format::ply;
+    if (opens("LASF"))
+        return Format::las;
+    if (opens("# .PCD") || opens("VERSION"))
+        return Format::pcd;
+    return std::nullopt;
+}
+
+PointCloud read_format(Input& in, Format format, const std::string& name, const ReadOptions& options)
+{
     PointCloud cloud;
     switch (format) {
-    case Format::conf: break; // read above: a list of files, not points
+    case Format::conf: break; // read by read_conf: a list of files, not points
     case Format::ply: cloud = read_ply(in, options); break;
     case Format::columns: cloud = read_columns(in, options, false); break;
     case Format::pts: cloud = read_columns(in, options, true); break;
@@ -2515,6 +2524,28 @@ PointCloud read_points(const std::filesystem::path& path, const ReadOptions& opt
     validate(cloud, name);
     recenter(cloud);
     return cloud;
+}
+
+} // namespace
+
+PointCloud read_points(const std::filesystem::path& path, const ReadOptions& options)
+{
+    const std::string name = path.string();
+    if (lower_extension(path).empty()) {
+        Input in(path, name, options.pipe_wait_seconds);
+        if (const std::optional<Format> format = format_by_header(in))
+            return read_format(in, *format, name, options);
+        throw InvalidInput(name + ": no file extension, and its first bytes are no PLY, LAS or PCD header; name it by "
+                                  "its format (.xyz .pts .txt .csv .obj .off .ptx, optionally .gz)");
+    }
+    const Format format = format_of(path, name);
+    if (format == Format::conf) {
+        PointCloud cloud = read_conf(path, name, options);
+        recenter(cloud);
+        return cloud;
+    }
+    Input in(path, name, options.pipe_wait_seconds);
+    return read_format(in, format, name, options);
 }
 
 bool is_scan_list(const std::filesystem::path& path)

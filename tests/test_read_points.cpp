@@ -1602,6 +1602,19 @@ TEST(ReadPoints, harmless_oddities_still_read)
     expect_points(read_points(write_file(dir / "cr_in_comment.xyz", "# exported\rby a tool\n" + rows)), kPoints);
 }
 
+// A file without an extension (a pipe such as <(zcat scan.ply.gz) is /dev/fd/63) is read when its header
+// names its format; other content is refused, asking for an extension.
+TEST(ReadPoints, files_without_an_extension_by_their_header)
+{
+    const fs::path dir = test_dir();
+    const std::string ply = make_ply(Encoding::binary_le, "float", kPoints, kColors);
+    expect_points(read_points(write_file(dir / "scan", ply)), kPoints);
+    expect_points(read_points(write_gz(dir / "scan_gz", ply)), kPoints);
+    const fs::path text = write_file(dir / "columns", "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n");
+    expect_error<InvalidInput>([&] { read_points(text); }, {text.string(), "no file extension", "no PLY, LAS or PCD header"});
+    expect_error<IoError>([&] { read_points(dir / "missing"); }, {(dir / "missing").string(), "no such file"});
+}
+
 TEST(ReadErrors, truncated_and_oversized_binary_ply)
 {
     const fs::path dir = test_dir();
