@@ -1476,8 +1476,12 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
     ASSERT_GE(index.size(), 2u);
     for (std::size_t l = 0; l < index.size(); ++l) {
         EXPECT_TRUE(fs::exists(dir / "lods" / index[l]["file"].get<std::string>()));
-        for (const char* key : {"level", "tolerance", "tiles", "faces", "mean_error", "max_error", "mesh_to_points_max"})
+        for (const char* key : {"level", "tolerance", "tiles", "faces", "mean_error", "max_error", "mesh_to_points_max",
+                                "boundary_loops", "components", "genus"})
             EXPECT_TRUE(index[l].contains(key)) << key;
+        EXPECT_EQ(index[l]["genus"].get<int>(), 0); // the bunny: open at its base, no handle at any level
+        EXPECT_GE(index[l]["boundary_loops"].get<std::size_t>(), 1u);
+        EXPECT_NE(r.out.find("level " + std::to_string(l) + ": tolerance"), std::string::npos) << r.out;
         EXPECT_LT(index[l]["mesh_to_points_max"].get<double>(), 0.05); // no spike off the bunny
         if (l > 0) {
             EXPECT_LE(index[l]["mean_error"].get<double>(), index[l - 1]["mean_error"].get<double>());

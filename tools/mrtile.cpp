@@ -1334,9 +1334,14 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         index.push_back({{"level", level}, {"file", name}, {"tolerance", l.tolerance}, {"tiles", l.cut.size()},
                          {"faces", l.mesh.n_faces()}, {"geometric_error", l.geometric_error},
                          {"mean_error", q.point_to_mesh.mean}, {"max_error", q.point_to_mesh.max},
-                         {"mesh_to_points_max", q.mesh_to_points.max}, {"e_rms", q.e_rms}});
-        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, mean/max distance %.3g/%.3g\n", level, l.tolerance,
-                    l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.point_to_mesh.mean, q.point_to_mesh.max);
+                         {"mesh_to_points_max", q.mesh_to_points.max}, {"e_rms", q.e_rms},
+                         // A level's own loops and pieces: one more than the finest's is seen through in a
+                         // viewer (QA round 43: the rocker arm's level 0 kept a 26-edge loop, said nowhere).
+                         {"boundary_loops", q.topology.boundary_loops}, {"components", q.topology.components},
+                         {"genus", q.topology.genus}});
+        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, %zu boundary loops, genus %d, mean/max distance %.3g/%.3g\n",
+                    level, l.tolerance, l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.topology.boundary_loops,
+                    q.topology.genus, q.point_to_mesh.mean, q.point_to_mesh.max);
     }
     if (quality.size() < set.levels.size())
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
