@@ -74,6 +74,10 @@ struct ReadOptions
     //! A named pipe (FIFO) as input is read once something writes to it; if nothing does within this
     //! many seconds (no writer), reading fails instead of waiting forever.
     double pipe_wait_seconds = 30.0;
+    //! Memory the points may take once built into a hierarchy, in bytes (0 = this machine's physical
+    //! memory): a cloud of more than memory / 128 points is refused while it is read (or by its
+    //! declared count), rather than the build running out of memory.
+    std::uint64_t memory_bytes = 0;
 };
 
 //! \brief One scan of a scan list: its file and the rigid motion that puts it into the common frame.
