@@ -1109,17 +1109,23 @@ PointCloud read_off(Input& in, const ReadOptions& options)
 enum class PlyType : std::uint8_t { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
 enum class PlyEncoding { ascii, binary_le, binary_be };
 
+// The PLY type names, the classic spelling of each type before its sized one (type_name gives the first).
+struct PlyTypeName
+{
+    const char* name;
+    PlyType type;
+};
+constexpr PlyTypeName kPlyTypeNames[] = {
+    {"char", PlyType::int8},     {"int8", PlyType::int8},       {"uchar", PlyType::uint8},
+    {"uint8", PlyType::uint8},   {"short", PlyType::int16},     {"int16", PlyType::int16},
+    {"ushort", PlyType::uint16}, {"uint16", PlyType::uint16},   {"int", PlyType::int32},
+    {"int32", PlyType::int32},   {"uint", PlyType::uint32},     {"uint32", PlyType::uint32},
+    {"float", PlyType::float32}, {"float32", PlyType::float32}, {"double", PlyType::float64},
+    {"float64", PlyType::float64}};
+
 bool parse_ply_type(std::string_view name, PlyType& type)
 {
-    struct Entry { const char* name; PlyType type; };
-    static constexpr Entry kTypes[] = {
-        {"char", PlyType::int8},     {"int8", PlyType::int8},       {"uchar", PlyType::uint8},
-        {"uint8", PlyType::uint8},   {"short", PlyType::int16},     {"int16", PlyType::int16},
-        {"ushort", PlyType::uint16}, {"uint16", PlyType::uint16},   {"int", PlyType::int32},
-        {"int32", PlyType::int32},   {"uint", PlyType::uint32},     {"uint32", PlyType::uint32},
-        {"float", PlyType::float32}, {"float32", PlyType::float32}, {"double", PlyType::float64},
-        {"float64", PlyType::float64}};
-    for (const Entry& e : kTypes)
+    for (const PlyTypeName& e : kPlyTypeNames)
         if (name == e.name) {
             type = e.type;
             return true;
@@ -1160,16 +1166,9 @@ bool fits_type(double value, PlyType t)
 
 const char* type_name(PlyType t)
 {
-    switch (t) {
-    case PlyType::int8: return "char";
-    case PlyType::uint8: return "uchar";
-    case PlyType::int16: return "short";
-    case PlyType::uint16: return "ushort";
-    case PlyType::int32: return "int";
-    case PlyType::uint32: return "uint";
-    case PlyType::float32: return "float";
-    case PlyType::float64: return "double";
-    }
+    for (const PlyTypeName& e : kPlyTypeNames)
+        if (e.type == t)
+            return e.name;
     return "?";
 }
 
