@@ -905,7 +905,7 @@ TEST(Cli, demo_writes_what_it_says)
     const fs::path dir = testing::fresh_test_dir("cli");
     const Result r = mrtile("demo -o " + (dir / "demo").string(), dir);
     ASSERT_EQ(r.code, 0) << r.err;
-    for (const char* file : {"model.mrt", "mesh.ply", "mesh.glb", "tiles/tileset.json"}) {
+    for (const char* file : {"model.mrt", "mesh.ply", "mesh.glb", "mesh.json", "tiles/tileset.json"}) {
         EXPECT_TRUE(fs::exists(dir / "demo" / file)) << file;
         EXPECT_NE(r.out.find("wrote " + (dir / "demo" / file).string()), std::string::npos) << file;
     }

@@ -581,6 +581,22 @@ TEST(Reconstruct, no_spikes_or_holes_on_a_sampled_cad_part)
     }
 }
 
+// The untangling's work bound (40 pair tests per face since session 36): a uniform 1M-point sample of
+// the fandisk (seed 3) crosses itself 573 times before the pass; 10 tests per face stopped with 89 pairs
+// left, 40 leave 12 (QA round 43: another sample kept 207 of 735 with 10, 11 with 40).
+TEST(Reconstruct, the_untangling_bound_clears_a_sampled_cad_part)
+{
+    const testing::ObjTriangles obj = testing::read_obj_triangles(MRTILE_SHARED_DATA "/fandisk.obj");
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    for (const auto& f : obj.faces)
+        triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
+    const Hierarchy h = build_hierarchy(shapes::mesh_surface(obj.vertices, triangles, 1000000, 3));
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    EXPECT_GT(r.untangle.pairs_before, 400u);
+    EXPECT_LT(r.untangle.pairs_after, 30u);
+    EXPECT_EQ(self_intersecting_faces(r.mesh).size() > 0, r.untangle.pairs_after > 0);
+}
+
 // The other side of filling covered holes: real holes stay open. The paper's Table 2 cuts (paper split
 // order, coarse τ) of the bunny keep their scan holes (3 loops at τ 0.002) and the 4,000-point 3-hole
 // solid its three tunnels; filling holes with some points inside (rather than covered all over) had
