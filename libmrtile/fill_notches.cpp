@@ -93,15 +93,7 @@ bool points_cover(const Hierarchy& h, const std::array<Vec3, 3>& t, double reach
             }
         return false;
     };
-    const double longest = std::max({distance(t[0], t[1]), distance(t[1], t[2]), distance(t[2], t[0])});
-    const int steps = std::clamp(static_cast<int>(std::ceil(longest / reach)), 1, 200);
-    for (int i = 0; i <= steps; ++i)
-        for (int j = 0; i + j <= steps; ++j) {
-            const double a = static_cast<double>(i) / steps, b = static_cast<double>(j) / steps;
-            if (!covered(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b))
-                return false;
-        }
-    return true;
+    return all_triangle_spots(t[0], t[1], t[2], reach, 200, covered);
 }
 
 class NotchFiller

@@ -469,6 +469,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
         for (const Tile& t : tiles)
             spacing_of[t.node] = std::sqrt(t.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(t.node)].count())));
         result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
+        result.covered_holes = close_covered_holes(result.mesh, h, spacing_of, along_height_field(options.covered_holes, result.surface));
     }
     const FitOptions fit = along_height_field(options.fit, result.surface);
     const SliverOptions slivers = along_height_field(options.slivers, result.surface);

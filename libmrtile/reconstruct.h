@@ -9,6 +9,7 @@
 //!   QualityReport q = measure_quality(h, r.cut, r.mesh);              // numbers users can trust
 //! \endcode
 
+#include "libmrtile/close_covered_holes.h"
 #include "libmrtile/color_vertices.h"
 #include "libmrtile/cut.h"
 #include "libmrtile/fill_notches.h"
@@ -46,6 +47,9 @@ struct MeshOptions
     //! notches of open borders that the points cover filled, before the slivers (fill_notches.h);
     //! rounds 0 = off
     NotchOptions notches;
+    //! small holes that the points cover closed by a fan around a vertex on the sample, after the
+    //! notches (close_covered_holes.h); max_edges 0 = off; vertical in height-field mode
+    CoveredHoleOptions covered_holes;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
     //! of at most three tiles, while other pieces exist, are refined (replaced by their children) up to
@@ -86,6 +90,7 @@ struct MeshResult
     std::size_t tiles = 0;
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     std::size_t notches = 0;        //!< faces filling notches of open borders (fill_notches)
+    CoveredHoleStats covered_holes; //!< small covered holes closed (close_covered_holes)
     //! Tiles meshed in all: the cut's, and the refined cut's again in each round that remeshed it
     //! (MeshOptions::piece_rounds, dropped_rounds). The surface costs about the same per tile, so this
     //! is the meshing's work, counted the same on every machine.

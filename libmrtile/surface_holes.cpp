@@ -645,14 +645,10 @@ std::vector<Vec3> patch_spots(const std::vector<Vec3>& positions, const std::vec
 {
     std::vector<Vec3> spots;
     for (const Tri& t : patch) {
-        const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
-        const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
-        const int steps = std::clamp(static_cast<int>(std::ceil(longest / step)), 1, 64);
-        for (int i = 0; i <= steps; ++i)
-            for (int j = 0; i + j <= steps; ++j) {
-                const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps;
-                spots.push_back(a + (b - a) * u + (c - a) * v);
-            }
+        all_triangle_spots(positions[t[0]], positions[t[1]], positions[t[2]], step, 64, [&](const Vec3& spot) {
+            spots.push_back(spot);
+            return true;
+        });
     }
     return spots;
 }

@@ -125,6 +125,23 @@ inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
     return std::max({corner(q, r, p), corner(r, p, q), corner(p, q, r)});
 }
 
+//! Whether `keep(spot)` holds at every spot of triangle (a, b, c): a barycentric grid with
+//! ceil(longest edge / step) steps along each edge (1 to max_steps), in a fixed order; stops at the
+//! first spot it fails. How covers and fills judge a triangle against the points around it.
+template <typename Keep>
+bool all_triangle_spots(const Vec3& a, const Vec3& b, const Vec3& c, double step, int max_steps, Keep keep)
+{
+    const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
+    const int steps = std::clamp(static_cast<int>(std::ceil(longest / step)), 1, max_steps);
+    for (int i = 0; i <= steps; ++i)
+        for (int j = 0; i + j <= steps; ++j) {
+            const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps;
+            if (!keep(a + (b - a) * u + (c - a) * v))
+                return false;
+        }
+    return true;
+}
+
 //! An orthonormal frame of a plane (origin, in-plane axes u and v, normal n): a point's coordinates in
 //! the plane, its height above it, and back. Fans and regions are judged in their tile's plane.
 struct PlaneFrame

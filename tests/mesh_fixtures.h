@@ -19,6 +19,27 @@ inline void add_checked_face(Mesh& mesh, Mesh::VertexHandle a, Mesh::VertexHandl
         throw std::logic_error("fixture: OpenMesh refused a face");
 }
 
+//! Gives `mesh` the library's properties (mesh.h) as if it were one tile's fan: every vertex of
+//! cluster `node`, every face a fan face (not a gap face) of tile `node`. Added where missing.
+inline void mark_as_one_tile(Mesh& mesh, int node)
+{
+    OpenMesh::VPropHandleT<int> cluster;
+    OpenMesh::FPropHandleT<int> tile;
+    OpenMesh::FPropHandleT<bool> gap;
+    if (!mesh.get_property_handle(cluster, kVertexCluster))
+        mesh.add_property(cluster, kVertexCluster);
+    if (!mesh.get_property_handle(tile, kFaceTile))
+        mesh.add_property(tile, kFaceTile);
+    if (!mesh.get_property_handle(gap, kFaceGap))
+        mesh.add_property(gap, kFaceGap);
+    for (const auto v : mesh.vertices())
+        mesh.property(cluster, v) = node;
+    for (const auto f : mesh.faces()) {
+        mesh.property(tile, f) = node;
+        mesh.property(gap, f) = false;
+    }
+}
+
 //! Closed UV sphere (poles + `rings`-1 parallels of `segments` vertices), outward CCW faces.
 //! Vertex normals are left zero so that writers must compute them.
 inline Mesh uv_sphere(int rings, int segments, double radius, const Vec3& centre = {}, bool colors = false)

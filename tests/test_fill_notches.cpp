@@ -34,23 +34,12 @@ Hierarchy square_points(const std::function<bool(double, double)>& drop = {})
 Mesh bent_square(const Vec3& n)
 {
     Mesh mesh;
-    OpenMesh::VPropHandleT<int> cluster;
-    OpenMesh::FPropHandleT<int> tile;
-    OpenMesh::FPropHandleT<bool> gap;
-    mesh.add_property(cluster, kVertexCluster);
-    mesh.add_property(tile, kFaceTile);
-    mesh.add_property(gap, kFaceGap);
     const auto a = mesh.add_vertex({0, 0, 0}), b = mesh.add_vertex({10, 0, 0}), c = mesh.add_vertex({10, 10, 0}),
                d = mesh.add_vertex({0, 10, 0}), v = mesh.add_vertex(to_point(n));
     testing::add_checked_face(mesh, a, v, d);
     testing::add_checked_face(mesh, v, c, d);
     testing::add_checked_face(mesh, v, b, c);
-    for (const auto w : mesh.vertices())
-        mesh.property(cluster, w) = 0;
-    for (const auto f : mesh.faces()) {
-        mesh.property(tile, f) = 0;
-        mesh.property(gap, f) = false;
-    }
+    testing::mark_as_one_tile(mesh, 0);
     mesh.update_normals();
     return mesh;
 }

@@ -625,6 +625,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["closings_refused"] = r.surface.closings_refused;
     j["refined_points"] = r.refined_points;
     j["notches"] = r.notches;
+    j["covered_holes_closed"] = r.covered_holes.closed;
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
     j["fit_flips"] = r.fit.flips;

@@ -1,0 +1,63 @@
+#pragma once
+//! \file close_covered_holes.h
+//! \brief Small holes of a mesh that the input points cover are closed (beyond the paper).
+//! \details The surface stage fills the gaps between tiles with a minimum-area triangulation of each
+//! loop, and leaves a loop open where that patch folds or crosses the surface. Along a sharp edge of a
+//! closed solid (a CAD part's 70-degree edge) the loop's corners lie on both faces, and a patch made of
+//! the loop's own corners cuts through the solid: 1M-point samples of the fandisk kept a loop of 8 or
+//! 11 edges there (QA round 43), with points all over it. This pass closes such a loop with a fan
+//! around one new vertex placed on the sample (the input point nearest the loop's centre), so that the
+//! cap follows the edge instead of cutting it, and keeps it only when
+//!  - the loop has at most `max_edges` edges (longer ones are the sample's own borders and wide holes,
+//!    which the surface stage judged whole);
+//!  - the input points cover the cap: every spot of it has a point within `cover_spacings` point
+//!    spacings (a hole of the sample, the bunny's base, has an empty middle);
+//!  - no cap face turns more than `max_turn_degrees` from the face it joins across the loop, and none
+//!    folds back over the cap (in a height field, every cap face faces up its axis);
+//!  - no cap face meets a face of the mesh that shares none of its corners.
+//! Every face is added through add_face and checked; a loop whose cap cannot be added whole stays open.
+//! Cap faces are gap faces (f:tile -1, f:gap true); the new vertex takes the cluster of the loop's
+//! nearest corner. Deterministic: loops are taken in half-edge order, each judged alone.
+
+#include "libmrtile/hierarchy.h"
+#include "libmrtile/mesh.h"
+#include "libmrtile/vec3.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+
+namespace mrt {
+
+struct CoveredHoleOptions
+{
+    //! Loops of at most this many edges are closed (0 = off).
+    std::size_t max_edges = 32;
+    //! The input points must cover the cap: every spot of it has a point within this many spacings.
+    double cover_spacings = 1.5;
+    //! Each cap face turns at most this much from the face it joins across the loop (degrees).
+    double max_turn_degrees = 60.0;
+    //! Keep a height field a graph over the plane normal to `axis`: every cap face must face up it.
+    bool vertical = false;
+    Vec3 axis{0, 0, 1};
+};
+
+//! Counts of close_covered_holes.
+struct CoveredHoleStats
+{
+    std::size_t closed = 0;    //!< loops closed
+    std::size_t faces = 0;     //!< faces added
+    std::size_t removed = 0;   //!< faces taken out around holes whose rim no cap fitted as it was
+    std::size_t uncovered = 0; //!< loops of at most max_edges edges left open: the points do not cover them
+    std::size_t refused = 0;   //!< loops left open although covered: their cap would fold or cross the mesh
+};
+
+//! \brief Closes the holes of `mesh` of at most options.max_edges edges that the points of `h` cover.
+//! `spacing_of` gives the point spacing of the tile each vertex names (v:cluster → spacing), as for
+//! fill_notches; a loop whose corners name no spacing is left open.
+//! \throw InvalidInput for options out of range (a turn outside (0, 180), a cover spacing not positive
+//! and finite, a zero axis with `vertical`) or a mesh without the v:cluster / f:tile / f:gap properties.
+CoveredHoleStats close_covered_holes(Mesh& mesh, const Hierarchy& h, const std::unordered_map<std::int32_t, double>& spacing_of,
+                                     const CoveredHoleOptions& options = {});
+
+} // namespace mrt
