@@ -1,7 +1,7 @@
-// Beyond the paper: small holes that the sample covers, closed by a fan around a vertex on the sample
-// (see close_covered_holes.h). The paper's T2 leaves such holes wherever its Delaunay faces are pruned;
-// our surface stage fills most of them with a patch of the loop's own corners, which cuts through a
-// solid where the loop runs along a sharp edge. A vertex placed on the points lets the cap bend there.
+// Beyond the paper: small holes that the sample covers, capped from the points (see
+// close_covered_holes.h). The paper's T2 leaves such holes wherever its Delaunay faces are pruned; our
+// surface stage fills most of them with a patch of the loop's own corners, which cuts through a solid
+// where the loop runs along a sharp edge. The points inside the hole, as vertices, let the cap bend there.
 
 #include "libmrtile/close_covered_holes.h"
 

@@ -1,23 +1,30 @@
 #pragma once
 //! \file close_covered_holes.h
-//! \brief Small holes of a mesh that the input points cover are closed (beyond the paper).
+//! \brief Small holes of a mesh that the input points cover are capped from the points (beyond the paper).
 //! \details The surface stage fills the gaps between tiles with a minimum-area triangulation of each
 //! loop, and leaves a loop open where that patch folds or crosses the surface. Along a sharp edge of a
-//! closed solid (a CAD part's 70-degree edge) the loop's corners lie on both faces, and a patch made of
+//! closed solid (a CAD part's 90-degree edge) the loop's corners lie on both faces, and a patch made of
 //! the loop's own corners cuts through the solid: 1M-point samples of the fandisk kept a loop of 8 or
-//! 11 edges there (QA round 43), with points all over it. This pass closes such a loop with a fan
-//! around one new vertex placed on the sample (the input point nearest the loop's centre), so that the
-//! cap follows the edge instead of cutting it, and keeps it only when
+//! 11 edges there (QA round 43), with points all over it. This pass sees each loop along the mean
+//! normal of the faces at its corners and triangulates its outline together with the input points
+//! inside it (constrained Delaunay, thinned to about one point per spacing): the cap's inner vertices
+//! lie on the sample, a sharp edge's points among them, so the cap follows the edge instead of
+//! cutting it. A cap is kept only when
 //!  - the loop has at most `max_edges` edges (longer ones are the sample's own borders and wide holes,
-//!    which the surface stage judged whole);
+//!    which the surface stage judged whole) and its outline is simple and counter-clockwise seen from
+//!    the surface's side;
 //!  - the input points cover the cap: every spot of it has a point within `cover_spacings` point
-//!    spacings (a hole of the sample, the bunny's base, has an empty middle);
-//!  - no cap face turns more than `max_turn_degrees` from the face it joins across the loop, and none
-//!    folds back over the cap (in a height field, every cap face faces up its axis);
-//!  - no cap face meets a face of the mesh that shares none of its corners.
-//! Every face is added through add_face and checked; a loop whose cap cannot be added whole stays open.
-//! Cap faces are gap faces (f:tile -1, f:gap true); the new vertex takes the cluster of the loop's
-//! nearest corner. Deterministic: loops are taken in half-edge order, each judged alone.
+//!    spacings;
+//!  - no cap face turns more than `max_turn_degrees` from the face it joins across the loop (in a
+//!    height field, every cap face faces up its axis);
+//!  - no cap face meets a face of the mesh other than in the corners and edges they share, and
+//!    OpenMesh's add_face takes every face (each handle checked; a refused cap is undone).
+//! Where no cap fits, the faces at the loop's corners are taken out and the wider hole tried, up to 4
+//! rings (judged on paper: the mesh changes only once a cap fits): a rim of folded faces, left where
+//! tiles straddle an edge, is replaced. A hole of the sample (the points leave an empty disc of twice
+//! the cover distance inside its outline: the bunny's base) is left at once. Cap faces are gap faces
+//! (f:tile -1, f:gap true); each new vertex takes the cluster of the loop's nearest corner.
+//! Deterministic: loops are taken in half-edge order, each judged alone.
 
 #include "libmrtile/hierarchy.h"
 #include "libmrtile/mesh.h"
