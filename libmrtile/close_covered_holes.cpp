@@ -189,6 +189,54 @@ private:
     std::vector<std::uint32_t> points_;
 };
 
+// A hole seen along `normal` (unit) from `centre`: its outline, and the points near it within a slab as
+// thick as the hole is wide (`width`: its corners' box diagonal, or 4 spacings), in the plane's
+// coordinates and in space.
+struct HoleView
+{
+    Vec3 u, v;
+    std::vector<Point2> outline;
+    std::vector<Point2> seen;
+    std::vector<Vec3> seen_3d;
+};
+
+HoleView view_hole(const Hierarchy& h, const std::vector<Vec3>& corners, const Vec3& centre, const Vec3& normal, double width,
+                   const std::vector<std::uint32_t>& near_points)
+{
+    HoleView view;
+    view.u = perpendicular_axis(normal);
+    view.v = cross(normal, view.u);
+    const auto project = [&](const Vec3& p) { return Point2{dot(p - centre, view.u), dot(p - centre, view.v)}; };
+    for (const Vec3& c : corners)
+        view.outline.push_back(project(c));
+    for (const std::uint32_t i : near_points) {
+        const Vec3& p = h.cloud.positions[i];
+        if (std::abs(dot(p - centre, normal)) <= width) {
+            view.seen.push_back(project(p));
+            view.seen_3d.push_back(p);
+        }
+    }
+    return view;
+}
+
+// The area-weighted mean normal of the faces, or zero.
+Vec3 mean_normal(const Mesh& mesh, const std::vector<Mesh::FaceHandle>& faces)
+{
+    Vec3 normal{0, 0, 0};
+    for (const auto f : faces) {
+        const std::array<Vec3, 3> t = face_corners(mesh, f);
+        normal += cross(t[1] - t[0], t[2] - t[0]);
+    }
+    return norm(normal) > 0.0 ? normalized(normal) : Vec3{0, 0, 0};
+}
+
+BoundingBox grown(BoundingBox box, double margin)
+{
+    box.min = box.min - Vec3{margin, margin, margin};
+    box.max = box.max + Vec3{margin, margin, margin};
+    return box;
+}
+
 class HoleCloser
 {
 public:
@@ -349,15 +397,25 @@ private:
         const std::vector<Mesh::HalfedgeHandle>& loop = hole.loop;
         const std::size_t n = loop.size();
         std::vector<Mesh::VertexHandle> corners;
-        double s = 0.0;
+        std::vector<double> spacings;
         Vec3 centre{0, 0, 0};
         for (const auto hh : loop) {
             const Mesh::VertexHandle v = mesh_.from_vertex_handle(hh);
             corners.push_back(v);
-            s = std::max(s, spacing(v));
+            if (spacing(v) > 0.0)
+                spacings.push_back(spacing(v));
             centre += point(v);
         }
         centre = centre / static_cast<double>(n);
+        // The point spacing around: the median of the corners' tiles (not the largest: a tile whose hull
+        // reaches over the hole has few points for its area, and QA round 45's 1M-point bunny had a base
+        // hole capped 31 spacings from the points by such a tile's spacing).
+        double s = 0.0;
+        if (!spacings.empty()) {
+            const auto middle = spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2);
+            std::nth_element(spacings.begin(), middle, spacings.end());
+            s = *middle;
+        }
         // A loop through a vertex twice bounds two holes that touch there: not a disc to cap.
         std::vector<Mesh::VertexHandle> sorted = corners;
         std::sort(sorted.begin(), sorted.end());
@@ -377,53 +435,34 @@ private:
             box.min = min(box.min, point(v));
             box.max = max(box.max, point(v));
         }
-        BoundingBox around_box = box; // reaching as far as an empty disc is judged
-        const double margin = kSampleHoleReach * reach;
-        around_box.min = around_box.min - Vec3{margin, margin, margin};
-        around_box.max = around_box.max + Vec3{margin, margin, margin};
-        const PointCover cover(h_, around_box, reach);
+        const PointCover cover(h_, grown(box, kSampleHoleReach * reach), reach); // as far as an empty disc is judged
         // The plane the hole is seen in: the mean of the faces kept at its corners (across a sharp edge
-        // of 90 degrees, 45 degrees from each side, so both sides project without folding).
-        Vec3 normal{0, 0, 0};
+        // of 90 degrees, 45 degrees from each side, so both sides project without folding). Its outline
+        // must be simple (checked by the triangulation) and counter-clockwise from that side: the cap's
+        // faces run along the loop's half-edges. (Other directions were tried where this one folds: the
+        // best-fit plane of the corners, the rim faces' normals. They closed none more of 60 loops on 83
+        // sampled solids: those loops run back and forth in space, not only in projection.)
         std::vector<Mesh::FaceHandle> around;
-        for (const auto v : corners)
-            for (const auto f : mesh_.vf_range(v))
+        for (const auto c : corners)
+            for (const auto f : mesh_.vf_range(c))
                 if (kept(hole, f))
                     around.push_back(f);
         std::sort(around.begin(), around.end());
         around.erase(std::unique(around.begin(), around.end()), around.end());
-        for (const auto f : around) {
-            const std::array<Vec3, 3> t = face_corners(mesh_, f);
-            normal += cross(t[1] - t[0], t[2] - t[0]);
-        }
+        const Vec3 normal = mean_normal(mesh_, around);
         if (!(norm(normal) > 0.0))
             return Outcome::Refused;
-        normal = normalized(normal);
-        // The hole seen along the faces' mean normal: across a sharp edge of 90 degrees, 45 degrees from
-        // each side, so both sides project without folding. Its outline must be simple (checked by the
-        // triangulation) and counter-clockwise from that side: the cap's faces run along the loop's
-        // half-edges. (Other directions were tried where this one folds: the best-fit plane of the
-        // corners, the rim faces' normals. They closed none more of 60 loops on 83 sampled solids:
-        // those loops run back and forth in space, not only in projection.)
-        const Vec3 u = perpendicular_axis(normal), v = cross(normal, u);
-        const auto project = [&](const Vec3& p) { return Point2{dot(p - centre, u), dot(p - centre, v)}; };
-        std::vector<Point2> polygon;
+        std::vector<Vec3> corner_points;
         for (const auto c : corners)
-            polygon.push_back(project(point(c)));
+            corner_points.push_back(point(c));
+        const HoleView view = view_hole(h_, corner_points, centre, normal, std::max(box.diagonal(), 4.0 * s), cover.points());
+        const std::vector<Point2>& polygon = view.outline;
+        const std::vector<Point2>& seen = view.seen;
+        const std::vector<Vec3>& seen_3d = view.seen_3d;
         if (!(signed_area(polygon) > 0.0))
             return Outcome::Refused;
-        // The points around, seen along the normal (within a slab as thick as the hole is wide). Where
-        // they leave an empty disc inside the outline, the hole is the sample's own.
-        const double slab = std::max(box.diagonal(), 4.0 * s);
-        std::vector<Point2> seen;
-        std::vector<Vec3> seen_3d;
-        for (const std::uint32_t i : cover.points()) {
-            const Vec3& p = h_.cloud.positions[i];
-            if (std::abs(dot(p - centre, normal)) <= slab) {
-                seen.push_back(project(p));
-                seen_3d.push_back(p);
-            }
-        }
+        // Where the points seen along the normal leave an empty disc inside the outline, the hole is the
+        // sample's own.
         if (has_empty_spot(polygon, seen, kSampleHoleReach * reach))
             return Outcome::SampleHole;
         // The cap's inner vertices: the points inside the outline, thinned to about one per spacing and
@@ -648,6 +687,33 @@ CoveredHoleStats close_covered_holes(Mesh& mesh, const Hierarchy& h, const std::
         mesh.update_vertex_normals();
     }
     return stats;
+}
+
+bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::HalfedgeHandle>& loop, double spacing)
+{
+    if (loop.size() < 3 || !(spacing > 0.0) || !std::isfinite(spacing))
+        return false;
+    std::vector<Vec3> corners;
+    std::vector<Mesh::FaceHandle> around;
+    Vec3 centre{0, 0, 0};
+    for (const auto hh : loop) {
+        const Mesh::VertexHandle v = mesh.from_vertex_handle(hh);
+        corners.push_back(to_vec3(mesh.point(v)));
+        centre += corners.back();
+        for (const auto f : mesh.vf_range(v))
+            around.push_back(f);
+    }
+    centre = centre / static_cast<double>(corners.size());
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    const Vec3 normal = mean_normal(mesh, around);
+    if (!(norm(normal) > 0.0))
+        return false;
+    const BoundingBox box = bounding_box(corners);
+    const double radius = kSampleHoleReach * CoveredHoleOptions{}.cover_spacings * spacing;
+    const HoleView view = view_hole(h, corners, centre, normal, std::max(box.diagonal(), 4.0 * spacing),
+                                    points_in_box(h, grown(box, radius)));
+    return has_empty_spot(view.outline, view.seen, radius);
 }
 
 } // namespace mrt

@@ -22,7 +22,8 @@
 //! Where no cap fits, the faces at the loop's corners are taken out and the wider hole tried, up to 4
 //! rings (judged on paper: the mesh changes only once a cap fits): a rim of folded faces, left where
 //! tiles straddle an edge, is replaced. A hole of the sample (the points leave an empty disc of twice
-//! the cover distance inside its outline: the bunny's base) is left at once. Cap faces are gap faces
+//! the cover distance inside its outline: the bunny's base) is left at once. The spacing is the median
+//! of the loop's corners' tiles. Cap faces are gap faces
 //! (f:tile -1, f:gap true); each new vertex takes the cluster of the loop's nearest corner.
 //! Deterministic: loops are taken in half-edge order, each judged alone.
 
@@ -33,6 +34,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
+#include <vector>
 
 namespace mrt {
 
@@ -40,8 +42,10 @@ struct CoveredHoleOptions
 {
     //! Loops of at most this many edges are closed (0 = off).
     std::size_t max_edges = 32;
-    //! The input points must cover the cap: every spot of it has a point within this many spacings.
-    double cover_spacings = 1.5;
+    //! The input points must cover the cap: every spot of it has a point within this many spacings (a
+    //! uniform random sample leaves empty discs of 1.5 spacings often enough that 1.5 refused caps over
+    //! sampled surface: a terrain's slit, a star prism's crack).
+    double cover_spacings = 2.0;
     //! Each cap face turns at most this much from the face it joins across the loop (degrees).
     double max_turn_degrees = 60.0;
     //! Keep a height field a graph over the plane normal to `axis`: every cap face must face up it.
@@ -66,5 +70,12 @@ struct CoveredHoleStats
 //! and finite, a zero axis with `vertical`) or a mesh without the v:cluster / f:tile / f:gap properties.
 CoveredHoleStats close_covered_holes(Mesh& mesh, const Hierarchy& h, const std::unordered_map<std::int32_t, double>& spacing_of,
                                      const CoveredHoleOptions& options = {});
+
+//! \brief Whether a boundary loop of `mesh` (its border half-edges in order) lies over a hole of the
+//! sample: seen along the mean normal of the faces at its corners, the points of `h` leave a spot
+//! inside it farther than twice the cover distance (CoveredHoleOptions::cover_spacings × `spacing`)
+//! from all of them, as close_covered_holes judges a hole before capping it. The bunny's base: yes; a
+//! crack between tiles over sampled surface: no. False for fewer than 3 edges or no usable spacing.
+bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::HalfedgeHandle>& loop, double spacing);
 
 } // namespace mrt

@@ -75,9 +75,15 @@ struct MeshOptions
     //! A mesh in several pieces with open borders (a closed thin part at a coarse cut, its tiles
     //! straddling it: the rocker arm at tolerance 0.02 was 11 pieces with 12 loops) has the tiles on
     //! its boundary loops refined and is meshed again, up to this many times (0 = never); a round is
-    //! kept only when it leaves fewer pieces and no more loops. Costs a meshing per round, only for
-    //! meshes in pieces with loops (separate closed objects have none).
+    //! kept only when it leaves fewer pieces and no more loops. So does a height field in one piece
+    //! whose loops inside its outline run along tiles their neighbours surround (slits), kept with fewer
+    //! loops and no more pieces. Costs a meshing per round, only for meshes with such loops.
     int piece_rounds = 3;
+    //! The same for a surface in 3D in one piece whose loops run along tiles their neighbours surround:
+    //! cracks where coarse tiles straddle an acute edge of a closed solid (a tetrahedron at tolerance
+    //! 0.01: 8-10 slits along its edges). A round is kept only with fewer loops, no more pieces, no
+    //! higher genus, no more fans left out and no more crossing pairs in the surface (0 = never).
+    int crack_rounds = 3;
 };
 
 struct MeshResult

@@ -726,6 +726,7 @@ TEST(Reconstruct, long_cracks_over_sampled_surface_close)
     fewer.max_hole_edges = 300;
     MeshOptions o;
     o.surface = fewer;
+    o.crack_rounds = 0; // since session 37 the crack rounds mend it too: the hole filling alone is tested
     EXPECT_GT(topology_stats(mesh_at_tolerance(arm, 0.015, o).result.mesh).boundary_loops, 0u); // the case still exercises it
 }
 
@@ -823,7 +824,7 @@ TEST(Reconstruct, options_and_cuts_out_of_range_are_refused)
     many.fit.rounds = kMaxFitRounds + 1;
     EXPECT_THROW(mesh_cut(h, cut, many), InvalidInput);
     for (int MeshOptions::*rounds : {&MeshOptions::small_object_rounds, &MeshOptions::gap_rounds,
-                                     &MeshOptions::dropped_rounds, &MeshOptions::piece_rounds}) {
+                                     &MeshOptions::dropped_rounds, &MeshOptions::piece_rounds, &MeshOptions::crack_rounds}) {
         MeshOptions o;
         o.*rounds = -1;
         EXPECT_THROW(mesh_cut(h, cut, o), InvalidInput);
@@ -1033,6 +1034,30 @@ TEST(Reconstruct, a_slit_in_a_terrain_is_mended)
         return count;
     };
     EXPECT_LE(looking_down(cap.mesh), looking_down(slit.mesh));
+}
+
+// The same mending in 3D (session 37): a closed surface in one piece with loops whose tiles their
+// neighbours surround has cracks, not borders. A tetrahedron's 71-degree edges at a coarse cut (200k
+// points, tolerance 0.01, seed 3): its tiles straddle the edges and leave 8 slits along them; refined
+// there, 1 is left, genus 0, with fewer crossing pairs. A round is kept only with fewer loops, no more
+// pieces, no higher genus, no more fans left out and no more crossing pairs.
+TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
+{
+    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    const Hierarchy h = build_hierarchy(shapes::mesh_surface(corners, sides, 200000, 3));
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    MeshOptions as_cut;
+    as_cut.crack_rounds = 0;
+    const MeshResult cracked = mesh_cut(h, cut, as_cut), mended = mesh_cut(h, cut);
+    const TopologyStats before = topology_stats(cracked.mesh), after = topology_stats(mended.mesh);
+    EXPECT_GE(before.boundary_loops, 5u); // the case this guards
+    EXPECT_EQ(before.components, 1u);
+    EXPECT_LE(after.boundary_loops, 1u);
+    EXPECT_EQ(after.components, 1u);
+    EXPECT_EQ(after.genus, 0);
+    EXPECT_GT(mended.cut.size(), cut.size());
+    EXPECT_LT(self_intersecting_faces(mended.mesh).size(), self_intersecting_faces(cracked.mesh).size());
 }
 
 TEST(Reconstruct, fan_refinement_lowers_the_deviation)
