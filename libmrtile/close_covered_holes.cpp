@@ -35,6 +35,9 @@ constexpr int kMaxWidenings = 4;
 constexpr std::size_t kMaxRingFaces = 8;
 // A cap with a spot this many times the cover distance from every point is over a hole of the sample.
 constexpr double kSampleHoleReach = 2.0;
+// is_sample_hole takes a loop wider than this many spacings (its corners' box diagonal) for a hole of
+// the sample without looking (about half a million spots would be judged at this width).
+constexpr double kMaxJudgedSpacings = 2000.0;
 
 void check_options(const CoveredHoleOptions& o)
 {
@@ -710,6 +713,10 @@ bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh
     if (!(norm(normal) > 0.0))
         return false;
     const BoundingBox box = bounding_box(corners);
+    // A loop this wide is no crack between tiles (and judging it spot by spot would take long: a lake
+    // in a 10M-point terrain).
+    if (box.diagonal() > kMaxJudgedSpacings * spacing)
+        return true;
     const double radius = kSampleHoleReach * CoveredHoleOptions{}.cover_spacings * spacing;
     const HoleView view = view_hole(h, corners, centre, normal, std::max(box.diagonal(), 4.0 * spacing),
                                     points_in_box(h, grown(box, radius)));

@@ -203,6 +203,36 @@ TEST(CloseCoveredHoles, a_hole_of_the_sample_stays_open)
     EXPECT_EQ(close_covered_holes(mesh, full, kSpacing).closed, 1u);
 }
 
+// The border half-edges of the mesh's only boundary loop, in order.
+std::vector<Mesh::HalfedgeHandle> only_loop(const Mesh& mesh)
+{
+    std::vector<Mesh::HalfedgeHandle> loop;
+    for (const auto start : mesh.halfedges())
+        if (mesh.is_boundary(start)) {
+            Mesh::HalfedgeHandle hh = start;
+            do {
+                loop.push_back(hh);
+                hh = mesh.next_halfedge_handle(hh);
+            } while (hh != start);
+            break;
+        }
+    return loop;
+}
+
+TEST(CloseCoveredHoles, a_hole_of_the_sample_is_told_from_a_covered_one)
+{
+    const Mesh mesh = cube_mesh(in_top_hole);
+    const std::vector<Mesh::HalfedgeHandle> loop = only_loop(mesh);
+    ASSERT_EQ(loop.size(), 16u);
+    EXPECT_FALSE(is_sample_hole(mesh, cube_points(), loop, kPointSpacing)); // points all over it
+    const Hierarchy holed = cube_points([](const Vec3& p) { return p.z > 0.999 && std::abs(p.x - 0.5) < 0.1 && std::abs(p.y - 0.5) < 0.1; });
+    EXPECT_TRUE(is_sample_hole(mesh, holed, loop, kPointSpacing)); // an empty square 10 spacings wide
+    // Wider than 2,000 spacings: a hole of the sample without looking.
+    EXPECT_TRUE(is_sample_hole(mesh, cube_points(), loop, 1e-4));
+    EXPECT_FALSE(is_sample_hole(mesh, cube_points(), {loop.begin(), loop.begin() + 2}, kPointSpacing));
+    EXPECT_FALSE(is_sample_hole(mesh, cube_points(), loop, 0.0));
+}
+
 TEST(CloseCoveredHoles, options_and_properties_are_checked)
 {
     const Hierarchy h = cube_points();
