@@ -726,7 +726,7 @@ TEST(Reconstruct, long_cracks_over_sampled_surface_close)
     fewer.max_hole_edges = 300;
     MeshOptions o;
     o.surface = fewer;
-    o.crack_rounds = 0; // since session 37 the crack rounds mend it too: the hole filling alone is tested
+    o.crack_rounds = 0; // the crack rounds (opt-in) mend it too: the hole filling alone is tested
     EXPECT_GT(topology_stats(mesh_at_tolerance(arm, 0.015, o).result.mesh).boundary_loops, 0u); // the case still exercises it
 }
 
@@ -1047,9 +1047,10 @@ TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
     const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
     const Hierarchy h = build_hierarchy(shapes::mesh_surface(corners, sides, 200000, 3));
     const Cut cut = cut_by_tolerance(h, 0.01);
-    MeshOptions as_cut;
-    as_cut.crack_rounds = 0;
-    const MeshResult cracked = mesh_cut(h, cut, as_cut), mended = mesh_cut(h, cut);
+    MeshOptions as_cut, rounds;
+    as_cut.crack_rounds = 0; // the default (QA round 46, see MeshOptions::crack_rounds)
+    rounds.crack_rounds = 3;
+    const MeshResult cracked = mesh_cut(h, cut, as_cut), mended = mesh_cut(h, cut, rounds);
     const TopologyStats before = topology_stats(cracked.mesh), after = topology_stats(mended.mesh);
     EXPECT_GE(before.boundary_loops, 5u); // the case this guards
     EXPECT_EQ(before.components, 1u);
