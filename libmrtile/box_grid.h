@@ -20,6 +20,12 @@
 
 namespace mrt {
 
+//! The bounding box of a triangle, as filed in a BoxGrid.
+inline BoundingBox triangle_box(const std::array<Vec3, 3>& t)
+{
+    return {min(min(t[0], t[1]), t[2]), max(max(t[0], t[1]), t[2])};
+}
+
 class BoxGrid
 {
 public:

@@ -9,6 +9,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/mesh_stats.h"
+#include "libmrtile/polygon2d.h"
 
 #include <algorithm>
 #include <array>
@@ -49,41 +50,13 @@ void check_options(const CoveredHoleOptions& o)
         throw InvalidInput("CoveredHoleOptions::axis must be a finite, non-zero direction when vertical is set");
 }
 
-using Point2 = std::array<double, 2>;
-
-double signed_area(const std::vector<Point2>& polygon)
-{
-    double sum = 0.0;
-    for (std::size_t i = 0; i < polygon.size(); ++i) {
-        const Point2 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
-        sum += a[0] * b[1] - a[1] * b[0];
-    }
-    return 0.5 * sum;
-}
-
-// Even-odd rule; a point on the outline may count either way (callers keep off the outline).
-bool inside_polygon(const std::vector<Point2>& polygon, const Point2& q)
-{
-    bool in = false;
-    for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-        const Point2 &a = polygon[i], &b = polygon[j];
-        if ((a[1] > q[1]) != (b[1] > q[1]) && q[0] < (b[0] - a[0]) * (q[1] - a[1]) / (b[1] - a[1]) + a[0])
-            in = !in;
-    }
-    return in;
-}
-
+// The distance from q to the polygon's outline.
 double distance_to_outline(const std::vector<Point2>& polygon, const Point2& q)
 {
     double best = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < polygon.size(); ++i) {
-        const Point2 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
-        const double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
-        const double t = len2 > 0.0 ? std::clamp(((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
-        const double ex = a[0] + t * dx - q[0], ey = a[1] + t * dy - q[1];
-        best = std::min(best, std::sqrt(ex * ex + ey * ey));
-    }
-    return best;
+    for (std::size_t i = 0; i < polygon.size(); ++i)
+        best = std::min(best, segment_distance2(q, polygon[i], polygon[(i + 1) % polygon.size()]));
+    return std::sqrt(best);
 }
 
 // Whether a spot inside the polygon (on a grid radius / 1.5 apart) lies farther than `radius` from
@@ -127,9 +100,11 @@ bool has_empty_spot(const std::vector<Point2>& polygon, const std::vector<Point2
     return false;
 }
 
-BoundingBox box_of(const std::array<Vec3, 3>& t)
+BoundingBox grown(BoundingBox box, double margin)
 {
-    return {min(min(t[0], t[1]), t[2]), max(max(t[0], t[1]), t[2])};
+    box.min = box.min - Vec3{margin, margin, margin};
+    box.max = box.max + Vec3{margin, margin, margin};
+    return box;
 }
 
 // The input points near a cap, bucketed in cubic cells of `reach`, to tell whether every spot of the
@@ -137,12 +112,9 @@ BoundingBox box_of(const std::array<Vec3, 3>& t)
 class PointCover
 {
 public:
-    PointCover(const Hierarchy& h, BoundingBox box, double reach) : reach_(reach), origin_(box.min)
+    PointCover(const Hierarchy& h, const BoundingBox& box, double reach) : reach_(reach), origin_(grown(box, reach).min)
     {
-        box.min = box.min - Vec3{reach, reach, reach};
-        box.max = box.max + Vec3{reach, reach, reach};
-        origin_ = box.min;
-        for (const std::uint32_t i : points_in_box(h, box)) {
+        for (const std::uint32_t i : points_in_box(h, grown(box, reach))) {
             const Vec3& p = h.cloud.positions[i];
             cells_[key(cell(p))].push_back(p);
             points_.push_back(i);
@@ -233,20 +205,13 @@ Vec3 mean_normal(const Mesh& mesh, const std::vector<Mesh::FaceHandle>& faces)
     return norm(normal) > 0.0 ? normalized(normal) : Vec3{0, 0, 0};
 }
 
-BoundingBox grown(BoundingBox box, double margin)
-{
-    box.min = box.min - Vec3{margin, margin, margin};
-    box.max = box.max + Vec3{margin, margin, margin};
-    return box;
-}
-
 class HoleCloser
 {
 public:
     HoleCloser(Mesh& mesh, const Hierarchy& h, const std::unordered_map<std::int32_t, double>& spacing_of,
                const CoveredHoleOptions& o)
         : mesh_(mesh), h_(h), spacing_of_(spacing_of), o_(o), min_turn_cos_(std::cos(o.max_turn_degrees * M_PI / 180.0)),
-          grid_(mean_edge(mesh) * 2.0)
+          grid_(mean_edge_length(mesh) * 2.0)
     {
         if (!mesh_.get_property_handle(cluster_, kVertexCluster) || !mesh_.get_property_handle(tile_, kFaceTile) ||
             !mesh_.get_property_handle(gap_, kFaceGap))
@@ -274,7 +239,7 @@ public:
         if (loops.empty())
             return stats_; // a closed mesh, or only long loops: no face grid needed
         for (const auto f : mesh_.faces())
-            grid_.insert(static_cast<std::uint32_t>(f.idx()), box_of(face_corners(mesh_, f)));
+            grid_.insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
         for (const auto& loop : loops)
             close(loop);
         if (removed_any_)
@@ -283,14 +248,6 @@ public:
     }
 
 private:
-    static double mean_edge(const Mesh& mesh)
-    {
-        double sum = 0.0;
-        for (const auto e : mesh.edges())
-            sum += mesh.calc_edge_length(e);
-        return mesh.n_edges() > 0 && sum > 0.0 ? sum / static_cast<double>(mesh.n_edges()) : 1.0;
-    }
-
     double spacing(Mesh::VertexHandle v) const
     {
         const auto it = spacing_of_.find(mesh_.property(cluster_, v));
@@ -433,11 +390,10 @@ private:
         if (beside.size() < 3)
             return Outcome::SampleHole;
         const double reach = o_.cover_spacings * s;
-        BoundingBox box{centre, centre};
-        for (const auto v : corners) {
-            box.min = min(box.min, point(v));
-            box.max = max(box.max, point(v));
-        }
+        std::vector<Vec3> corner_points;
+        for (const auto c : corners)
+            corner_points.push_back(point(c));
+        const BoundingBox box = bounding_box(corner_points);
         const PointCover cover(h_, grown(box, kSampleHoleReach * reach), reach); // as far as an empty disc is judged
         // The plane the hole is seen in: the mean of the faces kept at its corners (across a sharp edge
         // of 90 degrees, 45 degrees from each side, so both sides project without folding). Its outline
@@ -455,9 +411,6 @@ private:
         const Vec3 normal = mean_normal(mesh_, around);
         if (!(norm(normal) > 0.0))
             return Outcome::Refused;
-        std::vector<Vec3> corner_points;
-        for (const auto c : corners)
-            corner_points.push_back(point(c));
         const HoleView view = view_hole(h_, corner_points, centre, normal, std::max(box.diagonal(), 4.0 * s), cover.points());
         const std::vector<Point2>& polygon = view.outline;
         const std::vector<Point2>& seen = view.seen;
@@ -547,7 +500,7 @@ private:
         for (const auto fh : added) {
             mesh_.property(tile_, fh) = -1;
             mesh_.property(gap_, fh) = true;
-            grid_.insert(static_cast<std::uint32_t>(fh.idx()), box_of(face_corners(mesh_, fh)));
+            grid_.insert(static_cast<std::uint32_t>(fh.idx()), triangle_box(face_corners(mesh_, fh)));
         }
         for (const Removed& r : taken)
             for (const auto c : r.corners)
@@ -576,7 +529,7 @@ private:
                 continue; // cannot happen: the face's place is free (the hole would stay wider)
             mesh_.property(tile_, f) = it->tile;
             mesh_.property(gap_, f) = it->gap;
-            grid_.insert(static_cast<std::uint32_t>(f.idx()), box_of(face_corners(mesh_, f)));
+            grid_.insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
         }
     }
 
@@ -640,7 +593,7 @@ private:
             std::array<Vec3, 3> t;
             for (std::size_t k = 0; k < 3; ++k)
                 t[k] = point(faces[i][k]);
-            const bool meets = grid_.any_candidate(box_of(t), [&](std::uint32_t id) {
+            const bool meets = grid_.any_candidate(triangle_box(t), [&](std::uint32_t id) {
                 const Mesh::FaceHandle f(static_cast<int>(id));
                 return !mesh_.status(f).deleted() && !is_removed(hole, f) && corners_intersect(mesh_, faces[i], face_vertices(mesh_, f));
             });

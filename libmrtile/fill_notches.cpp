@@ -32,11 +32,6 @@ void check_options(const NotchOptions& o)
         throw InvalidInput("NotchOptions::rounds must lie in [0, 64]");
 }
 
-BoundingBox triangle_box(const std::array<Vec3, 3>& t)
-{
-    return {min(min(t[0], t[1]), t[2]), max(max(t[0], t[1]), t[2])};
-}
-
 // Whether every spot of triangle t (a barycentric grid at most `reach` apart) has an input point within
 // `reach` in the triangle's plane and within `reach` of it across, and the points over the triangle lie
 // in one layer: a thin part's other side a few spacings away (the bunny's ear at a coarse cut, whose
@@ -102,7 +97,7 @@ public:
     NotchFiller(Mesh& mesh, const Hierarchy& h, const std::unordered_map<std::int32_t, double>& spacing_of, const NotchOptions& o)
         : mesh_(mesh), h_(h), spacing_of_(spacing_of), o_(o), min_cos_(std::cos(o.max_turn_degrees * M_PI / 180.0)),
           min_angle_cos_(std::cos(o.min_angle_degrees * M_PI / 180.0)),
-          grid_(mean_edge(mesh) * 2.0)
+          grid_(mean_edge_length(mesh) * 2.0)
     {
         if (!mesh_.get_property_handle(cluster_, kVertexCluster) || !mesh_.get_property_handle(tile_, kFaceTile) ||
             !mesh_.get_property_handle(gap_, kFaceGap))
@@ -177,14 +172,6 @@ private:
                 outline[k] = it != longest.end() && it->second == loop_of[k];
             }
         return outline;
-    }
-
-    static double mean_edge(const Mesh& mesh)
-    {
-        double sum = 0.0;
-        for (const auto e : mesh.edges())
-            sum += mesh.calc_edge_length(e);
-        return mesh.n_edges() > 0 && sum > 0.0 ? sum / static_cast<double>(mesh.n_edges()) : 1.0;
     }
 
     std::array<Vec3, 3> corners(Mesh::FaceHandle f) const

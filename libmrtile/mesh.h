@@ -60,6 +60,16 @@ inline std::array<Mesh::VertexHandle, 3> face_vertices(const Mesh& mesh, Mesh::F
     return v;
 }
 
+//! The mean length of the mesh's edges; 1 for a mesh without edges or length (a grid cell size that
+//! always works).
+inline double mean_edge_length(const Mesh& mesh)
+{
+    double sum = 0.0;
+    for (const auto e : mesh.edges())
+        sum += mesh.calc_edge_length(e);
+    return mesh.n_edges() > 0 && sum > 0.0 ? sum / static_cast<double>(mesh.n_edges()) : 1.0;
+}
+
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";
 inline constexpr const char* kFaceGap = "f:gap";

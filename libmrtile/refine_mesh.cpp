@@ -10,6 +10,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/mesh_stats.h"
+#include "libmrtile/polygon2d.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 
@@ -26,8 +27,6 @@
 namespace mrt {
 namespace {
 
-using Point2 = std::array<double, 2>;
-
 // Rounds of mending a region that touches itself at a vertex (LocalRefiner::unpinch).
 constexpr int kPinchRounds = 20;
 
@@ -37,16 +36,6 @@ constexpr std::size_t kFitPointsPerTile = 64;
 constexpr double kFitDamping = 0.05;
 constexpr double kFitMaxMove = 0.5;
 constexpr int kFitSweeps = 20;
-
-double segment_distance2(const Point2& p, const Point2& a, const Point2& b)
-{
-    const double dx = b[0] - a[0], dy = b[1] - a[1];
-    const double len2 = dx * dx + dy * dy;
-    double t = len2 > 0.0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2 : 0.0;
-    t = std::clamp(t, 0.0, 1.0);
-    const double ex = a[0] + t * dx - p[0], ey = a[1] + t * dy - p[1];
-    return ex * ex + ey * ey;
-}
 
 // A point to insert: where it is, which descendant it belongs to, which input point it is (or -1).
 struct NewPoint
@@ -573,17 +562,6 @@ private:
         return {n.moments.mean, u, cross(normal, u), normal}; // cross(u, v) == normal: right-handed
     }
 
-    static double signed_area(const std::vector<Point2>& polygon)
-    {
-        double area = 0.0;
-        for (std::size_t i = 0; i < polygon.size(); ++i) {
-            const Point2& a = polygon[i];
-            const Point2& b = polygon[(i + 1) % polygon.size()];
-            area += a[0] * b[1] - a[1] * b[0];
-        }
-        return 0.5 * area;
-    }
-
     // The pseudo-tile points (apex and hull) of `tiles` that lie inside the outline, apart from it
     // and from each other by LocalRefineOptions::min_separation of their tile's spacing.
     std::vector<NewPoint> tile_points(const PlaneFrame& plane, const std::vector<Point2>& polygon,
@@ -650,18 +628,6 @@ private:
             }
         }
         return kept;
-    }
-
-    static bool inside_polygon(const std::vector<Point2>& polygon, const Point2& p)
-    {
-        bool inside = false;
-        for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-            const Point2& a = polygon[i];
-            const Point2& b = polygon[j];
-            if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0])
-                inside = !inside;
-        }
-        return inside;
     }
 
     // Deletes the region and adds the new faces in an order that always attaches to what is there
