@@ -303,9 +303,10 @@ constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_bro
 //    tiles overlap seen along the axis, so that no face between them looks up (a 3M-point terrain at
 //    tolerance 0.002: a 20-edge slit between two tiles); a round is kept when it has fewer loops and
 //    no more pieces;
-//  - a surface in 3D, in one piece, with loops whose tiles are surrounded: cracks where coarse tiles
+//  - a surface in 3D, in one piece, with loops whose tiles are surrounded (opt-in, crack_rounds 0 by
+//    default: it can close a real hole whose rim it takes for a crack): cracks where coarse tiles
 //    straddle an acute edge of a closed solid (a tetrahedron at tolerance 0.01: 8-10 slits along its
-//    edges; session 37's battery of 83 sampled solids: 58 -> 47 loops). A round is kept when it has
+//    edges; session 37's battery of 83 sampled solids: 60 -> 47 loops). A round is kept when it has
 //    fewer loops, no more pieces, no higher genus, no more fans left out (their points would lie far
 //    from the mesh: a tetrahedron at 0.002 had its maximum distance 3.4 times higher) and no more
 //    crossing pairs (a 5-point star prism: 16 -> 172 after the untangling).
@@ -318,6 +319,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         const bool pieces = round < options.piece_rounds && now.components >= 2 && now.boundary_loops > 0;
         const bool slits = round < options.piece_rounds && result.surface.height_field_used && now.components == 1 &&
                            now.boundary_loops >= 2;
+        // (The three exclude each other: pieces have 2 components or more, slits a height field.)
         const bool cracks = round < options.crack_rounds && !result.surface.height_field_used && now.components == 1 &&
                             now.boundary_loops >= 1;
         if (!pieces && !slits && !cracks)
@@ -337,7 +339,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
                 continue;
             // A crack lies over sampled surface; a hole of the sample (the bunny's base, whose tiles can
             // all be surrounded) is left without a meshing spent on it (the bunny at 0.001: 0.6 -> 1.0 s).
-            if (cracks && !pieces && !slits && is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
+            if (cracks && is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
                 continue;
             for (std::size_t k : loop)
                 marked[k] = true;
