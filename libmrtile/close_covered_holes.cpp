@@ -8,6 +8,7 @@
 #include "libmrtile/box_grid.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/median.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/polygon2d.h"
 
@@ -129,6 +130,25 @@ public:
     bool covers(const std::array<Vec3, 3>& t) const
     {
         return all_triangle_spots(t[0], t[1], t[2], reach_ / 1.5, 200, [&](const Vec3& spot) { return near(spot); });
+    }
+
+    // The share of triangle t's area with no point within reach, estimated at the centres of steps²
+    // equal sub-triangles (steps = the longest edge over a third of the reach, 1 to 200), each of which
+    // stands for the same area.
+    double share_uncovered(const std::array<Vec3, 3>& t) const
+    {
+        const double longest = std::max({distance(t[0], t[1]), distance(t[1], t[2]), distance(t[2], t[0])});
+        const int steps = std::clamp(static_cast<int>(std::ceil(longest / (reach_ / 3.0))), 1, 200);
+        const Vec3 du = (t[1] - t[0]) / static_cast<double>(steps), dv = (t[2] - t[0]) / static_cast<double>(steps);
+        std::size_t off = 0;
+        for (int i = 0; i < steps; ++i)
+            for (int j = 0; i + j < steps; ++j) {
+                const Vec3 corner = t[0] + du * static_cast<double>(i) + dv * static_cast<double>(j);
+                off += near(corner + (du + dv) / 3.0) ? 0 : 1; // the sub-triangle pointing up
+                if (i + j + 1 < steps)
+                    off += near(corner + (du + dv) * (2.0 / 3.0)) ? 0 : 1; // and the one pointing down
+            }
+        return static_cast<double>(off) / (static_cast<double>(steps) * static_cast<double>(steps));
     }
 
 private:
@@ -370,12 +390,7 @@ private:
         // The point spacing around: the median of the corners' tiles (not the largest: a tile whose hull
         // reaches over the hole has few points for its area, and QA round 45's 1M-point bunny had a base
         // hole capped 31 spacings from the points by such a tile's spacing).
-        double s = 0.0;
-        if (!spacings.empty()) {
-            const auto middle = spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2);
-            std::nth_element(spacings.begin(), middle, spacings.end());
-            s = *middle;
-        }
+        const double s = upper_median_in_place(spacings);
         // A loop through a vertex twice bounds two holes that touch there: not a disc to cap.
         std::vector<Mesh::VertexHandle> sorted = corners;
         std::sort(sorted.begin(), sorted.end());
@@ -674,6 +689,32 @@ bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh
     const HoleView view = view_hole(h, corners, centre, normal, std::max(box.diagonal(), 4.0 * spacing),
                                     points_in_box(h, grown(box, radius)));
     return has_empty_spot(view.outline, view.seen, radius);
+}
+
+double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::FaceHandle>& faces, double reach)
+{
+    if (!(reach > 0.0) || !std::isfinite(reach) || faces.empty())
+        return 0.0;
+    std::vector<std::array<Vec3, 3>> triangles;
+    std::vector<Vec3> corners;
+    for (const Mesh::FaceHandle f : faces) {
+        triangles.push_back(face_corners(mesh, f));
+        corners.insert(corners.end(), triangles.back().begin(), triangles.back().end());
+    }
+    const PointCover cover(h, bounding_box(corners), reach);
+    double off = 0.0;
+    for (const std::array<Vec3, 3>& t : triangles)
+        off += 0.5 * norm(cross(t[1] - t[0], t[2] - t[0])) * cover.share_uncovered(t);
+    return off;
+}
+
+double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const BoundingBox& box, double reach)
+{
+    std::vector<Mesh::FaceHandle> meeting;
+    for (const Mesh::FaceHandle f : mesh.faces())
+        if (triangle_box(face_corners(mesh, f)).meets(box))
+            meeting.push_back(f);
+    return area_off_the_sample(mesh, h, meeting, reach);
 }
 
 } // namespace mrt

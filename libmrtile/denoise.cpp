@@ -7,6 +7,7 @@
 #include "libmrtile/denoise.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/median.h"
 #include "libmrtile/neighbours.h"
 #include "libmrtile/pca.h"
 
@@ -146,10 +147,7 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
     // An isolated point (a stray return among others: neighbours far apart) stays where it is: its
     // neighbourhood is no surface, and a quadric through stray points would turn them into a sheet of
     // their own (a sphere with 1.5% stray points: 8 pieces, 1 when they stay).
-    std::vector<double> sorted = spread;
-    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(n / 2);
-    std::nth_element(sorted.begin(), middle, sorted.end());
-    const double isolated = options.isolated_ratio * *middle;
+    const double isolated = options.isolated_ratio * upper_median(spread);
     double sum = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
         if (options.isolated_ratio > 0.0 && spread[i] > isolated)

@@ -4,6 +4,7 @@
 // The noise floor goes beyond the paper, which assumes that its smallest clusters are pieces of surface:
 // under noise of about a point spacing they are blobs, and the floor keeps cuts above them.
 #include "libmrtile/hierarchy.h"
+#include "libmrtile/median.h"
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
@@ -33,13 +34,6 @@ double Hierarchy::flatness(const Node& node, double largest_side) const
 }
 
 namespace {
-
-double median(std::vector<double> v)
-{
-    const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), middle, v.end());
-    return *middle;
-}
 
 struct Roughness
 {
@@ -81,12 +75,12 @@ double floor_of(const Roughness& leaves, double region)
     constexpr double kFactor = 3.0;
     if (leaves.rms.size() < kMinLeaves)
         return 0.0;
-    const double rough = median(leaves.roughness);
+    const double rough = upper_median(leaves.roughness);
     if (!(rough > 0))
         return 0.0;
     const double weight = std::clamp((rough - kSmooth) / (kNoisyLeaves - kSmooth), 0.0, 1.0) *
                           std::clamp((kCurved - region / rough) / (kCurved - kNoisy), 0.0, 1.0);
-    return weight > 0 ? weight * kFactor * median(leaves.rms) : 0.0;
+    return weight > 0 ? weight * kFactor * upper_median(leaves.rms) : 0.0;
 }
 
 // Kurtosis of the distances of a node's points to its plane, E[d⁴] / E[d²]²: about 3 for noise (a
@@ -191,8 +185,8 @@ void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judge
             }
         }
     const bool sample_noisy = !floored_rms.empty() && 2 * floored_rms.size() >= noisy_leaves;
-    const double sample_rms = sample_noisy ? median(floored_rms) : 0.0;
-    const double sample_floor = sample_noisy ? median(floored_floor) : 0.0;
+    const double sample_rms = sample_noisy ? upper_median(floored_rms) : 0.0;
+    const double sample_floor = sample_noisy ? upper_median(floored_floor) : 0.0;
     auto whole_sample = [&](const JudgedRegion& me) {
         return sample_noisy && me.leaf_rms <= kAlike * sample_rms && sample_rms <= kAlike * me.leaf_rms ? sample_floor : 0.0;
     };
@@ -230,7 +224,7 @@ void take_neighbours_floors(Hierarchy& h, const std::vector<JudgedRegion>& judge
                 stack.push_back(n.right);
             }
         }
-        raised[r] = !floors.empty() && 2 * floors.size() >= others ? median(floors) : whole_sample(me);
+        raised[r] = !floors.empty() && 2 * floors.size() >= others ? upper_median(floors) : whole_sample(me);
     }
     for (std::size_t r = 0; r < judged.size(); ++r) {
         Node& n = h.nodes[static_cast<std::size_t>(judged[r].node)];
@@ -300,7 +294,7 @@ void derive_noise_floor(Hierarchy& h)
         if (n.count() >= 16 * min_cluster && n.count() < region_max && n.frame.values[1] > 0)
             region_roughness.push_back(Roughness::node_roughness(n));
     }
-    const double global = region_roughness.size() >= kMinLeaves ? floor_of(all, median(region_roughness)) : 0.0;
+    const double global = region_roughness.size() >= kMinLeaves ? floor_of(all, upper_median(region_roughness)) : 0.0;
 
     // Each region computes its floor (parents come before children, so regions come before what is
     // under them).
@@ -340,9 +334,9 @@ void derive_noise_floor(Hierarchy& h)
             if (parent.frame.values[1] > 0)
                 region_roughness = std::min(region_roughness, Roughness::node_roughness(parent));
         }
-        const double leaf_roughness = median(leaves.roughness);
+        const double leaf_roughness = upper_median(leaves.roughness);
         n.noise_floor = std::max(floor_of(leaves, region_roughness), plateau_floor(h, n, leaf_roughness, region_max, kurtosis));
-        judged.push_back({static_cast<std::int32_t>(k), median(leaves.rms), leaf_roughness, n.noise_floor});
+        judged.push_back({static_cast<std::int32_t>(k), upper_median(leaves.rms), leaf_roughness, n.noise_floor});
     }
     take_neighbours_floors(h, judged, region_max);
     // A denoised sample's regions: at least their residual noise, which their leaves no longer show.
@@ -447,7 +441,7 @@ bool sample_is_noisy(const Hierarchy& h)
     // The leaves, not the floors: floors come from noise of a fifth of a spacing on (meshes that the
     // floor alone keeps whole), and noise that breaks meshes (a spacing or more) makes blobs of leaves
     // also where the floor's rules miss it (3-4 spacings on a tube, one at a CAD part's sharp edges).
-    return regions >= kMinLeaves && !leaves.roughness.empty() && median(leaves.roughness) >= kNoisyLeaves;
+    return regions >= kMinLeaves && !leaves.roughness.empty() && upper_median(leaves.roughness) >= kNoisyLeaves;
 }
 
 } // namespace mrt

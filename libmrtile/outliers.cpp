@@ -7,6 +7,7 @@
 #include "libmrtile/outliers.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/median.h"
 #include "libmrtile/neighbours.h"
 
 #include <algorithm>
@@ -17,12 +18,6 @@
 namespace mrt {
 namespace {
 
-double median_of(std::vector<double>& values)
-{
-    const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-    std::nth_element(values.begin(), middle, values.end());
-    return *middle;
-}
 
 } // namespace
 
@@ -51,7 +46,7 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
     });
 
     std::vector<double> all = spread;
-    const double global = median_of(all);
+    const double global = upper_median_in_place(all);
     std::vector<std::uint32_t> out;
     std::vector<double> local(k);
     for (std::uint32_t i = 0; i < n; ++i) {
@@ -59,7 +54,7 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
         if (!outlier && o.local_ratio > 0.0) {
             for (std::size_t m = 0; m < k; ++m)
                 local[m] = spread[near[i * k + m]];
-            const double around = median_of(local);
+            const double around = upper_median_in_place(local);
             outlier = around > 0.0 && spread[i] > o.local_ratio * around;
         }
         if (outlier)

@@ -10,6 +10,7 @@
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
+#include "libmrtile/median.h"
 #include "libmrtile/pca.h"
 #include "libmrtile/union_find.h"
 
@@ -282,14 +283,119 @@ double median_spacing(const std::vector<Tile>& tiles, const std::vector<std::siz
     for (const std::size_t k : which)
         if (tiles[k].spacing() > 0.0)
             spacings.push_back(tiles[k].spacing());
-    if (spacings.empty())
-        return 0.0;
-    const auto middle = spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2);
-    std::nth_element(spacings.begin(), middle, spacings.end());
-    return *middle;
+    return upper_median_in_place(spacings);
 }
 
 constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_broken_pieces to refine them
+
+// The spacing of the sample under a tile: Tile::spacing is that of the points the tile was built from
+// (at most TileOptions::max_points of its node's), wider than the sample's at coarse cuts.
+double sample_spacing(const Hierarchy& h, const Tile& tile)
+{
+    const std::uint32_t under = h.nodes[static_cast<std::size_t>(tile.node)].count();
+    return under > tile.points ? tile.spacing() * std::sqrt(static_cast<double>(tile.points) / under) : tile.spacing();
+}
+
+// A crack lies over sampled surface: the mesh at it, and what mends it, stays within this many of its
+// sample's spacings of the points (judged as area_off_the_sample judges). A hole's rim can pass for a
+// crack when the rest of the hole lies under a neighbour's fan (QA round 46: spheres with holes 12-35
+// spacings wide closed by crack rounds at coarse cuts, faces 4-16 spacings off the points).
+constexpr double kCrackReach = 3.0;
+
+// A boundary loop that a crack round would mend, judged against the points: before the round, the
+// faces at its corners; after it, the mesh over its tiles.
+class CrackWatch
+{
+public:
+    CrackWatch(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles, const LoopTiles& loop,
+               const Mesh& mesh)
+    {
+        std::vector<Vec3> corners;
+        std::vector<double> spacings;
+        for (const std::size_t k : loop.tiles) {
+            corners.push_back(tiles[k].centre);
+            for (const std::uint32_t i : tiles[k].boundary)
+                corners.push_back(h.cloud.positions[i]);
+            if (const double s = sample_spacing(h, tiles[k]); s > 0.0)
+                spacings.push_back(s);
+            nodes_.push_back(cut[k]);
+        }
+        reach_ = kCrackReach * upper_median_in_place(spacings);
+        if (!(reach_ > 0.0))
+            return; // no spacing: never at a rim, never spanning
+        // Faces at a hole's rim span the rest of the hole: spots twice the reach from every point, over
+        // more than a reach-wide square (about one spot of that grid; the faces at a tetrahedron's
+        // cracks had half of one, those at the holes' rims on QA 46's spheres 1-38).
+        std::vector<Mesh::FaceHandle> at_corners;
+        for (const Mesh::HalfedgeHandle he : loop.border)
+            for (const Mesh::FaceHandle f : mesh.vf_range(mesh.to_vertex_handle(he)))
+                at_corners.push_back(f);
+        std::sort(at_corners.begin(), at_corners.end());
+        at_corners.erase(std::unique(at_corners.begin(), at_corners.end()), at_corners.end());
+        at_rim_ = area_off_the_sample(mesh, h, at_corners, 2.0 * reach_) > reach_ * reach_;
+        if (at_rim_)
+            return;
+        box_ = bounding_box(corners);
+        off_before_ = area_off_the_sample(mesh, h, box_, reach_);
+    }
+
+    // Whether the faces at the loop's corners span a hole of the sample: the loop is a hole's rim.
+    bool at_a_holes_rim() const { return at_rim_; }
+
+    // Whether `mesh` (the cut meshed again) spans more of a hole of the sample over the loop's tiles
+    // than the mesh before (by more than half a reach-wide square: the spots' rounding).
+    bool spans_a_hole(const Hierarchy& h, const Mesh& mesh) const
+    {
+        return !at_rim_ && area_off_the_sample(mesh, h, box_, reach_) > off_before_ + 0.5 * reach_ * reach_;
+    }
+
+    // The loop's tiles' cut nodes.
+    const std::vector<std::int32_t>& nodes() const { return nodes_; }
+    double reach() const { return reach_; }
+
+private:
+
+    std::vector<std::int32_t> nodes_;
+    double reach_ = 0.0;
+    bool at_rim_ = false;
+    BoundingBox box_;        // of the loop's tiles' outlines and centres
+    double off_before_ = 0.0; // the mesh's area over a hole of the sample in box_, before the round
+};
+
+// A regular sample of the points of h, at most about this many: the points a crack round must leave no
+// farther from the mesh than they were.
+constexpr std::size_t kFarSample = 20000;
+
+// The largest distance from a regular sample of h's points to `mesh`.
+double farthest_sample_point(const Hierarchy& h, const Mesh& mesh, std::size_t threads)
+{
+    std::vector<Vec3> sample;
+    const std::size_t step = std::max<std::size_t>(1, h.cloud.size() / kFarSample);
+    for (std::size_t i = 0; i < h.cloud.size(); i += step)
+        sample.push_back(h.cloud.positions[i]);
+    const std::vector<ClosestPoint> closest = closest_points(sample, mesh, threads);
+    double farthest = 0.0;
+    for (std::size_t i = 0; i < sample.size(); ++i)
+        farthest = std::max(farthest, distance(sample[i], closest[i].point));
+    return farthest;
+}
+
+// Whether the points lie farther from `again` (a crack round's mesh) than from `mesh`, the one before:
+// the farthest of a regular sample, by more than the watches' median spacing. The surface is meshed
+// anew everywhere, and a round that mended its cracks made a hole's rim elsewhere recede by 5
+// spacings (QA 46's sphere with holes of 8-40 spacings, at tolerance 0.01: the gap triangulation's
+// alpha follows the tiles' mean edge).
+bool leaves_points(const Hierarchy& h, const Mesh& mesh, const Mesh& again, const std::vector<CrackWatch>& watches,
+                   std::size_t threads)
+{
+    std::vector<double> reaches;
+    for (const CrackWatch& watch : watches)
+        reaches.push_back(watch.reach());
+    if (watches.empty())
+        return false;
+    const double spacing = upper_median_in_place(reaches) / kCrackReach;
+    return farthest_sample_point(h, again, threads) > farthest_sample_point(h, mesh, threads) + spacing;
+}
 
 // After the surface: boundary loops along tiles that their neighbours surround are cracks, not the
 // sample's borders (a scan's outline runs along tiles that face the empty outside: bun045, most of its
@@ -314,7 +420,11 @@ constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_bro
 void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface, MeshResult& result,
                           std::vector<Tile>& tiles)
 {
-    for (int round = 0; round < std::max(options.piece_rounds, options.crack_rounds); ++round) {
+    // Cut nodes on loops whose mending spanned a hole of the sample: a hole's rim, which later crack
+    // rounds leave as it is.
+    std::vector<std::int32_t> rims;
+    bool retried = false; // this round was tried again without the loops whose mending spanned a hole
+    for (int round = 0; round < std::max(options.piece_rounds, options.crack_rounds);) {
         const TopologyStats now = topology_stats(result.mesh);
         const bool pieces = round < options.piece_rounds && now.components >= 2 && now.boundary_loops > 0;
         const bool slits = round < options.piece_rounds && result.surface.height_field_used && now.components == 1 &&
@@ -327,6 +437,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         const std::vector<bool> surrounded = surrounded_tiles(tiles, surface);
         assert(surrounded.size() == result.cut.size()); // one tile per cut node, in order
         std::vector<bool> marked(result.cut.size(), false);
+        std::vector<CrackWatch> mended;
         std::size_t on_loops = 0, inner = 0;
         for (const LoopTiles& found : tiles_of_loops(result.cut, result.mesh)) {
             const std::vector<std::size_t>& loop = found.tiles;
@@ -339,8 +450,17 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
                 continue;
             // A crack lies over sampled surface; a hole of the sample (the bunny's base, whose tiles can
             // all be surrounded) is left without a meshing spent on it (the bunny at 0.001: 0.6 -> 1.0 s).
-            if (cracks && is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
-                continue;
+            if (cracks) {
+                if (std::any_of(loop.begin(), loop.end(), [&](std::size_t k) {
+                        return std::find(rims.begin(), rims.end(), result.cut[k]) != rims.end();
+                    }) ||
+                    is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
+                    continue;
+                CrackWatch watch(h, result.cut, tiles, found, result.mesh);
+                if (watch.at_a_holes_rim())
+                    continue;
+                mended.push_back(std::move(watch));
+            }
             for (std::size_t k : loop)
                 marked[k] = true;
         }
@@ -366,9 +486,25 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         bool better = pieces ? then.components < now.components && then.boundary_loops <= now.boundary_loops
                              : then.boundary_loops < now.boundary_loops && then.components <= now.components &&
                                    (slits || then.genus <= now.genus);
-        if (better && cracks)
+        if (better && cracks) {
+            // Where mending a loop spanned a hole of the sample, the round is tried once more without
+            // that loop (the others may be cracks), and the loop is left to later rounds as well.
+            std::vector<const CrackWatch*> spanning;
+            for (const CrackWatch& watch : mended)
+                if (watch.spans_a_hole(h, again))
+                    spanning.push_back(&watch);
+            if (!spanning.empty()) {
+                for (const CrackWatch* watch : spanning)
+                    rims.insert(rims.end(), watch->nodes().begin(), watch->nodes().end());
+                if (retried || spanning.size() == mended.size())
+                    return;
+                retried = true;
+                continue;
+            }
             better = again_stats.dropped_fans <= result.surface.dropped_fans &&
-                     self_intersecting_faces(again).size() <= self_intersecting_faces(result.mesh).size();
+                     self_intersecting_faces(again).size() <= self_intersecting_faces(result.mesh).size() &&
+                     !leaves_points(h, result.mesh, again, mended, options.fit.threads);
+        }
         if (!better)
             return;
         result.cut = cut;
@@ -376,6 +512,8 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         result.surface = again_stats;
         tiles = std::move(again_tiles);
         surface = again_options;
+        ++round;
+        retried = false;
     }
 }
 

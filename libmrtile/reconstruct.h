@@ -81,12 +81,13 @@ struct MeshOptions
     int piece_rounds = 3;
     //! The same for a surface in 3D in one piece whose loops run along tiles their neighbours surround:
     //! cracks where coarse tiles straddle an acute edge of a closed solid (a tetrahedron at tolerance
-    //! 0.01: 8-10 slits along its edges; 3 rounds: 8 -> 1). A round is kept only with fewer loops, no
-    //! more pieces, no higher genus, no more fans left out and no more crossing pairs in the surface.
-    //! Opt-in (0 = never, the default): QA round 46 found it closing real holes 12-35 spacings wide at
-    //! coarse cuts of spheres (a loop at a hole's rim, the rest of the hole under a neighbour's hull:
-    //! faces 4-16 spacings off the points), which its rules do not see.
-    int crack_rounds = 0;
+    //! 0.01: 8-10 slits along its edges; 3 rounds: 8 -> 1). A crack lies over sampled surface, so a
+    //! loop whose faces at its corners span a hole of the sample (spots 6 spacings from every point)
+    //! is a hole's rim and left; a round is kept only with fewer loops, no more pieces, no higher
+    //! genus, no more fans left out, no more crossing pairs, no more of the mesh over the loops' tiles
+    //! farther than 3 spacings from the points (else it is tried once more without the loops that
+    //! did so) and no point of a regular sample farther from the mesh by a spacing. 0 = never.
+    int crack_rounds = 3;
 };
 
 struct MeshResult

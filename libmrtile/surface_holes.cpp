@@ -7,6 +7,7 @@
 
 #include "libmrtile/box_grid.h"
 #include "libmrtile/coverage_gap.h"
+#include "libmrtile/median.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/parallel.h"
 
@@ -807,9 +808,7 @@ double sparse_side_spacing(const Hierarchy& h, const Vec3& centre, double radius
             }
             nearest.push_back(best);
         }
-        const auto middle = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
-        std::nth_element(nearest.begin(), middle, nearest.end());
-        return std::sqrt(*middle);
+        return std::sqrt(upper_median_in_place(nearest));
     };
     const double sparse_nearest = median_nearest(true), dense_nearest = median_nearest(false);
     const bool step = std::isfinite(sparse_nearest) && dense_nearest > 0.0 && sparse_nearest >= kMinStep * dense_nearest;

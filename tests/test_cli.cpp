@@ -357,6 +357,34 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
     EXPECT_NE(r.out.find("note: " + std::to_string(crossings) + " pairs of faces cross each other"), std::string::npos) << r.out;
 }
 
+// --crack-rounds reaches the library: a sampled tetrahedron's cracks along its edges at a coarse cut
+// (test_reconstruct: 8 -> 1 loops) are mended by default and left with --crack-rounds 0; out of range
+// (above 64) is a usage error naming the option, and lods, whose levels leave cracks to whole
+// tolerance cuts, has no such option.
+TEST(Cli, crack_rounds_are_an_option_of_mesh_and_reconstruct)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    std::string text;
+    for (const Vec3& p : shapes::mesh_surface(corners, sides, 200000, 3).positions)
+        text += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+    write_text(dir / "tetra.xyz", text);
+    const auto loops = [&](const std::string& extra) {
+        const Result r = mrtile("reconstruct " + (dir / "tetra.xyz").string() + " -o " + (dir / "t.ply").string() +
+                                    " --tolerance 0.01 --stats-json " + (dir / "t.json").string() + extra, dir);
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(slurp(dir / "t.json"))["boundary_loops"].get<std::size_t>();
+    };
+    const std::size_t mended = loops(""), left = loops(" --crack-rounds 0");
+    EXPECT_GE(left, 5u);
+    EXPECT_LT(mended, left);
+    Result r = mrtile("mesh x.mrt -o y.ply --crack-rounds 65", dir);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("--crack-rounds"), std::string::npos) << r.err;
+    EXPECT_EQ(mrtile("lods x.mrt -o d --crack-rounds 1", dir).code, 2);
+}
+
 // Points the mesh leaves out far from it (two strays 1,000 radii out) are counted in the JSON and noted:
 // they set the maximum distance and widen the diagonal the fractions are of.
 TEST(Cli, far_points_left_out_are_noted)
@@ -858,10 +886,11 @@ TEST(Cli, mesh_to_a_triangle_count)
     EXPECT_FALSE(fs::exists(dir / "n.ply"));
     EXPECT_EQ(r.out.find("note: the largest tile budget"), std::string::npos) << r.out; // whole at once
 
-    // The bunny's best 500-face cut is in pieces: a smaller budget is meshed instead, and said.
+    // The bunny's best 500-face cut is in pieces without the crack rounds (which mend it: one piece of
+    // 496 faces): a smaller budget is meshed instead, and said.
     const std::string bunny = (dir / "bun.mrt").string();
     ASSERT_EQ(mrtile("build -q " + std::string(MRTILE_SHARED_DATA) + "/bun_zipper.ply -o " + bunny, dir).code, 0);
-    const Result b = mrtile("mesh " + bunny + " -o " + (dir / "b.ply").string() + " --triangles 500 --stats-json " +
+    const Result b = mrtile("mesh " + bunny + " -o " + (dir / "b.ply").string() + " --triangles 500 --crack-rounds 0 --stats-json " +
                                 (dir / "b.json").string(),
                             dir);
     ASSERT_EQ(b.code, 0) << b.err;
@@ -872,6 +901,15 @@ TEST(Cli, mesh_to_a_triangle_count)
     const auto bs = nlohmann::json::parse(slurp(dir / "b.json"));
     EXPECT_EQ(bs["components"].get<std::size_t>(), 1u);
     EXPECT_LE(bs["faces"].get<std::size_t>(), 500u);
+    const Result c = mrtile("mesh " + bunny + " -o " + (dir / "c.ply").string() + " --triangles 500 --stats-json " +
+                                (dir / "c.json").string(),
+                            dir);
+    ASSERT_EQ(c.code, 0) << c.err;
+    EXPECT_EQ(c.out.find("note: the largest tile budget"), std::string::npos) << c.out;
+    const auto cs = nlohmann::json::parse(slurp(dir / "c.json"));
+    EXPECT_EQ(cs["components"].get<std::size_t>(), 1u);
+    EXPECT_LE(cs["faces"].get<std::size_t>(), 500u);
+    EXPECT_GT(cs["faces"].get<std::size_t>(), bs["faces"].get<std::size_t>()); // nearer the budget asked
 }
 
 // `--fit-rounds`: 0 interpolates as the paper does, the default fits; both report it, the fit is closer

@@ -431,6 +431,7 @@ struct MeshArgs
     int fit_rounds = FitOptions{}.rounds;
     bool no_colors = false;
     std::size_t close_holes = 0;
+    int crack_rounds = MeshOptions{}.crack_rounds;
 
     //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
     void add(CLI::App* cmd, bool one_mesh = true)
@@ -457,6 +458,12 @@ struct MeshArgs
         cmd->add_option("--close-holes", close_holes,
                         "also fill the sample's own holes of at most N edges, for watertight output (0 = off; at most 2000)")
             ->check(CLI::Range(0, 2000));
+        // LOD levels are mended by whole tolerance cuts instead (lod_set.h), so that they nest.
+        if (one_mesh)
+            cmd->add_option("--crack-rounds", crack_rounds,
+                            "rounds refining the tiles along cracks of a closed surface and meshing again (0 = off)")
+                ->check(CLI::Range(0, kMaxRefineRounds))
+                ->capture_default_str();
     }
 
     MeshOptions options() const
@@ -469,6 +476,7 @@ struct MeshArgs
         o.fit.rounds = fit_rounds;
         o.colors.enabled = !no_colors;
         o.surface.close_holes = close_holes;
+        o.crack_rounds = crack_rounds;
         return o;
     }
 };
