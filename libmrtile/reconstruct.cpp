@@ -21,6 +21,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <tuple>
 #include <unordered_map>
 
 namespace mrt {
@@ -380,21 +381,58 @@ double farthest_sample_point(const Hierarchy& h, const Mesh& mesh, std::size_t t
     return farthest;
 }
 
-// Whether the points lie farther from `again` (a crack round's mesh) than from `mesh`, the one before:
-// the farthest of a regular sample, by more than the watches' median spacing. The surface is meshed
-// anew everywhere, and a round that mended its cracks made a hole's rim elsewhere recede by 5
-// spacings (QA 46's sphere with holes of 8-40 spacings, at tolerance 0.01: the gap triangulation's
-// alpha follows the tiles' mean edge).
-bool leaves_points(const Hierarchy& h, const Mesh& mesh, const Mesh& again, const std::vector<CrackWatch>& watches,
-                   std::size_t threads)
+// The median reach of the watches (0 for none).
+double median_reach(const std::vector<CrackWatch>& watches)
 {
     std::vector<double> reaches;
     for (const CrackWatch& watch : watches)
         reaches.push_back(watch.reach());
-    if (watches.empty())
-        return false;
-    const double spacing = upper_median_in_place(reaches) / kCrackReach;
-    return farthest_sample_point(h, again, threads) > farthest_sample_point(h, mesh, threads) + spacing;
+    return upper_median_in_place(reaches);
+}
+
+// Whether the points lie farther from `again` (a crack round's mesh) than from `mesh`, the one before:
+// the farthest of a regular sample, by more than a spacing (a third of `reach`). The surface is meshed
+// anew everywhere, and a round that mended its cracks made a hole's rim elsewhere recede by 5
+// spacings (QA 46's sphere with holes of 8-40 spacings, at tolerance 0.01: the gap triangulation's
+// alpha follows the tiles' mean edge).
+bool leaves_points(const Hierarchy& h, const Mesh& mesh, const Mesh& again, double reach, std::size_t threads)
+{
+    return farthest_sample_point(h, again, threads) > farthest_sample_point(h, mesh, threads) + reach / kCrackReach;
+}
+
+// The faces of `mesh` with no face of `other` on the same three corner positions: what a meshing
+// changed, seen from one of the two meshes (untouched tiles keep their points, so their faces match).
+std::vector<Mesh::FaceHandle> faces_not_in(const Mesh& mesh, const Mesh& other)
+{
+    using Corners = std::array<double, 9>;
+    const auto corners_of = [](const Mesh& m, Mesh::FaceHandle f) {
+        std::array<Vec3, 3> t = face_corners(m, f);
+        std::sort(t.begin(), t.end(), [](const Vec3& a, const Vec3& b) {
+            return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+        });
+        return Corners{t[0].x, t[0].y, t[0].z, t[1].x, t[1].y, t[1].z, t[2].x, t[2].y, t[2].z};
+    };
+    std::vector<Corners> theirs;
+    for (const Mesh::FaceHandle f : other.faces())
+        theirs.push_back(corners_of(other, f));
+    std::sort(theirs.begin(), theirs.end());
+    std::vector<Mesh::FaceHandle> changed;
+    for (const Mesh::FaceHandle f : mesh.faces())
+        if (!std::binary_search(theirs.begin(), theirs.end(), corners_of(mesh, f)))
+            changed.push_back(f);
+    return changed;
+}
+
+// Whether `again` (a crack round's mesh) spans more of the sample's holes than `mesh`, the one before,
+// anywhere: the area farther than `reach` from every point of the faces only it has, against that of
+// the faces only the one before has, by more than half a reach-wide square. The surface is meshed anew
+// everywhere: mending one loop on a sphere with holes grew the faces spanning a 40-spacing hole 30
+// spacings away by 56 square spacings (QA round 47), which no watch over the loops' tiles sees.
+bool spans_more_holes(const Hierarchy& h, const Mesh& mesh, const Mesh& again, double reach)
+{
+    const double removed = area_off_the_sample(mesh, h, faces_not_in(mesh, again), reach);
+    const double added = area_off_the_sample(again, h, faces_not_in(again, mesh), reach);
+    return added > removed + 0.5 * reach * reach;
 }
 
 // After the surface: boundary loops along tiles that their neighbours surround are cracks, not the
@@ -501,9 +539,11 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
                 retried = true;
                 continue;
             }
+            const double reach = median_reach(mended);
             better = again_stats.dropped_fans <= result.surface.dropped_fans &&
                      self_intersecting_faces(again).size() <= self_intersecting_faces(result.mesh).size() &&
-                     !leaves_points(h, result.mesh, again, mended, options.fit.threads);
+                     !spans_more_holes(h, result.mesh, again, reach) &&
+                     !leaves_points(h, result.mesh, again, reach, options.fit.threads);
         }
         if (!better)
             return;

@@ -86,7 +86,8 @@ struct MeshOptions
     //! is a hole's rim and left; a round is kept only with fewer loops, no more pieces, no higher
     //! genus, no more fans left out, no more crossing pairs, no more of the mesh over the loops' tiles
     //! farther than 3 spacings from the points (else it is tried once more without the loops that
-    //! did so) and no point of a regular sample farther from the mesh by a spacing. 0 = never.
+    //! did so) nor among the faces it changed anywhere, and no point of a regular sample farther from
+    //! the mesh by a spacing. 0 = never.
     int crack_rounds = 3;
 };
 

@@ -1101,7 +1101,9 @@ HoledSphere holed_sphere(std::size_t count, std::uint32_t seed)
 // new mesh over the loops' tiles off the points, points left farther from the mesh), rounds closed a
 // 25-spacing hole at tolerance 0.02 and 15- and 18-spacing holes at 0.005 on these spheres (QA round
 // 46 found the same on its own: holes 12-35 spacings wide). Every hole open without the rounds stays
-// open with them (a boundary vertex within 1.5 hole radii of its centre).
+// open with them (a boundary vertex within 1.5 hole radii of its centre), and the mesh spans no more
+// of the holes (its area 3 spacings from every point: QA round 47 found a kept round that grew the
+// faces over a hole 30 spacings from the loop it mended).
 TEST(Reconstruct, crack_rounds_leave_the_samples_holes_open)
 {
     for (const std::uint32_t seed : {2u, 3u}) {
@@ -1128,6 +1130,10 @@ TEST(Reconstruct, crack_rounds_leave_the_samples_holes_open)
             const std::vector<bool> after = open_holes(with.mesh);
             EXPECT_EQ(topology_stats(with.mesh).components, 1u);
             EXPECT_GE(std::count(before.begin(), before.end(), true), 1); // the case has open holes to keep
+            const BoundingBox everywhere{{-2, -2, -2}, {2, 2, 2}};
+            const double reach = 3.0 * std::sqrt(4.0 * M_PI / 100000.0);
+            EXPECT_LE(area_off_the_sample(with.mesh, h, everywhere, reach),
+                      area_off_the_sample(mesh_cut(h, cut, without).mesh, h, everywhere, reach) + 0.5 * reach * reach);
             for (std::size_t k = 0; k < before.size(); ++k)
                 EXPECT_TRUE(!before[k] || after[k]) << "hole " << k << " closed";
         }
