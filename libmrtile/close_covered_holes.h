@@ -79,9 +79,10 @@ CoveredHoleStats close_covered_holes(Mesh& mesh, const Hierarchy& h, const std::
 bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::HalfedgeHandle>& loop, double spacing);
 
 //! \brief The area of the faces of `mesh` whose bounding boxes meet `box` that lies farther than `reach`
-//! from every point of `h`: each face's area times the share of its spots (a barycentric grid at most
-//! reach / 1.5 apart, as a cap is judged) with no point within reach. Faces spanning a hole of the
-//! sample have some; faces over sampled surface none. 0 for a `reach` that is not positive and finite.
+//! from every point of `h`: each face's area times the share of its equal sub-triangles (at most a
+//! third of the reach wide, up to 200 along an edge) whose centres have no point within reach. Faces
+//! spanning a hole of the sample have some; faces over sampled surface none (how mesh_cut's crack
+//! rounds tell a hole's rim from a crack). 0 for a `reach` that is not positive and finite.
 double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const BoundingBox& box, double reach);
 //! The same for the given faces.
 double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::FaceHandle>& faces, double reach);
