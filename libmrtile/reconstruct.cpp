@@ -21,6 +21,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <set>
 #include <tuple>
 #include <unordered_map>
 
@@ -289,6 +290,42 @@ double median_spacing(const std::vector<Tile>& tiles, const std::vector<std::siz
 
 constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_broken_pieces to refine them
 
+// The sample's own spacing under each tile, by its node: a tile is built from a sample of its node's
+// points (TileOptions::max_points), whose spacing (Tile::spacing) is coarser. What the notches and the
+// caps judge their covers by.
+std::unordered_map<std::int32_t, double> sample_spacings(const Hierarchy& h, const std::vector<Tile>& tiles)
+{
+    std::unordered_map<std::int32_t, double> spacing_of;
+    for (const Tile& t : tiles)
+        spacing_of[t.node] = std::sqrt(t.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(t.node)].count())));
+    return spacing_of;
+}
+
+// A border edge by its corners' positions, from -> to (meshes that share corners share these).
+using EdgeCorners = std::pair<std::array<double, 3>, std::array<double, 3>>;
+
+EdgeCorners corners_of(const Mesh& mesh, Mesh::HalfedgeHandle he)
+{
+    const Mesh::Point a = mesh.point(mesh.from_vertex_handle(he)), b = mesh.point(mesh.to_vertex_handle(he));
+    return {{a[0], a[1], a[2]}, {b[0], b[1], b[2]}};
+}
+
+// The border edges of `mesh` still open once the caps from the points (close_covered_holes, which
+// mesh_cut puts on after the fit) are put on a copy of it. A loop none of whose edges is left is one
+// the caps close, and crack rounds leave it to them: a round had taken such a loop on a 1M-point
+// fandisk sample, with 14 crossing pairs left in the end instead of the caps' 11 (QA round 47).
+std::set<EdgeCorners> open_after_caps(const Hierarchy& h, const std::vector<Tile>& tiles, const Mesh& mesh,
+                                      const CoveredHoleOptions& options)
+{
+    Mesh copy = mesh;
+    close_covered_holes(copy, h, sample_spacings(h, tiles), options);
+    std::set<EdgeCorners> open;
+    for (const Mesh::HalfedgeHandle he : copy.halfedges())
+        if (copy.is_boundary(he))
+            open.insert(corners_of(copy, he));
+    return open;
+}
+
 // The spacing of the sample under a tile: Tile::spacing is that of the points the tile was built from
 // (at most TileOptions::max_points of its node's), wider than the sample's at coarse cuts.
 double sample_spacing(const Hierarchy& h, const Tile& tile)
@@ -447,13 +484,15 @@ bool spans_more_holes(const Hierarchy& h, const Mesh& mesh, const Mesh& again, d
 //    tiles overlap seen along the axis, so that no face between them looks up (a 3M-point terrain at
 //    tolerance 0.002: a 20-edge slit between two tiles); a round is kept when it has fewer loops and
 //    no more pieces;
-//  - a surface in 3D, in one piece, with loops whose tiles are surrounded (opt-in, crack_rounds 0 by
-//    default: it can close a real hole whose rim it takes for a crack): cracks where coarse tiles
-//    straddle an acute edge of a closed solid (a tetrahedron at tolerance 0.01: 8-10 slits along its
-//    edges; session 37's battery of 83 sampled solids: 60 -> 47 loops). A round is kept when it has
-//    fewer loops, no more pieces, no higher genus, no more fans left out (their points would lie far
-//    from the mesh: a tetrahedron at 0.002 had its maximum distance 3.4 times higher) and no more
-//    crossing pairs (a 5-point star prism: 16 -> 172 after the untangling).
+//  - a surface in 3D, in one piece, with loops whose tiles are surrounded, that no cap closes
+//    (open_after_caps) and that are no hole's rim (is_sample_hole, CrackWatch): cracks where coarse
+//    tiles straddle an acute edge of a closed solid (a tetrahedron at tolerance 0.01: 8-10 slits
+//    along its edges; session 37's battery of 83 sampled solids: 59 -> 46 loops). A round is kept
+//    when it has fewer loops, no more pieces, no higher genus, no more fans left out (their points
+//    would lie far from the mesh: a tetrahedron at 0.002 had its maximum distance 3.4 times higher),
+//    no more crossing pairs (a 5-point star prism: 16 -> 172 after the untangling), no more of the
+//    mesh over the sample's holes (CrackWatch::spans_a_hole, spans_more_holes) and no points left
+//    farther from it (leaves_points).
 // Separate objects and a scan's own borders do not improve and are left as they were.
 void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface, MeshResult& result,
                           std::vector<Tile>& tiles)
@@ -477,6 +516,8 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         std::vector<bool> marked(result.cut.size(), false);
         std::vector<CrackWatch> mended;
         std::size_t on_loops = 0, inner = 0;
+        const std::set<EdgeCorners> open = cracks ? open_after_caps(h, tiles, result.mesh, options.covered_holes)
+                                                  : std::set<EdgeCorners>{};
         for (const LoopTiles& found : tiles_of_loops(result.cut, result.mesh)) {
             const std::vector<std::size_t>& loop = found.tiles;
             std::size_t loop_inner = 0;
@@ -489,7 +530,10 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
             // A crack lies over sampled surface; a hole of the sample (the bunny's base, whose tiles can
             // all be surrounded) is left without a meshing spent on it (the bunny at 0.001: 0.6 -> 1.0 s).
             if (cracks) {
-                if (std::any_of(loop.begin(), loop.end(), [&](std::size_t k) {
+                if (std::none_of(found.border.begin(), found.border.end(), [&](Mesh::HalfedgeHandle he) {
+                        return open.count(corners_of(result.mesh, he)) > 0;
+                    }) ||
+                    std::any_of(loop.begin(), loop.end(), [&](std::size_t k) {
                         return std::find(rims.begin(), rims.end(), result.cut[k]) != rims.end();
                     }) ||
                     is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
@@ -685,11 +729,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     result.tiles = tiles.size();
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     {
-        // The sample's own spacing: a tile is built from a sample of its points (TileOptions::max_points),
-        // whose spacing (Tile::spacing) is coarser.
-        std::unordered_map<std::int32_t, double> spacing_of;
-        for (const Tile& t : tiles)
-            spacing_of[t.node] = std::sqrt(t.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(t.node)].count())));
+        const std::unordered_map<std::int32_t, double> spacing_of = sample_spacings(h, tiles);
         result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
         result.covered_holes = close_covered_holes(result.mesh, h, spacing_of, along_height_field(options.covered_holes, result.surface));
     }
