@@ -290,14 +290,20 @@ double median_spacing(const std::vector<Tile>& tiles, const std::vector<std::siz
 
 constexpr double kMinSurroundedShare = 0.9; // of a loop's tiles, for refine_broken_pieces to refine them
 
-// The sample's own spacing under each tile, by its node: a tile is built from a sample of its node's
-// points (TileOptions::max_points), whose spacing (Tile::spacing) is coarser. What the notches and the
-// caps judge their covers by.
+// The spacing of the sample under a tile: sqrt(its area / its node's points). A tile is built from a
+// sample of its node's points (TileOptions::max_points), whose spacing (Tile::spacing) is coarser at
+// coarse cuts.
+double sample_spacing(const Hierarchy& h, const Tile& tile)
+{
+    return std::sqrt(tile.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(tile.node)].count())));
+}
+
+// The same for every tile, by its node: what the notches and the caps judge their covers by.
 std::unordered_map<std::int32_t, double> sample_spacings(const Hierarchy& h, const std::vector<Tile>& tiles)
 {
     std::unordered_map<std::int32_t, double> spacing_of;
     for (const Tile& t : tiles)
-        spacing_of[t.node] = std::sqrt(t.area / static_cast<double>(std::max<std::uint32_t>(1, h.nodes[static_cast<std::size_t>(t.node)].count())));
+        spacing_of[t.node] = sample_spacing(h, t);
     return spacing_of;
 }
 
@@ -324,14 +330,6 @@ std::set<EdgeCorners> open_after_caps(const Hierarchy& h, const std::vector<Tile
         if (copy.is_boundary(he))
             open.insert(corners_of(copy, he));
     return open;
-}
-
-// The spacing of the sample under a tile: Tile::spacing is that of the points the tile was built from
-// (at most TileOptions::max_points of its node's), wider than the sample's at coarse cuts.
-double sample_spacing(const Hierarchy& h, const Tile& tile)
-{
-    const std::uint32_t under = h.nodes[static_cast<std::size_t>(tile.node)].count();
-    return under > tile.points ? tile.spacing() * std::sqrt(static_cast<double>(tile.points) / under) : tile.spacing();
 }
 
 // A crack lies over sampled surface: the mesh at it, and what mends it, stays within this many of its
