@@ -21,6 +21,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <tuple>
 #include <unordered_map>
@@ -379,10 +380,11 @@ public:
     bool at_a_holes_rim() const { return at_rim_; }
 
     // Whether `mesh` (the cut meshed again) spans more of a hole of the sample over the loop's tiles
-    // than the mesh before (by more than half a reach-wide square: the spots' rounding).
+    // than the mesh before (by more than half a reach-wide square: the spots' rounding). For watches
+    // not at a hole's rim (those start no round).
     bool spans_a_hole(const Hierarchy& h, const Mesh& mesh) const
     {
-        return !at_rim_ && area_off_the_sample(mesh, h, box_, reach_) > off_before_ + 0.5 * reach_ * reach_;
+        return area_off_the_sample(mesh, h, box_, reach_) > off_before_ + 0.5 * reach_ * reach_;
     }
 
     // The loop's tiles' cut nodes.
@@ -390,7 +392,6 @@ public:
     double reach() const { return reach_; }
 
 private:
-
     std::vector<std::int32_t> nodes_;
     double reach_ = 0.0;
     bool at_rim_ = false;
@@ -440,7 +441,7 @@ bool leaves_points(const Hierarchy& h, const Mesh& mesh, const Mesh& again, doub
 std::vector<Mesh::FaceHandle> faces_not_in(const Mesh& mesh, const Mesh& other)
 {
     using Corners = std::array<double, 9>;
-    const auto corners_of = [](const Mesh& m, Mesh::FaceHandle f) {
+    const auto key = [](const Mesh& m, Mesh::FaceHandle f) {
         std::array<Vec3, 3> t = face_corners(m, f);
         std::sort(t.begin(), t.end(), [](const Vec3& a, const Vec3& b) {
             return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
@@ -449,11 +450,11 @@ std::vector<Mesh::FaceHandle> faces_not_in(const Mesh& mesh, const Mesh& other)
     };
     std::vector<Corners> theirs;
     for (const Mesh::FaceHandle f : other.faces())
-        theirs.push_back(corners_of(other, f));
+        theirs.push_back(key(other, f));
     std::sort(theirs.begin(), theirs.end());
     std::vector<Mesh::FaceHandle> changed;
     for (const Mesh::FaceHandle f : mesh.faces())
-        if (!std::binary_search(theirs.begin(), theirs.end(), corners_of(mesh, f)))
+        if (!std::binary_search(theirs.begin(), theirs.end(), key(mesh, f)))
             changed.push_back(f);
     return changed;
 }
@@ -514,8 +515,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         std::vector<bool> marked(result.cut.size(), false);
         std::vector<CrackWatch> mended;
         std::size_t on_loops = 0, inner = 0;
-        const std::set<EdgeCorners> open = cracks ? open_after_caps(h, tiles, result.mesh, options.covered_holes)
-                                                  : std::set<EdgeCorners>{};
+        std::optional<std::set<EdgeCorners>> open; // after the caps, put on a copy once a loop asks
         for (const LoopTiles& found : tiles_of_loops(result.cut, result.mesh)) {
             const std::vector<std::size_t>& loop = found.tiles;
             std::size_t loop_inner = 0;
@@ -528,13 +528,16 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
             // A crack lies over sampled surface; a hole of the sample (the bunny's base, whose tiles can
             // all be surrounded) is left without a meshing spent on it (the bunny at 0.001: 0.6 -> 1.0 s).
             if (cracks) {
-                if (std::none_of(found.border.begin(), found.border.end(), [&](Mesh::HalfedgeHandle he) {
-                        return open.count(corners_of(result.mesh, he)) > 0;
-                    }) ||
-                    std::any_of(loop.begin(), loop.end(), [&](std::size_t k) {
+                if (std::any_of(loop.begin(), loop.end(), [&](std::size_t k) {
                         return std::find(rims.begin(), rims.end(), result.cut[k]) != rims.end();
                     }) ||
                     is_sample_hole(result.mesh, h, found.border, median_spacing(tiles, loop)))
+                    continue;
+                if (!open)
+                    open = open_after_caps(h, tiles, result.mesh, options.covered_holes);
+                if (std::none_of(found.border.begin(), found.border.end(), [&](Mesh::HalfedgeHandle he) {
+                        return open->count(corners_of(result.mesh, he)) > 0;
+                    }))
                     continue;
                 CrackWatch watch(h, result.cut, tiles, found, result.mesh);
                 if (watch.at_a_holes_rim())
