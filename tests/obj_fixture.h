@@ -2,6 +2,7 @@
 // Reads the vertices and triangles of a plain OBJ file (what the CLI writes, the shared CAD parts), for
 // tests that look at a mesh file without OpenMesh: "v x y z" and "f a b c" lines ("a/t/n" corners
 // too); other lines are skipped.
+#include "libmrtile/shapes.h"
 #include "libmrtile/vec3.h"
 
 #include <array>
@@ -44,6 +45,17 @@ inline ObjTriangles read_obj_triangles(const std::filesystem::path& path)
         }
     }
     return obj;
+}
+
+//! A uniform sample of `count` points (seeded) over the triangles of an OBJ file: what a scanner would
+//! give of the CAD part it describes (shapes::mesh_surface).
+inline PointCloud sampled_obj_surface(const std::filesystem::path& path, std::size_t count, std::uint32_t seed)
+{
+    const ObjTriangles obj = read_obj_triangles(path);
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    for (const auto& f : obj.faces)
+        triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
+    return shapes::mesh_surface(obj.vertices, triangles, count, seed);
 }
 
 } // namespace mrt::testing

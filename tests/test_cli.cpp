@@ -392,11 +392,7 @@ TEST(Cli, crack_rounds_are_an_option_of_mesh_and_reconstruct)
 TEST(Cli, crack_rounds_leave_to_the_caps_the_loops_they_close)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    const testing::ObjTriangles part = testing::read_obj_triangles(MRTILE_SHARED_DATA "/fandisk.obj");
-    std::vector<std::array<std::uint32_t, 3>> sides;
-    for (const auto& f : part.faces)
-        sides.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
-    const PointCloud sample = shapes::mesh_surface(part.vertices, sides, 300000, 2);
+    const PointCloud sample = testing::sampled_obj_surface(MRTILE_SHARED_DATA "/fandisk.obj", 300000, 2);
     {
         std::ofstream ply(dir / "fan.ply", std::ios::binary);
         ply << "ply\nformat binary_little_endian 1.0\nelement vertex " << sample.positions.size()

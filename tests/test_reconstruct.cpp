@@ -586,11 +586,7 @@ TEST(Reconstruct, no_spikes_or_holes_on_a_sampled_cad_part)
 // left, 40 leave 12 (QA round 43: another sample kept 207 of 735 with 10, 11 with 40).
 TEST(Reconstruct, the_untangling_bound_clears_a_sampled_cad_part)
 {
-    const testing::ObjTriangles obj = testing::read_obj_triangles(MRTILE_SHARED_DATA "/fandisk.obj");
-    std::vector<std::array<std::uint32_t, 3>> triangles;
-    for (const auto& f : obj.faces)
-        triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
-    const Hierarchy h = build_hierarchy(shapes::mesh_surface(obj.vertices, triangles, 1000000, 3));
+    const Hierarchy h = build_hierarchy(testing::sampled_obj_surface(MRTILE_SHARED_DATA "/fandisk.obj", 1000000, 3));
     const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
     EXPECT_GT(r.untangle.pairs_before, 400u);
     EXPECT_LT(r.untangle.pairs_after, 30u);
