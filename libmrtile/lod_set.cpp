@@ -273,13 +273,14 @@ BoundingBox mesh_box(const Mesh& m, BoundingBox box)
 
 // Meshes a level's cut; the level keeps the cut meshed (small separate objects refined, MeshOptions).
 // A level's pieces are mended by whole levels (mend_coarse_levels: tolerance cuts, so the levels nest),
-// not by mesh_cut's refinement of the tiles on its loops (MeshOptions::piece_rounds, crack_rounds),
-// which could make a level finer in places than the next.
+// not by mesh_cut's refinement of the tiles on its loops or folds (MeshOptions::piece_rounds,
+// crack_rounds, crossing_rounds), which could make a level finer in places than the next.
 void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
 {
     MeshOptions level_options = options;
     level_options.piece_rounds = 0;
     level_options.crack_rounds = 0;
+    level_options.crossing_rounds = 0;
     MeshResult meshed = mesh_cut(h, level.cut, level_options);
     level.cut = std::move(meshed.cut);
     level.mesh = std::move(meshed.mesh);

@@ -357,6 +357,38 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
     EXPECT_NE(r.out.find("note: " + std::to_string(crossings) + " pairs of faces cross each other"), std::string::npos) << r.out;
 }
 
+// A uniform sample of the regular tetrahedron with corners (1, 1, 1), (1, -1, -1), (-1, 1, -1),
+// (-1, -1, 1), written as an XYZ text file: its 71-degree edges crack and fold at coarse cuts.
+void write_sampled_tetrahedron(const fs::path& path, std::size_t count, std::uint32_t seed)
+{
+    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    std::string text;
+    for (const Vec3& p : shapes::mesh_surface(corners, sides, count, seed).positions)
+        text += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+    write_text(path, text);
+}
+
+// `reconstruct` of dir/tetra.xyz at tolerance 0.01 with `extra` options: `key` of its statistics.
+std::size_t tetrahedron_stat(const fs::path& dir, const std::string& extra, const char* key)
+{
+    const Result r = mrtile("reconstruct " + (dir / "tetra.xyz").string() + " -o " + (dir / "t.ply").string() +
+                                " --tolerance 0.01 --stats-json " + (dir / "t.json").string() + extra, dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(slurp(dir / "t.json"))[key].get<std::size_t>();
+}
+
+// A rounds option of mesh and reconstruct: above 64 is a usage error naming it, with no output; lods,
+// whose levels leave the rounds to whole tolerance cuts so that they nest, has no such option.
+void expect_a_rounds_option(const fs::path& dir, const std::string& option)
+{
+    const Result r = mrtile("mesh x.mrt -o y.ply " + option + " 65", dir);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find(option), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "y.ply"));
+    EXPECT_EQ(mrtile("lods x.mrt -o d " + option + " 1", dir).code, 2);
+}
+
 // --crack-rounds reaches the library: a sampled tetrahedron's cracks along its edges at a coarse cut
 // (test_reconstruct: 8 -> 1 loops) are mended by default and left with --crack-rounds 0; out of range
 // (above 64) is a usage error naming the option, and lods, whose levels leave cracks to whole
@@ -364,25 +396,28 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
 TEST(Cli, crack_rounds_are_an_option_of_mesh_and_reconstruct)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-    std::string text;
-    for (const Vec3& p : shapes::mesh_surface(corners, sides, 200000, 3).positions)
-        text += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
-    write_text(dir / "tetra.xyz", text);
-    const auto loops = [&](const std::string& extra) {
-        const Result r = mrtile("reconstruct " + (dir / "tetra.xyz").string() + " -o " + (dir / "t.ply").string() +
-                                    " --tolerance 0.01 --stats-json " + (dir / "t.json").string() + extra, dir);
-        EXPECT_EQ(r.code, 0) << r.err;
-        return nlohmann::json::parse(slurp(dir / "t.json"))["boundary_loops"].get<std::size_t>();
-    };
-    const std::size_t mended = loops(""), left = loops(" --crack-rounds 0");
+    write_sampled_tetrahedron(dir / "tetra.xyz", 200000, 3);
+    const auto loops = [&](const std::string& extra) { return tetrahedron_stat(dir, extra, "boundary_loops"); };
+    // (The crossing rounds, which refine the tiles that fold along the edges, mend most of them too.)
+    const std::size_t mended = loops(" --crossing-rounds 0"), left = loops(" --crack-rounds 0 --crossing-rounds 0");
     EXPECT_GE(left, 5u);
     EXPECT_LT(mended, left);
-    Result r = mrtile("mesh x.mrt -o y.ply --crack-rounds 65", dir);
-    EXPECT_EQ(r.code, 2);
-    EXPECT_NE(r.err.find("--crack-rounds"), std::string::npos) << r.err;
-    EXPECT_EQ(mrtile("lods x.mrt -o d --crack-rounds 1", dir).code, 2);
+    expect_a_rounds_option(dir, "--crack-rounds");
+}
+
+// --crossing-rounds reaches the library: a sampled tetrahedron at a coarse cut, whose tiles fold along
+// its edges (test_reconstruct: 379 crossing pairs left without the rounds, none with them), crosses
+// itself less by default than with --crossing-rounds 0; out of range is a usage error naming the
+// option, and lods, whose levels must nest, has no such option.
+TEST(Cli, crossing_rounds_are_an_option_of_mesh_and_reconstruct)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    write_sampled_tetrahedron(dir / "tetra.xyz", 100000, 11);
+    const auto crossings = [&](const std::string& extra) { return tetrahedron_stat(dir, extra, "self_intersections"); };
+    const std::size_t refined = crossings(""), folded = crossings(" --crossing-rounds 0");
+    EXPECT_GE(folded, 100u);
+    EXPECT_LT(refined, folded / 20);
+    expect_a_rounds_option(dir, "--crossing-rounds");
 }
 
 // Crack rounds leave to the caps from the points the loops those close (on a copy of the surface): the

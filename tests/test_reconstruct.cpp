@@ -583,11 +583,15 @@ TEST(Reconstruct, no_spikes_or_holes_on_a_sampled_cad_part)
 
 // The untangling's work bound (40 pair tests per face since session 36): a uniform 1M-point sample of
 // the fandisk (seed 3) crosses itself 573 times before the pass; 10 tests per face stopped with 89 pairs
-// left, 40 leave 12 (QA round 43: another sample kept 207 of 735 with 10, 11 with 40).
+// left, 40 leave 12 (QA round 43: another sample kept 207 of 735 with 10, 11 with 40). The crossing
+// rounds (MeshOptions::crossing_rounds) are off: they mesh the cut again where the pass leaves pairs
+// (16 s instead of 5 s here), and the pass's bound is what is tested.
 TEST(Reconstruct, the_untangling_bound_clears_a_sampled_cad_part)
 {
     const Hierarchy h = build_hierarchy(testing::sampled_obj_surface(MRTILE_SHARED_DATA "/fandisk.obj", 1000000, 3));
-    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
+    MeshOptions o;
+    o.crossing_rounds = 0;
+    const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002), o);
     EXPECT_GT(r.untangle.pairs_before, 400u);
     EXPECT_LT(r.untangle.pairs_after, 30u);
     EXPECT_EQ(self_intersecting_faces(r.mesh).size() > 0, r.untangle.pairs_after > 0);
@@ -722,7 +726,8 @@ TEST(Reconstruct, long_cracks_over_sampled_surface_close)
     fewer.max_hole_edges = 300;
     MeshOptions o;
     o.surface = fewer;
-    o.crack_rounds = 0; // the crack rounds mend it too: the hole filling alone is tested
+    o.crack_rounds = 0; // the crack and crossing rounds mend it too: the hole filling alone is tested
+    o.crossing_rounds = 0;
     EXPECT_GT(topology_stats(mesh_at_tolerance(arm, 0.015, o).result.mesh).boundary_loops, 0u); // the case still exercises it
 }
 
@@ -820,7 +825,8 @@ TEST(Reconstruct, options_and_cuts_out_of_range_are_refused)
     many.fit.rounds = kMaxFitRounds + 1;
     EXPECT_THROW(mesh_cut(h, cut, many), InvalidInput);
     for (int MeshOptions::*rounds : {&MeshOptions::small_object_rounds, &MeshOptions::gap_rounds,
-                                     &MeshOptions::dropped_rounds, &MeshOptions::piece_rounds, &MeshOptions::crack_rounds}) {
+                                     &MeshOptions::dropped_rounds, &MeshOptions::piece_rounds, &MeshOptions::crack_rounds,
+                                     &MeshOptions::crossing_rounds}) {
         MeshOptions o;
         o.*rounds = -1;
         EXPECT_THROW(mesh_cut(h, cut, o), InvalidInput);
@@ -1054,6 +1060,40 @@ TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
     EXPECT_EQ(after.genus, 0);
     EXPECT_GT(mended.cut.size(), cut.size());
     EXPECT_LT(self_intersecting_faces(mended.mesh).size(), self_intersecting_faces(cracked.mesh).size());
+}
+
+// Crossing rounds (session 39): at a coarse cut the tetrahedron's tiles straddle its 71-degree edges
+// and fan from inside the solid, and their faces cross their neighbours' (100k points, seed 11,
+// tolerance 0.01: 379 pairs left after the untangling, with the crack rounds). Refining the tiles of
+// the crossing faces and meshing again leaves none, and the mesh comes nearer the points, with no
+// more loops or pieces and no handle. A surface whose faces do not cross is meshed as without them.
+TEST(Reconstruct, tiles_folding_along_a_tetrahedrons_edges_are_refined)
+{
+    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    const Hierarchy h = build_hierarchy(shapes::mesh_surface(corners, sides, 100000, 11));
+    const Cut cut = cut_by_tolerance(h, 0.01);
+    MeshOptions off; // rounds: the default
+    off.crossing_rounds = 0;
+    const MeshResult folded = mesh_cut(h, cut, off), refined = mesh_cut(h, cut);
+    const std::size_t before = self_intersecting_faces(folded.mesh).size(), after = self_intersecting_faces(refined.mesh).size();
+    EXPECT_GE(before, 100u); // the case this guards
+    EXPECT_LE(after, before / 20);
+    EXPECT_GT(refined.cut.size(), folded.cut.size());
+    const TopologyStats a = topology_stats(folded.mesh), b = topology_stats(refined.mesh);
+    EXPECT_LE(b.boundary_loops, a.boundary_loops);
+    EXPECT_EQ(b.components, 1u);
+    EXPECT_EQ(b.genus, 0);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, refined.mesh).mean, point_to_mesh_distance(h.cloud.positions, folded.mesh).mean);
+
+    const Hierarchy torus = build_hierarchy(shapes::torus(20000));
+    const Cut coarse = cut_by_tolerance(torus, 0.01);
+    const MeshResult with = mesh_cut(torus, coarse), without = mesh_cut(torus, coarse, off);
+    ASSERT_EQ(self_intersecting_faces(without.mesh).size(), 0u);
+    EXPECT_EQ(with.cut, without.cut);
+    ASSERT_EQ(with.mesh.n_faces(), without.mesh.n_faces());
+    for (const Mesh::VertexHandle v : with.mesh.vertices())
+        EXPECT_EQ(with.mesh.point(v), without.mesh.point(v));
 }
 
 // A sphere sampled on a Fibonacci spiral (`count` points, radius 1, noise of a tenth of the spacing)
@@ -1322,10 +1362,14 @@ TEST(Reconstruct, a_refinement_whose_crossings_the_untangling_undoes_is_kept)
     const Hierarchy h = build_hierarchy(cloud);
     ASSERT_TRUE(h.info.denoised);
     const Cut cut = cut_by_tolerance(h, 0.005);
-    MeshOptions as_cut;
+    // The dropped rounds are compared: the crossing rounds, which take 2 of the 4 pairs left without
+    // the dropped rounds away and none with them, are off in both.
+    MeshOptions as_cut, rounds;
+    rounds.crossing_rounds = 0;
+    as_cut = rounds;
     as_cut.dropped_rounds = 0;
     const MeshResult plain = mesh_cut(h, cut, as_cut);
-    const MeshResult r = mesh_cut(h, cut);
+    const MeshResult r = mesh_cut(h, cut, rounds);
     EXPECT_LT(r.surface.dropped_fans + 3, plain.surface.dropped_fans);
     EXPECT_LE(self_intersecting_faces(r.mesh).size(), self_intersecting_faces(plain.mesh).size());
     const QualityReport q = measure_quality(h, r.cut, r.mesh), q_plain = measure_quality(h, plain.cut, plain.mesh);

@@ -432,6 +432,7 @@ struct MeshArgs
     bool no_colors = false;
     std::size_t close_holes = 0;
     int crack_rounds = MeshOptions{}.crack_rounds;
+    int crossing_rounds = MeshOptions{}.crossing_rounds;
 
     //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
     void add(CLI::App* cmd, bool one_mesh = true)
@@ -464,6 +465,11 @@ struct MeshArgs
                             "rounds refining the tiles along cracks of a closed surface and meshing again (0 = off)")
                 ->check(CLI::Range(0, kMaxRefineRounds))
                 ->capture_default_str();
+        if (one_mesh)
+            cmd->add_option("--crossing-rounds", crossing_rounds,
+                            "rounds refining the tiles of faces that cross each other and meshing again (0 = off)")
+                ->check(CLI::Range(0, kMaxRefineRounds))
+                ->capture_default_str();
     }
 
     MeshOptions options() const
@@ -477,6 +483,7 @@ struct MeshArgs
         o.colors.enabled = !no_colors;
         o.surface.close_holes = close_holes;
         o.crack_rounds = crack_rounds;
+        o.crossing_rounds = crossing_rounds;
         return o;
     }
 };
