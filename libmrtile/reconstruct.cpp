@@ -339,6 +339,17 @@ std::set<EdgeCorners> open_after_caps(const Hierarchy& h, const std::vector<Tile
 // spacings wide closed by crack rounds at coarse cuts, faces 4-16 spacings off the points).
 constexpr double kCrackReach = 3.0;
 
+// kCrackReach spacings of the sample under the tiles `which` (the median of their sample_spacing; 0
+// when none has one): how far from the points the mesh a round changes may lie.
+double crack_reach(const Hierarchy& h, const std::vector<Tile>& tiles, const std::vector<std::size_t>& which)
+{
+    std::vector<double> spacings;
+    for (const std::size_t k : which)
+        if (const double s = sample_spacing(h, tiles[k]); s > 0.0)
+            spacings.push_back(s);
+    return kCrackReach * upper_median_in_place(spacings);
+}
+
 // A boundary loop that a crack round would mend, judged against the points: before the round, the
 // faces at its corners; after it, the mesh over its tiles.
 class CrackWatch
@@ -348,16 +359,13 @@ public:
                const Mesh& mesh)
     {
         std::vector<Vec3> corners;
-        std::vector<double> spacings;
         for (const std::size_t k : loop.tiles) {
             corners.push_back(tiles[k].centre);
             for (const std::uint32_t i : tiles[k].boundary)
                 corners.push_back(h.cloud.positions[i]);
-            if (const double s = sample_spacing(h, tiles[k]); s > 0.0)
-                spacings.push_back(s);
             nodes_.push_back(cut[k]);
         }
-        reach_ = kCrackReach * upper_median_in_place(spacings);
+        reach_ = crack_reach(h, tiles, loop.tiles);
         if (!(reach_ > 0.0))
             return; // no spacing: never at a rim, never spanning
         // Faces at a hole's rim span the rest of the hole: spots twice the reach from every point, over
@@ -758,20 +766,20 @@ std::size_t points_away(const Hierarchy& h, const Cut& cut, const std::vector<bo
 // with no more loops or handles, no more fans left out or no more points in the tiles left out away
 // from it (a fan left out where its neighbours cover its points does no harm: the tetrahedron sampled
 // as text, 414 -> 0 pairs, one more such fan), no more of it over the sample's holes
-// (spans_more_holes) and no point of a regular sample farther from it (leaves_points). Crossings at leaves (the bunny's ear tip at 0.002) cost
-// nothing. `tiles` and `away` follow the cut kept.
+// (spans_more_holes) and no point of a regular sample farther from it (leaves_points). Crossings at
+// leaves (the bunny's ear tip at 0.002) cost nothing. `tiles` and `away` follow the cut kept.
 void refine_crossings(const Hierarchy& h, const MeshOptions& options, MeshResult& result, std::vector<Tile>& tiles,
                       std::vector<bool>& away)
 {
     // What the rounds mend is what the untangling leaves: with the untangling off, nothing.
     if (options.untangle.max_rounds == 0)
         return;
+    if (options.crossing_rounds == 0 || result.untangle.pairs_after == 0)
+        return;
+    TopologyStats now = topology_stats(result.mesh); // of result.mesh, round after round
     for (int round = 0; round < options.crossing_rounds; ++round) {
         const std::size_t crossings = result.untangle.pairs_after;
-        if (crossings == 0)
-            return;
-        const TopologyStats now = topology_stats(result.mesh);
-        if (now.components != 1)
+        if (crossings == 0 || now.components != 1)
             return;
         // The tile ids follow the fit's flips (faces across two tiles become gap faces, whose corners
         // name their tiles) and the untangling's collapses.
@@ -800,17 +808,14 @@ void refine_crossings(const Hierarchy& h, const MeshOptions& options, MeshResult
         if (again.untangle.pairs_after >= crossings || then.boundary_loops > now.boundary_loops || then.components != 1 ||
             then.genus > now.genus || !fewer_left_out)
             return;
-        std::vector<double> spacings;
-        for (const std::size_t k : which)
-            if (const double sp = sample_spacing(h, tiles[k]); sp > 0.0)
-                spacings.push_back(sp);
-        const double reach = kCrackReach * upper_median_in_place(spacings);
+        const double reach = crack_reach(h, tiles, which);
         if (reach > 0.0 && (spans_more_holes(h, result.mesh, again.mesh, reach) ||
                             leaves_points(h, result.mesh, again.mesh, reach, options.fit.threads)))
             return;
         result = std::move(again);
         tiles = std::move(again_tiles);
         away = std::move(again_away);
+        now = then;
     }
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Reads the vertices and triangles of a plain OBJ file (what the CLI writes, the shared CAD parts), for
 // tests that look at a mesh file without OpenMesh: "v x y z" and "f a b c" lines ("a/t/n" corners
-// too); other lines are skipped.
+// too); other lines are skipped. Also uniform samples of solids given by their triangles (an OBJ's CAD
+// part, the regular tetrahedron) for tests of their reconstruction.
 #include "libmrtile/shapes.h"
 #include "libmrtile/vec3.h"
 
@@ -56,6 +57,15 @@ inline PointCloud sampled_obj_surface(const std::filesystem::path& path, std::si
     for (const auto& f : obj.faces)
         triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
     return shapes::mesh_surface(obj.vertices, triangles, count, seed);
+}
+
+//! A uniform sample of `count` points (seeded) over the regular tetrahedron with corners (1, 1, 1),
+//! (1, -1, -1), (-1, 1, -1), (-1, -1, 1): its 71-degree edges crack and fold at coarse cuts.
+inline PointCloud sampled_tetrahedron(std::size_t count, std::uint32_t seed)
+{
+    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    return shapes::mesh_surface(corners, sides, count, seed);
 }
 
 } // namespace mrt::testing

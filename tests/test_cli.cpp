@@ -357,14 +357,11 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
     EXPECT_NE(r.out.find("note: " + std::to_string(crossings) + " pairs of faces cross each other"), std::string::npos) << r.out;
 }
 
-// A uniform sample of the regular tetrahedron with corners (1, 1, 1), (1, -1, -1), (-1, 1, -1),
-// (-1, -1, 1), written as an XYZ text file: its 71-degree edges crack and fold at coarse cuts.
+// testing::sampled_tetrahedron written as an XYZ text file.
 void write_sampled_tetrahedron(const fs::path& path, std::size_t count, std::uint32_t seed)
 {
-    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
     std::string text;
-    for (const Vec3& p : shapes::mesh_surface(corners, sides, count, seed).positions)
+    for (const Vec3& p : testing::sampled_tetrahedron(count, seed).positions)
         text += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
     write_text(path, text);
 }

@@ -1045,9 +1045,7 @@ TEST(Reconstruct, a_slit_in_a_terrain_is_mended)
 // pieces, no higher genus, no more fans left out and no more crossing pairs.
 TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
 {
-    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-    const Hierarchy h = build_hierarchy(shapes::mesh_surface(corners, sides, 200000, 3));
+    const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(200000, 3));
     const Cut cut = cut_by_tolerance(h, 0.01);
     MeshOptions as_cut, rounds; // rounds: the default
     as_cut.crack_rounds = 0;
@@ -1069,9 +1067,7 @@ TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
 // more loops or pieces and no handle. A surface whose faces do not cross is meshed as without them.
 TEST(Reconstruct, tiles_folding_along_a_tetrahedrons_edges_are_refined)
 {
-    const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-    const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-    const Hierarchy h = build_hierarchy(shapes::mesh_surface(corners, sides, 100000, 11));
+    const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(100000, 11));
     const Cut cut = cut_by_tolerance(h, 0.01);
     MeshOptions off; // rounds: the default
     off.crossing_rounds = 0;
