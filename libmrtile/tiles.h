@@ -16,6 +16,10 @@
 
 namespace mrt {
 
+//! TileOptions::meet_factor for thin walls (`mrtile --thin-walls`): cells whose points come within 4 point
+//! spacings of each other meet; the sides of walls about 3 spacings thick and more are told apart.
+inline constexpr double kThinWallMeetFactor = 4.0;
+
 struct TileOptions
 {
     //! A hull point is dropped as collinear when the turn at it is at most this fraction of the squared
@@ -33,6 +37,16 @@ struct TileOptions
     //! the larger of their point spacings of the bisector plane of the two centres (the sampled surface
     //! comes that close to their Voronoi face).
     double adjacency_factor = 1.5;
+    //! Thin walls (opt-in; `mrtile --thin-walls` sets kThinWallMeetFactor): two tiles facing the same
+    //! way within 30 degrees (either way round) are neighbours only if, moreover, a point of one cell
+    //! within that reach of the bisector comes within meet_factor × the larger spacing of some point of
+    //! the other cell: the surface runs from one cell into the other. Where the two sides of a thin wall
+    //! face each other, the bisector of an outer and an inner centre set apart along the wall crosses
+    //! both sides, so both cells have points at it, each on its own side, a wall's thickness apart, and
+    //! the bisector test alone makes them neighbours across the wall. Off by default: where a plate's
+    //! rim is not sampled (a CAD part's vertices), coarse tiles of its two sides meet only across the rim,
+    //! and the test leaves the rim open (README: Choices, thin walls). 0 = off.
+    double meet_factor = 0.0;
     //! Place the fan apex at the height (along the normal) that fits the fan to the tile's points in
     //! least squares; false: the mean height of the points near the centre (on the surface).
     bool fit_apex = true;
@@ -103,8 +117,8 @@ struct Tile
     bool has_fan() const { return !fanless && boundary.size() >= 3; }
 };
 
-//! \throw InvalidInput unless collinear_tolerance is finite and >= 0, adjacency_factor >= 0 and plane_axis
-//! finite (make_tiles, make_tile and refine_mesh check it first).
+//! \throw InvalidInput unless collinear_tolerance is finite and >= 0, adjacency_factor and meet_factor >= 0
+//! and plane_axis finite (make_tiles, make_tile and refine_mesh check it first).
 void check_tile_options(const TileOptions& options);
 
 //! \brief Builds the tile of every node of `cut`, in cut order.

@@ -7,6 +7,7 @@
 #include "libmrtile/vec3.h"
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
@@ -66,6 +67,20 @@ inline PointCloud sampled_tetrahedron(std::size_t count, std::uint32_t seed)
     const std::vector<Vec3> corners{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
     const std::vector<std::array<std::uint32_t, 3>> sides{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
     return shapes::mesh_surface(corners, sides, count, seed);
+}
+
+//! A closed shell whose wall is 3 point spacings thick: `count` points uniform over two concentric
+//! spheres (radius 1 and 1 - 3 spacings, the spacing of the count over both), seeds `seed` and seed + 100.
+inline PointCloud sphere_shell(std::size_t count, std::uint32_t seed)
+{
+    const double spacing = std::sqrt(4.0 * kPi * (1.0 + 0.95 * 0.95) / static_cast<double>(count));
+    const double inner = 1.0 - 3.0 * spacing;
+    const auto outer_count = static_cast<std::size_t>(static_cast<double>(count) / (1.0 + inner * inner));
+    PointCloud shell = shapes::sphere(outer_count, 1.0, seed);
+    const PointCloud inside = shapes::sphere(count - outer_count, inner, seed + 100);
+    for (const Vec3& p : inside.positions)
+        shell.positions.push_back(p + inside.origin - shell.origin);
+    return shell;
 }
 
 } // namespace mrt::testing

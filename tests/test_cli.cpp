@@ -417,6 +417,32 @@ TEST(Cli, crossing_rounds_are_an_option_of_mesh_and_reconstruct)
     expect_a_rounds_option(dir, "--crossing-rounds");
 }
 
+// --thin-walls reaches the library (test_reconstruct: a sphere shell 3 point spacings thick, both sides
+// closed with it; by default 3 loops in 6 pieces), and the levels an export stores with it say so in
+// their recipe (an export without it meshes them again: 12 s here, not run).
+TEST(Cli, thin_walls_is_an_option_of_every_meshing_command)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const PointCloud shell = testing::sphere_shell(10000, 3);
+    std::string text;
+    for (const Vec3& p : shell.positions)
+        text += std::to_string(p.x + shell.origin.x) + " " + std::to_string(p.y + shell.origin.y) + " " +
+                std::to_string(p.z + shell.origin.z) + "\n";
+    write_text(dir / "shell.xyz", text);
+    const Result r = mrtile("reconstruct " + (dir / "shell.xyz").string() + " -o " + (dir / "s.ply").string() +
+                                " --thin-walls --model " + (dir / "s.mrt").string() + " --stats-json " + (dir / "s.json").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir / "s.json"));
+    EXPECT_EQ(j["boundary_loops"].get<std::size_t>(), 0u);
+    EXPECT_EQ(j["components"].get<std::size_t>(), 2u);
+    const std::string model = (dir / "s.mrt").string();
+    const Result stored = mrtile("export " + model + " -o " + (dir / "t").string() + " --format 3dtiles --store-levels --thin-walls", dir);
+    ASSERT_EQ(stored.code, 0) << stored.err;
+    const Result info = mrtile("info " + model + " --json", dir);
+    ASSERT_EQ(info.code, 0) << info.err;
+    EXPECT_NE(nlohmann::json::parse(info.out)["stored_level_recipe"].get<std::string>().find("thin-walls=1"), std::string::npos);
+}
+
 // Crack rounds leave to the caps from the points the loops those close (on a copy of the surface): the
 // fandisk part sampled with 300k points (seed 2) at tolerance 0.005 has one loop along a sharp edge,
 // which a crack round had mended with 2 crossing pairs left; the cap leaves none, and the mesh is the

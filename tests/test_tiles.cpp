@@ -226,6 +226,46 @@ TEST(Tiles, trimmed_tiles_are_voronoi_cells)
     EXPECT_NEAR(static_cast<double>(degree) / static_cast<double>(tiles.size()), 6.0, 1.0);
 }
 
+// With TileOptions::meet_factor (thin walls), the two sides of a wall (two planes 5 point spacings apart)
+// are no surface neighbours: the bisector of a tile above and one below, set apart along the planes,
+// crosses both planes, so both cells have points at it (by default 556 such pairs of 2,608), but the
+// points of one never come near the other's. A tile whose node holds points of both planes is left out.
+TEST(Tiles, the_sides_of_a_thin_wall_are_no_neighbours)
+{
+    const std::size_t per_plane = 8000;
+    const double gap = 5.0 / std::sqrt(static_cast<double>(per_plane)); // 5 spacings of a unit square
+    const Hierarchy h = build_hierarchy(shapes::parallel_planes(per_plane, gap));
+    const Cut cut = cut_by_tolerance(h, 0.002);
+    const auto side = [&](std::size_t k) { // 0 or 1 (the plane), 2: both
+        const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
+        bool low = false, high = false;
+        for (std::uint32_t i = n.begin; i < n.end; ++i)
+            (h.cloud.positions[i].z + h.cloud.origin.z < 0.5 * gap ? low : high) = true;
+        return low && high ? 2 : high ? 1 : 0;
+    };
+    const auto across = [&](const TileOptions& options, std::size_t& pairs) {
+        const std::vector<Tile> tiles = make_tiles(h, cut, options);
+        std::size_t count = 0;
+        pairs = 0;
+        for (std::size_t k = 0; k < tiles.size(); ++k)
+            for (std::uint32_t j : tiles[k].neighbours) {
+                ++pairs;
+                count += side(k) != 2 && side(j) != 2 && side(k) != side(j) ? 1 : 0;
+            }
+        return count;
+    };
+    TileOptions thin_walls;
+    thin_walls.meet_factor = kThinWallMeetFactor;
+    std::size_t pairs = 0, pairs_before = 0;
+    EXPECT_GT(across(TileOptions{}, pairs_before), 100u) << "the fixture should have tiles witnessed across the wall";
+    EXPECT_EQ(across(thin_walls, pairs), 0u);
+    // Neighbours along each plane stay: about six per tile.
+    EXPECT_GT(pairs, 5 * cut.size());
+    TileOptions negative;
+    negative.meet_factor = -1.0;
+    EXPECT_THROW(make_tiles(h, cut, negative), InvalidInput);
+}
+
 // Without fitting, the apex (the fan's centre vertex) lies on the surface: on a unit sphere it is much
 // nearer to the sphere than the patch's mean, which sits below the cap.
 TEST(Tiles, apex_lies_on_a_curved_surface)

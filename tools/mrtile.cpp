@@ -433,6 +433,7 @@ struct MeshArgs
     std::size_t close_holes = 0;
     int crack_rounds = MeshOptions{}.crack_rounds;
     int crossing_rounds = MeshOptions{}.crossing_rounds;
+    bool thin_walls = false;
 
     //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
     void add(CLI::App* cmd, bool one_mesh = true)
@@ -456,6 +457,9 @@ struct MeshArgs
             ->check(CLI::Range(0, kMaxFitRounds))
             ->capture_default_str();
         cmd->add_flag("--no-colors", no_colors, "leave the mesh uncoloured even when the points have colours");
+        cmd->add_flag("--thin-walls", thin_walls,
+                      "tell the two sides of walls about 3 point spacings thick and more apart (a shell, a plate sampled on "
+                      "both sides); may open the rims of plates whose rims are not sampled (README: Choices, thin walls)");
         cmd->add_option("--close-holes", close_holes,
                         "also fill the sample's own holes of at most N edges, for watertight output (0 = off; at most 2000)")
             ->check(CLI::Range(0, 2000));
@@ -484,6 +488,7 @@ struct MeshArgs
         o.surface.close_holes = close_holes;
         o.crack_rounds = crack_rounds;
         o.crossing_rounds = crossing_rounds;
+        o.tiles.meet_factor = thin_walls ? kThinWallMeetFactor : 0.0;
         return o;
     }
 };
@@ -1114,7 +1119,8 @@ std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& 
            " lod-tolerances=" + tolerances + " below-noise=" + (g.below_noise ? "1" : "0") + " alpha=" + real(m.alpha) +
            " height-field=" + m.height_field + " keep-steps=" + (m.keep_steps ? "1" : "0") +
            " refine-fans=" + real(m.refine_fans) + " fit-rounds=" + std::to_string(m.fit_rounds) +
-           " no-colors=" + (m.no_colors ? "1" : "0") + " close-holes=" + std::to_string(m.close_holes);
+           " no-colors=" + (m.no_colors ? "1" : "0") + " close-holes=" + std::to_string(m.close_holes) +
+           (m.thin_walls ? " thin-walls=1" : ""); // only when on: recipes stored without the option still match
 }
 
 // Levels stored in a model, on their way into an export, and (--store-levels) those the export meshed,
