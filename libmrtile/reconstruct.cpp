@@ -972,6 +972,7 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     MendedMeshResult out;
     const Cut asked = cut_at(0);
     std::size_t cut_size = asked.size(); // of the cut kept, as cut_at gave it (mesh_cut may refine it)
+    int kept_step = 0;
     out.result = mesh_cut(h, asked, options);
     out.asked = topology_stats(out.result.mesh);
     out.in_pieces = broken_into_pieces(h, out.result, out.asked, options);
@@ -1001,11 +1002,28 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
         if (fewer && kept >= best_kept) {
             out.result = std::move(candidate);
             out.steps = step;
+            kept_step = step;
             best = then;
             best_kept = kept;
             out.in_pieces = broken_into_pieces(h, out.result, best, options);
         } else if (candidate.meshed_tiles > kCheapMendTiles) {
             break;
+        }
+    }
+    // Pieces that finer cuts did not join may be the two sides of a thin wall, which the bisector test
+    // takes for neighbours (TileOptions::meet_factor): the surface joins the sides here and tears them
+    // there. Last, after the finer cuts, so that a cut they close stays as it was (a plate whose rim
+    // is not sampled opens along it with thin walls: the rocker arm at tolerance 0.015).
+    if (out.in_pieces && options.thin_walls_when_in_pieces && options.tiles.meet_factor == 0.0) {
+        MeshOptions thin = options;
+        thin.tiles.meet_factor = kThinWallMeetFactor;
+        MeshResult candidate = mesh_cut(h, kept_step == 0 ? asked : cut_at(kept_step), thin);
+        const TopologyStats then = topology_stats(candidate.mesh);
+        const bool fewer = then.components < best.components && then.boundary_loops <= best.boundary_loops;
+        if (fewer && kept_points(h, candidate) >= best_kept) {
+            out.result = std::move(candidate);
+            out.thin_walls = true;
+            out.in_pieces = broken_into_pieces(h, out.result, then, thin);
         }
     }
     return out;

@@ -99,6 +99,13 @@ struct MeshOptions
     //! over the sample's holes and no point of a regular sample farther from it by a spacing. A round
     //! tried costs a meshing, kept or not; a mesh without crossings costs nothing. 0 = never.
     int crossing_rounds = 2;
+    //! mesh_mended only: where its mesh is still in pieces that the sample joins after its finer cuts,
+    //! the cut kept is meshed again with thin walls (TileOptions::meet_factor = kThinWallMeetFactor, when
+    //! it is 0) and that mesh is kept on the finer cuts' terms: fewer pieces, no more boundary loops, no
+    //! points left out that the first kept. The two sides of a wall a few spacings thick, joined and torn
+    //! apart by the surface, are such pieces (a sphere shell 3 spacings thick: 109 pieces, 110 loops ->
+    //! one piece, 14 loops). false = never.
+    bool thin_walls_when_in_pieces = true;
 };
 
 struct MeshResult
@@ -155,6 +162,8 @@ struct MendedMeshResult
     int steps = 0;       //!< finer cuts kept (0: the cut asked was not in pieces, or no finer one was better)
     TopologyStats asked; //!< the topology of the mesh of the cut asked
     bool in_pieces = false; //!< whether the mesh kept is still in pieces that the sample joins
+    //! whether the mesh kept was meshed with thin walls (MeshOptions::thin_walls_when_in_pieces)
+    bool thin_walls = false;
 };
 
 //! \brief Meshes cut_at(0), and where its mesh is in pieces that its sample is not, the finer cuts
@@ -166,6 +175,8 @@ struct MendedMeshResult
 //! is meshed for k = 1 .. mend_steps while the best so far is in pieces (past one that is no better
 //! only while the cuts have at most 1,000 tiles), and kept when it has fewer pieces and no more boundary
 //! loops than that best, and leaves out no more points (those of tiles without a vertex in the mesh). Tiles are joined when their points come within 3 point spacings.
+//! Where the best is still in pieces after that, its cut is meshed once more with thin walls
+//! (MeshOptions::thin_walls_when_in_pieces) and kept on the same terms (MendedMeshResult::thin_walls).
 //! cut_at(k) should be finer with k and meet whatever cut_at(0) was asked to meet (a tolerance / √2^k,
 //! a camera's pixel error / √2^k). Separate objects and a scan's separate fragments are no such pieces
 //! and cost nothing more. \throw InvalidInput as mesh_cut, or mend_steps outside [0, 8].

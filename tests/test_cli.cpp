@@ -419,7 +419,8 @@ TEST(Cli, crossing_rounds_are_an_option_of_mesh_and_reconstruct)
 
 // --thin-walls reaches the library (test_reconstruct: a sphere shell 3 point spacings thick, both sides
 // closed with it; by default 3 loops in 6 pieces), and the levels an export stores with it say so in
-// their recipe (an export without it meshes them again: 12 s here, not run).
+// their recipe (an export without it meshes them again: 12 s here, not run). A mesh without it that
+// comes out in pieces is meshed with it by itself.
 TEST(Cli, thin_walls_is_an_option_of_every_meshing_command)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
@@ -441,6 +442,12 @@ TEST(Cli, thin_walls_is_an_option_of_every_meshing_command)
     const Result info = mrtile("info " + model + " --json", dir);
     ASSERT_EQ(info.code, 0) << info.err;
     EXPECT_NE(nlohmann::json::parse(info.out)["stored_level_recipe"].get<std::string>().find("thin-walls=1"), std::string::npos);
+    // Without the option, the mesh in pieces is meshed with it all the same (mesh_mended), and says so.
+    const Result by_default = mrtile("mesh " + model + " -o " + (dir / "d.ply").string() + " --stats-json " +
+                                         (dir / "d.json").string(), dir);
+    ASSERT_EQ(by_default.code, 0) << by_default.err;
+    EXPECT_NE(by_default.out.find("meshed with --thin-walls instead"), std::string::npos) << by_default.out;
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "d.json"))["components"].get<std::size_t>(), 2u);
 }
 
 // Crack rounds leave to the caps from the points the loops those close (on a copy of the surface): the

@@ -874,14 +874,28 @@ TEST(Reconstruct, untangle_and_flip_options_out_of_range_are_refused)
     }
 }
 
-// A closed shell whose wall is 3 point spacings thick: two concentric spheres, each closed. By default,
-// tiles on the outer and the inner sphere whose bisector crosses both are surface neighbours: the mesh
-// joins the sides, 3 loops in 6 pieces 0.39% of the diagonal from the points on average (seed 3), in 5 s.
-// With TileOptions::meet_factor (`--thin-walls`) both spheres are closed, 10 times nearer, in 0.5 s.
+// A closed shell whose wall is 3 point spacings thick: two concentric spheres, each closed. Without
+// thin walls, tiles on the outer and the inner sphere whose bisector crosses both are surface neighbours:
+// the mesh joins the sides, 3 loops in 6 pieces 0.39% of the diagonal from the points on average (seed
+// 3), in 5 s. With TileOptions::meet_factor (`--thin-walls`) both spheres are closed, 10 times nearer,
+// in 0.5 s; mesh_mended meshes so by itself where the finer cuts leave the pieces (seed 3 and 4: by
+// default too), unless told not to.
 TEST(Reconstruct, both_sides_of_a_thin_shell_are_closed_with_thin_walls)
 {
     MeshOptions thin_walls;
     thin_walls.tiles.meet_factor = kThinWallMeetFactor;
+    MeshOptions never;
+    never.thin_walls_when_in_pieces = false;
+    {
+        const Hierarchy h = build_hierarchy(testing::sphere_shell(10000, 3));
+        const MendedMeshResult by_default = mesh_at_tolerance(h, 0.002);
+        EXPECT_TRUE(by_default.thin_walls);
+        EXPECT_EQ(topology_stats(by_default.result.mesh).components, 2u);
+        const MendedMeshResult torn = mesh_at_tolerance(h, 0.002, never);
+        EXPECT_FALSE(torn.thin_walls);
+        EXPECT_TRUE(torn.in_pieces);
+        EXPECT_GT(topology_stats(torn.result.mesh).boundary_loops, 0u);
+    }
     for (const std::uint32_t seed : {3u, 4u}) {
         const Hierarchy h = build_hierarchy(testing::sphere_shell(10000, seed));
         const MeshResult r = mesh_at_tolerance(h, 0.002, thin_walls).result;

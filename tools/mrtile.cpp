@@ -859,8 +859,12 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                     "what was asked too)%s\n",
                     mended.asked.components, what, mended.in_pieces ? "; still in pieces there" : "");
     }
+    if (mended.thin_walls)
+        std::printf("note: the mesh was in pieces that the sample joins; meshed with --thin-walls instead (the two sides "
+                    "of a wall a few point spacings thick, joined and torn apart: README, Choices, thin walls)%s\n",
+                    mended.in_pieces ? "; still in pieces" : "");
     const MeshResult& r = mended.result;
-    if (mended.in_pieces && mended.steps == 0)
+    if (mended.in_pieces && mended.steps == 0 && !mended.thin_walls)
         std::printf("note: the mesh is in %zu pieces that the sample joins; %s\n", mended.asked.components,
                     cut_args.tiles > 0 ? "a larger --tiles budget may join them (bounds, such as --tolerance, are meshed "
                                          "finer where so)"
