@@ -961,6 +961,20 @@ std::size_t kept_points(const Hierarchy& h, const MeshResult& r)
     return points;
 }
 
+// mesh_mended's terms for a candidate mesh (topology `then`) over the one kept: fewer pieces, no more
+// boundary loops, and no fewer points kept (kept_points, counted only when the topology passes). The
+// candidate's kept points when it passes.
+std::optional<std::size_t> mends(const Hierarchy& h, const MeshResult& candidate, const TopologyStats& then,
+                                 const TopologyStats& kept_topology, std::size_t kept)
+{
+    if (!(then.components < kept_topology.components && then.boundary_loops <= kept_topology.boundary_loops))
+        return std::nullopt;
+    const std::size_t points = kept_points(h, candidate);
+    if (points < kept)
+        return std::nullopt;
+    return points;
+}
+
 } // namespace
 
 MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& cut_at, const MeshOptions& options, int mend_steps)
@@ -970,16 +984,15 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     if (!cut_at)
         throw InvalidInput("mesh_mended: cut_at is empty; pass a function that gives the cut of each step");
     MendedMeshResult out;
-    const Cut asked = cut_at(0);
-    std::size_t cut_size = asked.size(); // of the cut kept, as cut_at gave it (mesh_cut may refine it)
-    int kept_step = 0;
-    out.result = mesh_cut(h, asked, options);
+    Cut kept_cut = cut_at(0);               // as cut_at gave it (mesh_cut may refine it)
+    std::size_t cut_size = kept_cut.size(); // of the last cut meshed
+    out.result = mesh_cut(h, kept_cut, options);
     out.asked = topology_stats(out.result.mesh);
     out.in_pieces = broken_into_pieces(h, out.result, out.asked, options);
     TopologyStats best = out.asked; // of out.result, and the points it keeps
     std::size_t best_kept = out.in_pieces ? kept_points(h, out.result) : 0;
     for (int step = 1; step <= mend_steps && out.in_pieces; ++step) {
-        const Cut finer = cut_at(step);
+        Cut finer = cut_at(step);
         if (finer.size() <= cut_size) // at the leaves, or at a noise floor: nothing finer
             break;
         // A large cut that is nearly all leaves (two sheets a few spacings apart, whose leaves straddle
@@ -997,14 +1010,12 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
         // for steps that joined nothing (QA round 31: 75% of the run).
         MeshResult candidate = mesh_cut(h, finer, options);
         const TopologyStats then = topology_stats(candidate.mesh);
-        const bool fewer = then.components < best.components && then.boundary_loops <= best.boundary_loops;
-        const std::size_t kept = fewer ? kept_points(h, candidate) : 0;
-        if (fewer && kept >= best_kept) {
+        if (const std::optional<std::size_t> kept = mends(h, candidate, then, best, best_kept)) {
             out.result = std::move(candidate);
             out.steps = step;
-            kept_step = step;
+            kept_cut = std::move(finer);
             best = then;
-            best_kept = kept;
+            best_kept = *kept;
             out.in_pieces = broken_into_pieces(h, out.result, best, options);
         } else if (candidate.meshed_tiles > kCheapMendTiles) {
             break;
@@ -1017,10 +1028,9 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     if (out.in_pieces && options.thin_walls_when_in_pieces && options.tiles.meet_factor == 0.0) {
         MeshOptions thin = options;
         thin.tiles.meet_factor = kThinWallMeetFactor;
-        MeshResult candidate = mesh_cut(h, kept_step == 0 ? asked : cut_at(kept_step), thin);
+        MeshResult candidate = mesh_cut(h, kept_cut, thin);
         const TopologyStats then = topology_stats(candidate.mesh);
-        const bool fewer = then.components < best.components && then.boundary_loops <= best.boundary_loops;
-        if (fewer && kept_points(h, candidate) >= best_kept) {
+        if (mends(h, candidate, then, best, best_kept)) {
             out.result = std::move(candidate);
             out.thin_walls = true;
             out.in_pieces = broken_into_pieces(h, out.result, then, thin);
@@ -1111,15 +1121,14 @@ TriangleCountResult mesh_to_triangle_count(const Hierarchy& h, std::size_t trian
         r.result = mesh_cut(h, r.cut, options);
         ++out.meshings;
         const TopologyStats then = topology_stats(r.result.mesh);
-        const bool better = r.result.mesh.n_faces() <= triangles && then.components < kept_topology.components &&
-                            then.boundary_loops <= kept_topology.boundary_loops;
-        const std::size_t points = better ? kept_points(h, r.result) : 0;
-        if (better && points >= kept) {
+        const std::optional<std::size_t> points =
+            r.result.mesh.n_faces() <= triangles ? mends(h, r.result, then, kept_topology, kept) : std::nullopt;
+        if (points) {
             r.meshings = out.meshings;
             r.asked = out.asked;
             r.smaller_budget = true;
             kept_topology = then;
-            kept = points;
+            kept = *points;
             r.in_pieces = broken_into_pieces(h, r.result, then, options);
             out = std::move(r);
         } else if (r.result.meshed_tiles > kCheapMendTiles) {
