@@ -365,14 +365,29 @@ private:
             const auto j = std::min(side - 1, static_cast<std::size_t>(std::max(0.0, (v - lo_v) / cell_v)));
             return std::array<std::size_t, 2>{i, j};
         };
-        std::vector<std::vector<std::uint32_t>> grid(side * side);
-        for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-            const Point2 &a = uv[triangles[t][0]], &b = uv[triangles[t][1]], &c = uv[triangles[t][2]];
-            const auto lo = cell(std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}));
-            const auto hi = cell(std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}));
-            for (std::size_t i = lo[0]; i <= hi[0]; ++i)
-                for (std::size_t j = lo[1]; j <= hi[1]; ++j)
-                    grid[j * side + i].push_back(t);
+        // The cells' triangle lists as compressed rows (counted, then filled in triangle order): one
+        // allocation per region instead of one per cell.
+        std::vector<std::uint32_t> grid_start(side * side + 1, 0), grid;
+        for (int pass = 0; pass < 2; ++pass) {
+            std::vector<std::uint32_t> fill;
+            if (pass == 1) {
+                for (std::size_t c = 0; c < side * side; ++c)
+                    grid_start[c + 1] += grid_start[c];
+                grid.resize(grid_start.back());
+                fill.assign(grid_start.begin(), grid_start.end() - 1);
+            }
+            for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+                const Point2 &a = uv[triangles[t][0]], &b = uv[triangles[t][1]], &c = uv[triangles[t][2]];
+                const auto lo = cell(std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}));
+                const auto hi = cell(std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}));
+                for (std::size_t i = lo[0]; i <= hi[0]; ++i)
+                    for (std::size_t j = lo[1]; j <= hi[1]; ++j) {
+                        if (pass == 0)
+                            ++grid_start[j * side + i + 1];
+                        else
+                            grid[fill[j * side + i]++] = t;
+                    }
+            }
         }
         // Per triangle, the normal equations of its points: Σ λλᵀ and Σ λ z.
         std::vector<std::array<double, 9>> normal(triangles.size(), std::array<double, 9>{});
@@ -386,7 +401,9 @@ private:
                 const Vec3& q = h_.cloud.positions[i];
                 const Point2 p = plane.project(q);
                 const auto c = cell(p[0], p[1]);
-                for (const std::uint32_t t : grid[c[1] * side + c[0]]) {
+                const std::size_t at = c[1] * side + c[0];
+                for (std::uint32_t g = grid_start[at]; g < grid_start[at + 1]; ++g) {
+                    const std::uint32_t t = grid[g];
                     std::array<double, 3> l{};
                     if (!barycentric(p, {uv[triangles[t][0]], uv[triangles[t][1]], uv[triangles[t][2]]}, l) || l[0] < -1e-9 ||
                         l[1] < -1e-9 || l[2] < -1e-9)
@@ -406,12 +423,20 @@ private:
             return;
         // Gauss-Seidel on the new vertices' heights; the damping weight is a share of the mean weight
         // the points put on a vertex.
-        std::vector<std::vector<std::pair<std::uint32_t, int>>> incident(count); // (triangle, corner)
+        // Per vertex, its (triangle, corner) pairs in triangle order, as compressed rows.
+        std::vector<std::uint32_t> incident_start(count + 1, 0);
+        for (const auto& t : triangles)
+            for (const std::uint32_t k : t)
+                ++incident_start[k + 1];
+        for (std::size_t k = 0; k < count; ++k)
+            incident_start[k + 1] += incident_start[k];
+        std::vector<std::pair<std::uint32_t, int>> incident(incident_start.back());
+        std::vector<std::uint32_t> incident_fill(incident_start.begin(), incident_start.end() - 1);
         std::vector<double> shortest(count, std::numeric_limits<double>::infinity());
         for (std::uint32_t t = 0; t < triangles.size(); ++t)
             for (int r = 0; r < 3; ++r) {
                 const std::uint32_t k = triangles[t][static_cast<std::size_t>(r)];
-                incident[k].push_back({t, r});
+                incident[incident_fill[k]++] = {t, r};
                 const std::uint32_t next = triangles[t][static_cast<std::size_t>((r + 1) % 3)];
                 const double length = distance(plane.point(uv[k], height[k]), plane.point(uv[next], height[next]));
                 shortest[k] = std::min(shortest[k], length);
@@ -419,14 +444,17 @@ private:
             }
         double weight = 0.0;
         for (std::size_t k = fixed; k < count; ++k)
-            for (const auto& [t, r] : incident[k])
+            for (std::uint32_t i = incident_start[k]; i < incident_start[k + 1]; ++i) {
+                const auto [t, r] = incident[i];
                 weight += normal[t][static_cast<std::size_t>(4 * r)];
+            }
         const double damping = kFitDamping * weight / static_cast<double>(count - fixed) + 1e-300;
         const std::vector<double> start = height;
         for (int sweep = 0; sweep < kFitSweeps; ++sweep)
             for (std::size_t k = fixed; k < count; ++k) {
                 double diagonal = damping, sum = damping * start[k];
-                for (const auto& [t, r] : incident[k]) {
+                for (std::uint32_t i = incident_start[k]; i < incident_start[k + 1]; ++i) {
+                    const auto [t, r] = incident[i];
                     diagonal += normal[t][static_cast<std::size_t>(4 * r)];
                     sum += rhs[t][static_cast<std::size_t>(r)];
                     for (int c = 0; c < 3; ++c)
@@ -755,30 +783,59 @@ private:
         };
         for (const auto f : added)
             mark(f);
+        // The faces at the outline's vertices and at their neighbours (each vertex visited once).
         std::vector<Mesh::FaceHandle> around;
-        for (const auto v : outline)
-            for (const auto f : mesh_.vf_range(v))
-                for (const auto w : mesh_.fv_range(f))
-                    for (const auto g : mesh_.vf_range(w))
-                        if (mark(g))
-                            around.push_back(g);
-        auto box = [&](Mesh::FaceHandle f) {
-            const std::array<Vec3, 3> c = face_corners(mesh_, f);
-            return std::array<Vec3, 2>{min(min(c[0], c[1]), c[2]), max(max(c[0], c[1]), c[2])};
+        vertex_stamp_.resize(mesh_.n_vertices(), 0u);
+        if (stamp_ == 1)
+            std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0u);
+        auto take_faces_at = [&](Mesh::VertexHandle w) {
+            std::uint32_t& s = vertex_stamp_[static_cast<std::size_t>(w.idx())];
+            if (s == stamp_)
+                return;
+            s = stamp_;
+            for (const auto g : mesh_.vf_range(w))
+                if (mark(g))
+                    around.push_back(g);
         };
-        std::vector<std::array<Vec3, 2>> around_boxes;
-        around_boxes.reserve(around.size());
-        for (const auto g : around)
-            around_boxes.push_back(box(g));
-        for (const auto f : added) {
-            const std::array<Vec3, 2> a = box(f);
-            for (std::size_t k = 0; k < around.size(); ++k) {
-                const std::array<Vec3, 2>& b = around_boxes[k];
-                if (a[1].x < b[0].x || b[1].x < a[0].x || a[1].y < b[0].y || b[1].y < a[0].y || a[1].z < b[0].z ||
-                    b[1].z < a[0].z)
-                    continue;
-                if (faces_intersect(mesh_, f, around[k]))
-                    return true;
+        for (const auto v : outline) {
+            take_faces_at(v);
+            for (const auto w : mesh_.vv_range(v))
+                take_faces_at(w);
+        }
+        // Sort and sweep along x: every pair of boxes that overlap along x is met once, in
+        // O((n + m) log(n + m) + pairs) instead of n × m box tests.
+        struct Box
+        {
+            std::array<Vec3, 2> extent;
+            Mesh::FaceHandle face;
+        };
+        auto boxes_of = [&](const std::vector<Mesh::FaceHandle>& faces) {
+            std::vector<Box> boxes;
+            boxes.reserve(faces.size());
+            for (const auto f : faces) {
+                const std::array<Vec3, 3> c = face_corners(mesh_, f);
+                boxes.push_back({{min(min(c[0], c[1]), c[2]), max(max(c[0], c[1]), c[2])}, f});
+            }
+            std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) { return a.extent[0].x < b.extent[0].x; });
+            return boxes;
+        };
+        const std::vector<Box> mine = boxes_of(added), theirs = boxes_of(around);
+        auto crosses = [&](const Box& a, const Box& b) {
+            return !(a.extent[1].y < b.extent[0].y || b.extent[1].y < a.extent[0].y || a.extent[1].z < b.extent[0].z ||
+                     b.extent[1].z < a.extent[0].z || a.extent[1].x < b.extent[0].x || b.extent[1].x < a.extent[0].x) &&
+                   faces_intersect(mesh_, a.face, b.face);
+        };
+        for (std::size_t i = 0, j = 0; i < mine.size() && j < theirs.size();) {
+            if (mine[i].extent[0].x <= theirs[j].extent[0].x) {
+                for (std::size_t k = j; k < theirs.size() && theirs[k].extent[0].x <= mine[i].extent[1].x; ++k)
+                    if (crosses(mine[i], theirs[k]))
+                        return true;
+                ++i;
+            } else {
+                for (std::size_t k = i; k < mine.size() && mine[k].extent[0].x <= theirs[j].extent[1].x; ++k)
+                    if (crosses(mine[k], theirs[j]))
+                        return true;
+                ++j;
             }
         }
         return false;
@@ -792,31 +849,43 @@ private:
         auto key = [](std::uint32_t a, std::uint32_t b) {
             return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
         };
-        std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_edge;
+        // (edge, triangle) pairs sorted: a triangle's edge partners are one range, in triangle order.
+        std::vector<std::pair<std::uint64_t, std::size_t>> by_edge;
+        by_edge.reserve(3 * triangles.size());
         for (std::size_t k = 0; k < triangles.size(); ++k)
             for (int i = 0; i < 3; ++i)
-                by_edge[key(triangles[k][i], triangles[k][(i + 1) % 3])].push_back(k);
+                by_edge.push_back({key(triangles[k][i], triangles[k][(i + 1) % 3]), k});
+        std::sort(by_edge.begin(), by_edge.end());
+        auto range_of = [&](std::uint64_t edge) {
+            const auto first = std::lower_bound(by_edge.begin(), by_edge.end(), std::pair<std::uint64_t, std::size_t>{edge, 0});
+            auto last = first;
+            while (last != by_edge.end() && last->first == edge)
+                ++last;
+            return std::make_pair(first, last);
+        };
         std::vector<char> placed(triangles.size(), 0);
         std::vector<std::size_t> order;
         order.reserve(triangles.size());
         for (std::uint32_t i = 0; i < outline_size; ++i) {
-            const auto it = by_edge.find(key(i, static_cast<std::uint32_t>((i + 1) % outline_size)));
-            if (it == by_edge.end())
+            const auto [first, last] = range_of(key(i, static_cast<std::uint32_t>((i + 1) % outline_size)));
+            if (first == last)
                 return {};
-            for (const std::size_t k : it->second)
-                if (!placed[k]) {
-                    placed[k] = 1;
-                    order.push_back(k);
+            for (auto it = first; it != last; ++it)
+                if (!placed[it->second]) {
+                    placed[it->second] = 1;
+                    order.push_back(it->second);
                 }
         }
         for (std::size_t head = 0; head < order.size(); ++head) {
             const auto& t = triangles[order[head]];
-            for (int i = 0; i < 3; ++i)
-                for (const std::size_t k : by_edge[key(t[i], t[(i + 1) % 3])])
-                    if (!placed[k]) {
-                        placed[k] = 1;
-                        order.push_back(k);
+            for (int i = 0; i < 3; ++i) {
+                const auto [first, last] = range_of(key(t[i], t[(i + 1) % 3]));
+                for (auto it = first; it != last; ++it)
+                    if (!placed[it->second]) {
+                        placed[it->second] = 1;
+                        order.push_back(it->second);
                     }
+            }
         }
         return order;
     }
@@ -873,6 +942,7 @@ private:
     std::vector<Mesh::FaceHandle> touched_faces_;     // new faces (update_touched_normals)
     std::vector<Mesh::VertexHandle> touched_vertices_; // their corners, outlines included
     std::vector<std::uint32_t> face_stamp_; // per face: the crossing test's call that last saw it
+    std::vector<std::uint32_t> vertex_stamp_; // per vertex: the same, for the vertices whose faces were taken
     std::uint32_t stamp_ = 0;
 };
 
