@@ -636,6 +636,59 @@ void reserve_capped(PointCloud& cloud, std::uint64_t count, std::size_t cap, boo
 
 std::uint8_t unit_to_byte(double v) { return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); }
 
+// Colours whose file does not say their range (named text columns, OBJ's "v x y z r g b", PLY colours
+// wider than a byte) are read at the range the file's largest value says, as the LAS reader does for
+// 16-bit fields: up to 1 it is 0-1 (OBJ's convention, float PLY), up to 255 bytes, beyond 16 bits.
+// Until QA round 48 each reader assumed one range: 0-1 floats in a CSV came out nearly black, 16-bit
+// values in a CSV and 0-255 in an OBJ white, 0-255 in a PLY ushort nearly black. Points are read as a
+// stream, so the bytes kept under a narrower range are converted when a later value widens it (at most
+// twice a file; they lie within the narrower range, so their value under the wider one is 0 or 1).
+class ColorRange
+{
+public:
+    enum class Range { unit, byte, word };
+
+    //! `narrowest`: Range::byte for integer fields (a 1 in a ushort is no full intensity).
+    explicit ColorRange(Range narrowest = Range::unit) : range_(narrowest) {}
+
+    //! One point's channels (alpha last, if any) as bytes; `kept` holds the points read so far, which
+    //! are converted if these values widen the range.
+    Rgba to_bytes(const double* channels, int count, std::vector<Rgba>& kept)
+    {
+        Range needed = range_;
+        for (int c = 0; c < count; ++c)
+            needed = std::max(needed, channels[c] <= 1.0 ? Range::unit : channels[c] <= 255.0 ? Range::byte : Range::word);
+        if (needed != range_) {
+            // Under the wider range a kept value (within the narrower one) is 0 or 1: 1 from half of it.
+            const int half = range_ == Range::unit ? (needed == Range::byte ? 128 : 256) : 129;
+            for (Rgba& rgba : kept)
+                for (int c = 0; c < count; ++c)
+                    rgba[static_cast<std::size_t>(c)] = rgba[static_cast<std::size_t>(c)] >= half ? 1 : 0;
+            range_ = needed;
+        }
+        Rgba out{0, 0, 0, 255};
+        for (int c = 0; c < count; ++c)
+            out[static_cast<std::size_t>(c)] = byte(channels[c]);
+        return out;
+    }
+
+private:
+    std::uint8_t byte(double v) const
+    {
+        switch (range_) {
+        case Range::unit:
+            return unit_to_byte(v);
+        case Range::byte:
+            return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
+        case Range::word:
+            break;
+        }
+        return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 65535.0) / 257.0));
+    }
+
+    Range range_;
+};
+
 // ---------------------------------------------------------------------------------------------------
 // XYZ / PTS / TXT / CSV
 
@@ -821,6 +874,7 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
 {
     PointCloud cloud;
     ColumnLayout layout;
+    ColorRange named_colors;
     bool layout_known = false;
     std::string_view line;
     bool first_content_line = true;
@@ -926,13 +980,12 @@ PointCloud read_columns(Input& in, const ReadOptions& options, bool pts)
         check_max_points(in, cloud.positions.size() + 1, options);
         cloud.positions.push_back(p);
         if (has_all(layout.color) && layout.colors_named) {
-            // Named colours: a word is an error as in a coordinate column; out-of-range values are
-            // clamped, as the PLY reader does with integer colours, rather than losing every colour.
-            Rgba c = {0, 0, 0, 255};
+            // Named colours: a word is an error as in a coordinate column; their range is the file's
+            // (ColorRange), negative values are 0.
+            double channels[3];
             for (int k = 0; k < 3; ++k)
-                c[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(
-                    std::lround(std::clamp(column_number(in, color_fields[k], layout), 0.0, 255.0)));
-            cloud.colors.push_back(c);
+                channels[k] = column_number(in, color_fields[k], layout);
+            cloud.colors.push_back(named_colors.to_bytes(channels, 3, cloud.colors));
         } else if (has_all(layout.color)) {
             Rgba c = {0, 0, 0, 255};
             if (color_byte(color_fields[0], c[0]) && color_byte(color_fields[1], c[1]) &&
@@ -957,6 +1010,7 @@ PointCloud read_obj(Input& in, const ReadOptions& options)
 {
     PointCloud cloud;
     std::vector<Rgba> colors;
+    ColorRange color_range;
     bool all_colored = true;
     std::string_view line;
     while (in.next_line(line)) {
@@ -991,9 +1045,10 @@ PointCloud read_obj(Input& in, const ReadOptions& options)
             fail_line(in, "expected 3 coordinates, found " + std::to_string(count));
         check_max_points(in, cloud.positions.size() + 1, options);
         cloud.positions.push_back({values[0], values[1], values[2]});
-        // "v x y z r g b" is the common vertex-colour extension; "v x y z w" is a weight.
+        // "v x y z r g b" is the common vertex-colour extension (0-1, but 0-255 is written too:
+        // ColorRange); "v x y z w" is a weight.
         if (count == 6 && all_colored && options.keep_colors)
-            colors.push_back({unit_to_byte(values[3]), unit_to_byte(values[4]), unit_to_byte(values[5]), 255});
+            colors.push_back(color_range.to_bytes(values + 3, 3, colors));
         else
             all_colored = false;
     }
@@ -1351,7 +1406,7 @@ VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_
     VertexLayout layout;
     // Two vertex properties of a name the reader uses (two x): which one holds the coordinate is
     // anyone's guess, and the first was read without a word (QA round 42). Other names may repeat.
-    for (const char* used : {"x", "y", "z", "red", "green", "blue", "alpha"})
+    for (const char* used : {"x", "y", "z", "red", "green", "blue", "alpha", "diffuse_red", "diffuse_green", "diffuse_blue", "diffuse_alpha"})
         if (std::count_if(vertex.properties.begin(), vertex.properties.end(),
                           [&](const PlyProperty& p) { return p.name == used; }) > 1)
             throw InvalidInput(in.name() + ": the PLY vertex element has two '" + used + "' properties: the header is ambiguous");
@@ -1362,8 +1417,12 @@ VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_
             throw InvalidInput(in.name() + ": PLY vertex element has no scalar '" + axes[i] + "' property");
     }
     const char* channels[4] = {"red", "green", "blue", "alpha"};
+    // Scanalyze-era Stanford files and some MeshLab exports name them diffuse_red and so on (dropped
+    // without a word until QA round 48).
+    const char* diffuse[4] = {"diffuse_red", "diffuse_green", "diffuse_blue", "diffuse_alpha"};
+    const bool plain = vertex.find("red") >= 0 || vertex.find("green") >= 0 || vertex.find("blue") >= 0;
     for (int i = 0; i < 4; ++i) {
-        const int index = vertex.find(channels[i]);
+        const int index = vertex.find(plain ? channels[i] : diffuse[i]);
         if (index >= 0 && !vertex.properties[static_cast<std::size_t>(index)].is_list)
             layout.rgba[i] = index;
     }
@@ -1371,14 +1430,6 @@ VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_
     return layout;
 }
 
-std::uint8_t channel_to_byte(double v, PlyType t)
-{
-    if (is_float_type(t))
-        return unit_to_byte(v);
-    if (t == PlyType::uint16)
-        return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 65535.0) / 257.0));
-    return static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
-}
 
 [[noreturn]] void fail_truncated(const Input& in, const PlyElement& element, std::uint64_t done)
 {
@@ -1515,22 +1566,33 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         kept[static_cast<std::size_t>(f)] = true;
     for (int f : layout.xyz)
         is_coordinate[static_cast<std::size_t>(f)] = true;
+    // Bytes are colours as they are; wider fields have the range their values say (ColorRange):
+    // floats 0-1 or 0-255, 16-bit fields 0-65535 or, as many writers store them, 0-255.
+    const PlyType color_type = layout.colors ? vertex.properties[static_cast<std::size_t>(layout.rgba[0])].type : PlyType::uint8;
+    const bool byte_colors = color_type == PlyType::uint8 || color_type == PlyType::int8;
+    ColorRange color_range(is_float_type(color_type) ? ColorRange::Range::unit : ColorRange::Range::byte);
     const auto store = [&](const double* v) {
         cloud.positions.push_back({v[layout.xyz[0]], v[layout.xyz[1]], v[layout.xyz[2]]});
         if (layout.colors) {
-            Rgba rgba{0, 0, 0, 255};
-            for (int c = 0; c < 4; ++c)
-                if (layout.rgba[c] >= 0) {
-                    // A binary float colour of NaN became an unspecified byte without a word (QA round
-                    // 29); in an ASCII file the same value is refused, as a coordinate is in both.
-                    if (!std::isfinite(v[layout.rgba[c]]))
-                        throw InvalidInput(in.name() + ": vertex " + std::to_string(cloud.positions.size() - 1) + ": its " +
-                                           vertex.properties[static_cast<std::size_t>(layout.rgba[c])].name +
-                                           " value is not a finite number");
-                    rgba[static_cast<std::size_t>(c)] = channel_to_byte(
-                        v[layout.rgba[c]], vertex.properties[static_cast<std::size_t>(layout.rgba[c])].type);
-                }
-            cloud.colors.push_back(rgba);
+            double channels[4];
+            const int count = layout.rgba[3] >= 0 ? 4 : 3; // red, green and blue are there (vertex_layout)
+            for (int c = 0; c < count; ++c) {
+                channels[c] = v[layout.rgba[c]];
+                // A binary float colour of NaN became an unspecified byte without a word (QA round
+                // 29); in an ASCII file the same value is refused, as a coordinate is in both.
+                if (!std::isfinite(channels[c]))
+                    throw InvalidInput(in.name() + ": vertex " + std::to_string(cloud.positions.size() - 1) + ": its " +
+                                       vertex.properties[static_cast<std::size_t>(layout.rgba[c])].name +
+                                       " value is not a finite number");
+            }
+            if (byte_colors) {
+                Rgba rgba{0, 0, 0, 255};
+                for (int c = 0; c < count; ++c)
+                    rgba[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::clamp(channels[c], 0.0, 255.0));
+                cloud.colors.push_back(rgba);
+            } else {
+                cloud.colors.push_back(color_range.to_bytes(channels, count, cloud.colors));
+            }
         }
     };
 

@@ -24,10 +24,28 @@ void check_tolerance(double value, const char* name)
 
 double distance_to_box(const Vec3& p, const BoundingBox& b) { return std::sqrt(b.squared_distance_to(p)); }
 
+// How wide across a line its points may spread, in their spacing along it (is_line).
+constexpr double kLineWidthSpacings = 2.0;
+
 // Whether a node's points lie along one line: across the line they spread under a thirtieth of their
-// spread along it (eigenvalues 900 apart), and they are 8 or more (the fewest a leaf holds by choice:
-// one or two stray points are no line, and are split off as before).
-bool is_line(const Node& n) { return n.count() >= 8 && n.frame.values[1] <= n.frame.values[2] / 900.0; }
+// spread along it (eigenvalues 900 apart), they are 8 or more (the fewest a leaf holds by choice: one
+// or two stray points are no line, and are split off as before), and across it they spread less than
+// kLineWidthSpacings of their spacing along it. A thin tube (a pipe, a cable) is as long and thin, but
+// its points go round it: a tube of radius r sampled at spacing s holds about 2πr/s points per s of
+// its length where a line holds one, so its spread across is r/√2 against a spacing along of
+// s²/(2πr): 4 times it at r = s, 111 times at r = 5s. Taken for lines, a bent pipe's arms stopped
+// every tolerance cut at the node holding both, one flat fan over the space between them (QA round 48).
+bool is_line(const Node& n)
+{
+    if (n.count() < 8 || !(n.frame.values[1] <= n.frame.values[2] / 900.0))
+        return false;
+    const auto count = static_cast<double>(n.count());
+    // frame.values are of the scatter matrix (sums over the points): a variance is value / count, and
+    // points spread evenly along a segment of length L have variance L² / 12.
+    const double length = std::sqrt(12.0 * n.frame.values[2] / count);
+    const double across = std::sqrt(n.frame.values[1] / count);
+    return across <= kLineWidthSpacings * length / count;
+}
 
 // The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above
 // `limit` and above the node's noise floor (below it, children fit the noise: hierarchy.h), or its

@@ -156,7 +156,8 @@ double cut_plane_error(const Hierarchy& h, const Cut& cut);
 bool is_partition(const Hierarchy& h, const Cut& cut);
 
 //! \brief Whether `n` spreads over a surface while a child of it lies along one line (across the line
-//! its 8 or more points spread under a thirtieth of their spread along it).
+//! its 8 or more points spread under a thirtieth of their spread along it, and under two of their
+//! spacings along it: a thin tube is as long and thin, but its points go round it).
 //! \details A stretch of a single scan line fits every plane through it, so its plane distance says
 //! nothing and its tile is a sliver with no surface: where a scan's lines lie farther apart than a
 //! leaf runs along one (30 points along a line per spacing across), the cuts by tolerance, region and

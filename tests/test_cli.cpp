@@ -277,6 +277,11 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --camera 3,0,0:0,0,0:60:1080 --tolerance 0.001", "excludes"},
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --no-quality", "--no-quality"},
         {tiles + " --no-quality", "--no-quality"},
+        // A LOD set's levels are mended by finer whole cuts (QA round 48: both were accepted and ignored).
+        {tiles + " --crack-rounds 0", "--crack-rounds: mends one mesh"},
+        {tiles + " --crossing-rounds 1", "--crossing-rounds: mends one mesh"},
+        {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string() + " --format lod-glb --crack-rounds 0", "--crack-rounds: mends"},
+        {"reconstruct " + in + " -o " + (dir / "t").string() + " --format 3dtiles --crossing-rounds 0", "--crossing-rounds"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);
@@ -1264,7 +1269,9 @@ TEST(Cli, reconstruct_crs_shapes_a_height_field_mesh)
                       .code,
                   0);
         EXPECT_EQ(loops("crs.json"), 1);   // the scene's border only
-        EXPECT_EQ(loops("plain.json"), 2); // meshed in 3D: the footprint stays open
+        // Meshed in 3D the footprint stays open at 0.002; at 0.005 it closes since session 41 (the
+        // ground beside the walls, far off the roof tiles' plane, stays in the ground's cells).
+        EXPECT_EQ(loops("plain.json"), tolerance == "0.005" ? 1 : 2);
         ASSERT_EQ(mrtile("build " + in + " -o " + (dir / "m.mrt").string() + " --crs EPSG:32632", dir).code, 0);
         ASSERT_EQ(mrtile("mesh " + (dir / "m.mrt").string() + " -o " + (dir / "built.ply").string() + " --tolerance " + tolerance, dir).code, 0);
         EXPECT_EQ(slurp(dir / "crs.ply"), slurp(dir / "built.ply"));

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <set>
 
 namespace mrt {
@@ -480,6 +481,32 @@ TEST(Cut, scan_lines_far_apart_are_not_cut_into_single_lines)
     // limits.)
     const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.002));
     EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
+}
+
+// A bent thin pipe (QA round 48): each straight arm, as a whole, is as long and thin as a stretch of a
+// scan line, and the line rule stopped every tolerance cut at the root, one flat tile over the empty
+// space between the arms (mesh to points: 0.29 of the diagonal), even at tolerance 0. Its points go
+// round the pipe, far denser than a line of that length: the cut refines, and the mesh is a tube.
+TEST(Cut, a_bent_thin_pipe_is_no_line)
+{
+    PointCloud c;
+    const double radius = 0.025, length = 5.0;
+    std::mt19937 rng(48); // its raw output is the same everywhere (its distributions are not)
+    auto uniform = [&] { return static_cast<double>(rng()) / 4294967296.0; };
+    for (int i = 0; i < 40000; ++i) {
+        const double along = length * uniform(), angle = 2 * M_PI * uniform();
+        const double u = radius * std::cos(angle), w = radius * std::sin(angle);
+        c.positions.push_back(i % 2 ? Vec3{along, u, w} : Vec3{u, along, w}); // arms along x and y
+    }
+    const Hierarchy h = build_hierarchy(c);
+    const Node& root = h.nodes[0];
+    EXPECT_FALSE(splits_into_lines(h, root));
+    for (double tol : {0.002, 0.0}) {
+        const Cut cut = cut_by_tolerance(h, tol);
+        EXPECT_GT(cut.size(), 100u) << tol;
+        const MeshResult r = mesh_cut(h, cut);
+        EXPECT_LT(mesh_to_point_distance(r.mesh, h.cloud.positions).max, 0.01) << tol;
+    }
 }
 
 } // namespace

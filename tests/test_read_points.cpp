@@ -490,17 +490,58 @@ TEST(ReadColumns, named_colour_columns_refuse_words_and_clamp)
     const fs::path eu = write_file(dir / "word_eu.csv", "X;Y;Z;red;green;blue\n1;2;3;10;x;30\n");
     expect_error<InvalidInput>([&] { read_points(eu); }, {eu.string(), "line 2: 'x' is not a number"});
 
+    // The file's largest value says the range (ColorRange): 1e6 is beyond 16 bits and clamped, negative
+    // values are 0, and the rest are 16-bit values (300 / 257 rounds to 1).
     const PointCloud c = read_points(write_file(dir / "range.csv", "//X,Y,Z,R,G,B\n1,2,3,300,-1,50\n4,5,6,255,0,"
                                                                    "127.6\n7,8,9,1e6,-0.4,0\n"));
     expect_points(c, {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}});
     ASSERT_EQ(c.colors.size(), 3u);
-    EXPECT_EQ(c.colors[0], (std::array<std::uint8_t, 4>{255, 0, 50, 255}));
-    EXPECT_EQ(c.colors[1], (std::array<std::uint8_t, 4>{255, 0, 128, 255}));
+    EXPECT_EQ(c.colors[0], (std::array<std::uint8_t, 4>{1, 0, 0, 255}));
+    EXPECT_EQ(c.colors[1], (std::array<std::uint8_t, 4>{1, 0, 0, 255}));
     EXPECT_EQ(c.colors[2], (std::array<std::uint8_t, 4>{255, 0, 0, 255}));
     // Not asked for: the colour columns are not read at all.
     ReadOptions no_colors;
     no_colors.keep_colors = false;
     EXPECT_FALSE(read_points(word, no_colors).has_colors());
+}
+
+// Colours whose range the file does not say are read at the range its largest value says (QA round
+// 48: 0-1 floats in a CSV came out nearly black, 16-bit values in a CSV and 0-255 in an OBJ white,
+// 0-255 in a PLY ushort nearly black); the same red in every spelling gives the same bytes.
+TEST(ReadColors, the_range_is_the_one_the_values_say)
+{
+    const fs::path dir = test_dir();
+    const std::array<std::uint8_t, 4> red{230, 20, 20, 255}, blue{20, 20, 230, 255};
+    auto expect_red_blue = [&](const fs::path& file) {
+        const PointCloud c = read_points(file);
+        ASSERT_EQ(c.colors.size(), 2u) << file;
+        EXPECT_EQ(c.colors[0], red) << file;
+        EXPECT_EQ(c.colors[1], blue) << file;
+    };
+    // 230 / 255 = 0.90196, 20 / 255 = 0.078431; 230 × 257 = 59110, 20 × 257 = 5140.
+    expect_red_blue(write_file(dir / "unit.csv", "x,y,z,r,g,b\n0,0,0,0.90196,0.078431,0.078431\n1,0,0,0.078431,0.078431,0.90196\n"));
+    expect_red_blue(write_file(dir / "byte.csv", "x,y,z,r,g,b\n0,0,0,230,20,20\n1,0,0,20,20,230\n"));
+    expect_red_blue(write_file(dir / "word.csv", "x,y,z,red,green,blue\n0,0,0,59110,5140,5140\n1,0,0,5140,5140,59110\n"));
+    expect_red_blue(write_file(dir / "unit.obj", "v 0 0 0 0.90196 0.078431 0.078431\nv 1 0 0 0.078431 0.078431 0.90196\n"));
+    expect_red_blue(write_file(dir / "byte.obj", "v 0 0 0 230 20 20\nv 1 0 0 20 20 230\n"));
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n";
+    for (const std::string type : {"ushort", "float", "int"}) {
+        const std::string props = "property " + type + " red\nproperty " + type + " green\nproperty " + type + " blue\nend_header\n";
+        expect_red_blue(write_file(dir / ("byte_" + type + ".ply"), header + props + "0 0 0 230 20 20\n1 0 0 20 20 230\n"));
+    }
+    expect_red_blue(write_file(dir / "word.ply", header + "property ushort red\nproperty ushort green\nproperty ushort blue\nend_header\n"
+                                                          "0 0 0 59110 5140 5140\n1 0 0 5140 5140 59110\n"));
+    expect_red_blue(write_file(dir / "unit.ply", header + "property float red\nproperty float green\nproperty float blue\nend_header\n"
+                                                          "0 0 0 0.90196 0.078431 0.078431\n1 0 0 0.078431 0.078431 0.90196\n"));
+    // Scanalyze's names.
+    expect_red_blue(write_file(dir / "diffuse.ply", header + "property uchar diffuse_red\nproperty uchar diffuse_green\n"
+                                                             "property uchar diffuse_blue\nend_header\n0 0 0 230 20 20\n1 0 0 20 20 230\n"));
+    // A value read under a narrower range is read again when a later one widens it: 0.5 and 1 of the
+    // first point are 1 out of 255, as 0.5 and 1 are.
+    const PointCloud widened = read_points(write_file(dir / "widened.csv", "x,y,z,r,g,b\n0,0,0,0.5,0,1\n1,0,0,200,0,0\n"));
+    ASSERT_EQ(widened.colors.size(), 2u);
+    EXPECT_EQ(widened.colors[0], (std::array<std::uint8_t, 4>{1, 0, 1, 255}));
+    EXPECT_EQ(widened.colors[1], (std::array<std::uint8_t, 4>{200, 0, 0, 255}));
 }
 
 // Two delimiters with nothing between them are an empty field (a missing value, pandas' unnamed index

@@ -874,6 +874,41 @@ TEST(Reconstruct, untangle_and_flip_options_out_of_range_are_refused)
     }
 }
 
+// A pipe 25 mm in radius 0.3 m in front of a flat wall (QA round 48; 20 of the wall's spacings): the
+// wall's tiles are large where it is flat, so the pipe's tile centres were nearer to the wall points
+// behind the pipe than the wall's own centres, and the pipe's tiles took them into their hulls: fans
+// across the empty space. Points of another surface stay in their own node's cell (voronoi_partition).
+TEST(Reconstruct, a_pipe_in_front_of_a_wall_is_not_joined_to_it)
+{
+    PointCloud c;
+    std::mt19937 rng(71); // its raw output is the same everywhere (its distributions are not)
+    auto uniform = [&] { return static_cast<double>(rng()) / 4294967296.0; };
+    for (int i = 0; i < 60000; ++i)
+        c.positions.push_back({6.0 * uniform(), 0.0, 2.5 * uniform()});
+    for (int i = 0; i < 12000; ++i) {
+        const double angle = 2 * M_PI * uniform();
+        c.positions.push_back({6.0 * uniform(), 0.3 + 0.025 * std::cos(angle), 2.0 + 0.025 * std::sin(angle)});
+    }
+    const Hierarchy h = build_hierarchy(c);
+    auto across = [&](const Mesh& mesh) { // faces with a corner on the wall and one on the pipe
+        std::size_t count = 0;
+        for (const auto f : mesh.faces()) {
+            bool wall = false, pipe = false;
+            for (const auto v : mesh.fv_range(f))
+                (mesh.point(v)[1] + h.cloud.origin.y < 0.15 ? wall : pipe) = true;
+            count += wall && pipe ? 1 : 0;
+        }
+        return count;
+    };
+    for (double tolerance : {0.002, 0.001}) {
+        EXPECT_EQ(across(mesh_cut(h, cut_by_tolerance(h, tolerance)).mesh), 0u) << tolerance;
+        // As the CLI meshes it: finer where the mesh is in pieces (the pipe's are, at coarse cuts).
+        const MendedMeshResult mended = mesh_at_tolerance(h, tolerance);
+        EXPECT_EQ(across(mended.result.mesh), 0u) << tolerance;
+        EXPECT_GE(topology_stats(mended.result.mesh).components, 2u) << tolerance;
+    }
+}
+
 // A closed shell whose wall is 3 point spacings thick: two concentric spheres, each closed. Without
 // thin walls, tiles on the outer and the inner sphere whose bisector crosses both are surface neighbours:
 // the mesh joins the sides, 3 loops in 6 pieces 0.39% of the diagonal from the points on average (seed

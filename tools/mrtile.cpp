@@ -99,6 +99,21 @@ CLI::Validator integer_check(unsigned long long lo, unsigned long long hi)
 // Whether an option appeared on the command line (its value alone cannot tell a default from a choice).
 bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
+// A coordinate as the fewest digits that read back as the same double (printf's %.17g showed
+// 979993.34100000001 for 979993.341: QA round 48).
+std::string shortest(double v)
+{
+    char text[32];
+    const auto [end, error] = std::to_chars(text, text + sizeof text, v);
+    return error == std::errc() ? std::string(text, end) : std::to_string(v);
+}
+
+// Three coordinates, as shortest gives them, separated by `between`.
+std::string shortest(const mrt::Vec3& p, const char* between = " ")
+{
+    return shortest(p.x) + between + shortest(p.y) + between + shortest(p.z);
+}
+
 // A text option given as "" would read as not given at all; a path given as "" passed every check and
 // failed after the work ("mrtile: error: : cannot rename temporary file into place", exit 1; `--model ''`
 // saved no model without a word: QA round 29).
@@ -434,6 +449,8 @@ struct MeshArgs
     int crack_rounds = MeshOptions{}.crack_rounds;
     int crossing_rounds = MeshOptions{}.crossing_rounds;
     bool thin_walls = false;
+    const CLI::Option* crack_option = nullptr;    // one mesh only: LOD levels are mended by whole cuts
+    const CLI::Option* crossing_option = nullptr;
 
     //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
     void add(CLI::App* cmd, bool one_mesh = true)
@@ -465,15 +482,15 @@ struct MeshArgs
             ->check(CLI::Range(0, 2000));
         // LOD levels are mended by whole tolerance cuts instead (lod_set.h), so that they nest.
         if (one_mesh)
-            cmd->add_option("--crack-rounds", crack_rounds,
-                            "rounds refining the tiles along cracks of a closed surface and meshing again (0 = off)")
-                ->check(CLI::Range(0, kMaxRefineRounds))
-                ->capture_default_str();
+            crack_option = cmd->add_option("--crack-rounds", crack_rounds,
+                                           "rounds refining the tiles along cracks of a closed surface and meshing again (0 = off)")
+                               ->check(CLI::Range(0, kMaxRefineRounds))
+                               ->capture_default_str();
         if (one_mesh)
-            cmd->add_option("--crossing-rounds", crossing_rounds,
-                            "rounds refining the tiles of faces that cross each other and meshing again (0 = off)")
-                ->check(CLI::Range(0, kMaxRefineRounds))
-                ->capture_default_str();
+            crossing_option = cmd->add_option("--crossing-rounds", crossing_rounds,
+                                              "rounds refining the tiles of faces that cross each other and meshing again (0 = off)")
+                                  ->check(CLI::Range(0, kMaxRefineRounds))
+                                  ->capture_default_str();
     }
 
     MeshOptions options() const
@@ -599,15 +616,15 @@ void write_any_mesh(const Mesh& mesh, const Vec3& origin, const fs::path& out, c
         // Draco has no transform, and float positions far from 0 lose their digits: the file keeps
         // them relative to the origin, which a reader must add back. Say so where it matters.
         if (origin != Vec3{0, 0, 0})
-            std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g), stored as its "
+            std::printf("note: %s: positions are relative to the model's origin (%s), stored as its "
                         "\"mrtile_origin\" metadata entry (Draco has no transform)\n",
-                        named.string().c_str(), origin.x, origin.y, origin.z);
+                        named.string().c_str(), shortest(origin, ", ").c_str());
     } else if (is_mesh_extension(ext)) { // OpenMesh's writers: .ply .obj .off .stl .om
         write_mesh(mesh, origin, out);
         if (ext == ".stl" && stl_is_relative(mesh, origin))
-            std::printf("note: %s: positions are relative to the model's origin (%.17g, %.17g, %.17g): STL has only 32-bit "
+            std::printf("note: %s: positions are relative to the model's origin (%s): STL has only 32-bit "
                         "floats, which lose digits that far out (.ply, .obj and .off keep absolute double coordinates)\n",
-                        named.string().c_str(), origin.x, origin.y, origin.z);
+                        named.string().c_str(), shortest(origin, ", ").c_str());
     } else {
         throw UsageError(out.string() + ": " + kMeshExtensionHelp);
     }
@@ -1413,6 +1430,10 @@ struct ProduceArgs
             throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is higher ends the set)");
         if (exp.lod_set() && mesh.no_quality)
             throw UsageError("--no-quality: a LOD set's levels are not measured; it skips the measurement of one mesh");
+        // Accepted and ignored until QA round 48: the levels of a LOD set are mended by whole cuts.
+        for (const CLI::Option* o : {mesh.crack_option, mesh.crossing_option})
+            if (exp.lod_set() && given(o))
+                throw UsageError(o->get_name() + ": mends one mesh; a LOD set's levels are mended by finer whole cuts instead");
     }
 
     //! `stored`: levels stored with the model (reused when made with the same options); with
@@ -1688,14 +1709,14 @@ int run_info(const fs::path& model, bool json)
     std::printf("model       %s\n", model.string().c_str());
     std::printf("points      %zu%s\n", h.cloud.size(), h.cloud.has_colors() ? " (with colours)" : "");
     std::printf("nodes       %zu\nleaves      %zu\ndepth       %u\n", h.nodes.size(), h.leaf_count(), h.max_depth());
-    std::printf("bbox min    %.17g %.17g %.17g\nbbox max    %.17g %.17g %.17g\n", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    std::printf("bbox min    %s\nbbox max    %s\n", shortest(lo).c_str(), shortest(hi).c_str());
     std::printf("criterion   %s %g, pca limit %u, min cluster %u, reclassify %s\n", criterion.c_str(), h.info.criterion_value,
                 h.info.pca_limit, h.info.min_cluster, h.info.reclassify ? "on" : "off");
-    std::printf("scale       %.17g (tolerances are relative to it)\n", h.scale);
+    std::printf("scale       %s (tolerances are relative to it)\n", shortest(h.scale).c_str());
     if (h.cloud.viewpoint) {
         const Vec3 v = *h.cloud.viewpoint + h.cloud.origin;
-        std::printf("viewpoint   %.17g %.17g %.17g (open surfaces face it; %s: %.2g%% of the points hidden from it)\n",
-                    v.x, v.y, v.z, view->single_view ? "one view, so no handles" : "no single view, handles allowed",
+        std::printf("viewpoint   %s (open surfaces face it; %s: %.2g%% of the points hidden from it)\n",
+                    shortest(v).c_str(), view->single_view ? "one view, so no handles" : "no single view, handles allowed",
                     100.0 * view->hidden_share);
     }
     if (!h.cloud.crs.empty())
