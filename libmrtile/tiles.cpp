@@ -535,8 +535,14 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
             if (!space.flat && best != representative[k]) {
                 const Node& other = h.nodes[static_cast<std::size_t>(cut[best])];
                 const Vec3& q = h.cloud.positions[i];
-                if (std::abs(dot(q - other.moments.mean, other.frame.vectors[0])) > reach[best] &&
-                    std::abs(dot(q - n.moments.mean, n.frame.vectors[0])) <= reach[k]) {
+                // The larger of the two reaches: where a coarse node meets fine ones (a focus region, a
+                // camera cut), its points beside a fine tile lie off that tile's plane by the curvature
+                // of the coarse node's span, not of the fine tile's (with the fine tile's reach alone,
+                // the torus's focus cut kept such points from the fine cells: overlapping tiles, and its
+                // mesh took 3 times as long).
+                const double off = std::max(reach[best], reach[k]);
+                if (std::abs(dot(q - other.moments.mean, other.frame.vectors[0])) > off &&
+                    std::abs(dot(q - n.moments.mean, n.frame.vectors[0])) <= off) {
                     owner.push_back(k);
                     point.push_back(i);
                     continue;
