@@ -49,7 +49,9 @@ constexpr double kForeignPlaneFactor = 4.0;
 // plane distance, 3 RMS plane distances and its point spacing, and within that of its own node's plane:
 // it is another surface (voronoi_partition). At 8 the points of a narrow strip of a merged scan's base,
 // whose plane is poorly defined, were kept from it by 1.05-1.7 times that reach, and the strip was left
-// out of bun.conf's mesh at tolerance 0.01; the wall behind a pipe lies 25 times it off.
+// out of bun.conf's mesh at tolerance 0.01. With the larger of the two nodes' reaches (see there), two
+// surfaces part where they lie about 16 spacings apart or more: QA round 48's wall, 20 of its spacings
+// behind a pipe, is 1.3 reaches off the pipe's tiles.
 constexpr double kOtherSurfaceFactor = 16.0;
 
 // The point spacing of a node's points, from its spread in its plane: n points spread evenly over a
@@ -62,6 +64,7 @@ double node_spacing(const Node& n)
     const double area = 12.0 * std::sqrt(std::max(0.0, n.frame.values[1]) * std::max(0.0, n.frame.values[2])) / count;
     return std::sqrt(area / count);
 }
+
 // Tiles whose normals are this close (either way round) may be the two sides of a thin wall: with
 // TileOptions::meet_factor, their adjacency asks whether their cells meet (meet_on_surface).
 constexpr double kSameFacingDegrees = 30.0;
