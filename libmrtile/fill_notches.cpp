@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -183,6 +184,19 @@ private:
         return c;
     }
 
+    // The spacing of the points of v's node from their own spread (12 σ1 σ2 over n points: a rectangle's
+    // area from its variances); infinity where v names no node.
+    double own_spacing(Mesh::VertexHandle v) const
+    {
+        const int id = mesh_.property(cluster_, v);
+        if (id < 0 || static_cast<std::size_t>(id) >= h_.nodes.size())
+            return std::numeric_limits<double>::infinity();
+        const Node& n = h_.nodes[static_cast<std::size_t>(id)];
+        const double count = static_cast<double>(std::max<std::uint32_t>(1, n.count()));
+        const double area = 12.0 * std::sqrt(std::max(0.0, n.frame.values[1]) * std::max(0.0, n.frame.values[2])) / count;
+        return std::sqrt(area / count);
+    }
+
     double spacing(Mesh::VertexHandle v) const
     {
         const auto it = spacing_of_.find(mesh_.property(cluster_, v));
@@ -205,7 +219,7 @@ private:
         if (!(base > 0.0))
             return false;
         const double depth = norm(cross(pc - pa, ab)) / base;
-        if (depth <= o_.min_depth_spacings * s)
+        if (depth <= o_.min_depth_spacings * std::min(s, own_spacing(c)))
             return false;
         // A notch opens wide (the tiles' hulls end on the outline at some angle); a narrow inlet's
         // triangle is a sliver reaching into the surface, where the bunny's ear at a coarse cut had one

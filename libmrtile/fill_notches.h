@@ -42,7 +42,9 @@ struct NotchOptions
 
 //! \brief Fills the notches of `mesh`'s borders that the points of `h` cover; returns the faces added.
 //! `spacing_of` gives the point spacing of the tile each vertex names (v:cluster → spacing; vertices
-//! whose cluster is missing or spaced 0 start no notch).
+//! whose cluster is missing or spaced 0 start no notch); the depth is judged by the smaller of it and
+//! the spacing of the node's own points (from their spread in its plane), since a tile's hull area over
+//! its node's points overstates it where the tile's cell spans larger neighbours' points.
 //! \throw InvalidInput for options out of range (negative or NaN spacings, a turn outside (0, 90], an
 //! angle outside [0, 180), rounds outside [0, 64]) or a mesh without the v:cluster / f:tile / f:gap properties.
 std::size_t fill_notches(Mesh& mesh, const Hierarchy& h, const std::unordered_map<std::int32_t, double>& spacing_of,

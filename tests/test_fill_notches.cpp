@@ -101,6 +101,21 @@ TEST(FillNotches, uncovered_shallow_and_convex_corners_stay)
     EXPECT_EQ(fill_notches(layered, build_hierarchy(two), kSpacing), 0u);
 }
 
+// The spacing the caller gives is the tile's hull area over its node's points, which is too large where
+// a small node's Voronoi cell spans its large neighbours' points (QA round 48: 0.45 for a ground sampled
+// every 0.126, and a notch 3.4 spacings deep passed for shallow). The depth is judged by the smaller of
+// that and the node's own spacing, from its points' spread.
+TEST(FillNotches, the_depth_is_judged_by_the_nodes_own_spacing)
+{
+    const Hierarchy h = square_points();
+    const std::unordered_map<std::int32_t, double> inflated{{0, 0.4}}; // 4 times the points' spacing
+    Mesh notch = bent_square({5, 0.5, 0}); // 5 spacings deep, 1.25 of the inflated ones
+    EXPECT_EQ(fill_notches(notch, h, inflated), 1u);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, notch).max, 1e-9);
+    Mesh shallow = bent_square({5, 0.25, 0}); // 2.5 spacings deep: still within the tiles' error
+    EXPECT_EQ(fill_notches(shallow, h, inflated), 0u);
+}
+
 TEST(FillNotches, bad_options_and_meshes_are_refused)
 {
     const Hierarchy h = square_points();
