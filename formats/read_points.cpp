@@ -1566,10 +1566,9 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
         kept[static_cast<std::size_t>(f)] = true;
     for (int f : layout.xyz)
         is_coordinate[static_cast<std::size_t>(f)] = true;
-    // Bytes are colours as they are; wider fields have the range their values say (ColorRange):
-    // floats 0-1 or 0-255, 16-bit fields 0-65535 or, as many writers store them, 0-255.
+    // Colours have the range their values say (ColorRange): floats 0-1 or 0-255, integer fields 0-255
+    // (a byte's own range, never widened) or, beyond it, 0-65535.
     const PlyType color_type = layout.colors ? vertex.properties[static_cast<std::size_t>(layout.rgba[0])].type : PlyType::uint8;
-    const bool byte_colors = color_type == PlyType::uint8 || color_type == PlyType::int8;
     ColorRange color_range(is_float_type(color_type) ? ColorRange::Range::unit : ColorRange::Range::byte);
     const auto store = [&](const double* v) {
         cloud.positions.push_back({v[layout.xyz[0]], v[layout.xyz[1]], v[layout.xyz[2]]});
@@ -1585,14 +1584,7 @@ PointCloud read_ply(Input& in, const ReadOptions& options)
                                        vertex.properties[static_cast<std::size_t>(layout.rgba[c])].name +
                                        " value is not a finite number");
             }
-            if (byte_colors) {
-                Rgba rgba{0, 0, 0, 255};
-                for (int c = 0; c < count; ++c)
-                    rgba[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::clamp(channels[c], 0.0, 255.0));
-                cloud.colors.push_back(rgba);
-            } else {
-                cloud.colors.push_back(color_range.to_bytes(channels, count, cloud.colors));
-            }
+            cloud.colors.push_back(color_range.to_bytes(channels, count, cloud.colors));
         }
     };
 

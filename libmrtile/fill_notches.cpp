@@ -184,17 +184,14 @@ private:
         return c;
     }
 
-    // The spacing of the points of v's node from their own spread (12 σ1 σ2 over n points: a rectangle's
-    // area from its variances); infinity where v names no node.
+    // The spacing of the points of v's node from their own spread (node_spacing); infinity where v
+    // names no node.
     double own_spacing(Mesh::VertexHandle v) const
     {
         const int id = mesh_.property(cluster_, v);
         if (id < 0 || static_cast<std::size_t>(id) >= h_.nodes.size())
             return std::numeric_limits<double>::infinity();
-        const Node& n = h_.nodes[static_cast<std::size_t>(id)];
-        const double count = static_cast<double>(std::max<std::uint32_t>(1, n.count()));
-        const double area = 12.0 * std::sqrt(std::max(0.0, n.frame.values[1]) * std::max(0.0, n.frame.values[2])) / count;
-        return std::sqrt(area / count);
+        return node_spacing(h_.nodes[static_cast<std::size_t>(id)]);
     }
 
     double spacing(Mesh::VertexHandle v) const

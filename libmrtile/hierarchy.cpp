@@ -26,6 +26,15 @@ std::uint32_t Hierarchy::max_depth() const
     return d;
 }
 
+double node_spacing(const Node& n)
+{
+    const double count = static_cast<double>(n.count());
+    if (!(count > 0.0))
+        return 0.0;
+    const double area = 12.0 * std::sqrt(std::max(0.0, n.frame.values[1]) * std::max(0.0, n.frame.values[2])) / count;
+    return std::sqrt(area / count);
+}
+
 double Hierarchy::flatness(const Node& node, double largest_side) const
 {
     if (info.criterion == Criterion::Tau)

@@ -73,6 +73,11 @@ struct Node
 //! there is to its error. Cuts, LOD errors and the surface stage count a gap only where it dominates.
 inline bool gap_dominates(const Node& n) { return n.coverage_gap > n.max_plane_distance; }
 
+//! The point spacing of a node's points from their spread in its plane: n points spread evenly over a
+//! rectangle of sides L1, L2 have variances L² / 12 along them, so the area is 12 σ1 σ2 (0 for an empty
+//! node). Unlike a tile's hull area over its node's points, it does not depend on the cut around it.
+double node_spacing(const Node& n);
+
 struct BuildInfo
 {
     Criterion criterion = Criterion::Tolerance;

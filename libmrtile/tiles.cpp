@@ -54,17 +54,6 @@ constexpr double kForeignPlaneFactor = 4.0;
 // behind a pipe, is 1.3 reaches off the pipe's tiles.
 constexpr double kOtherSurfaceFactor = 16.0;
 
-// The point spacing of a node's points, from its spread in its plane: n points spread evenly over a
-// rectangle of sides L1, L2 have variances L² / 12 along them, so the area is 12 σ1 σ2.
-double node_spacing(const Node& n)
-{
-    const double count = static_cast<double>(n.count());
-    if (!(count > 0.0))
-        return 0.0;
-    const double area = 12.0 * std::sqrt(std::max(0.0, n.frame.values[1]) * std::max(0.0, n.frame.values[2])) / count;
-    return std::sqrt(area / count);
-}
-
 // Tiles whose normals are this close (either way round) may be the two sides of a thin wall: with
 // TileOptions::meet_factor, their adjacency asks whether their cells meet (meet_on_surface).
 constexpr double kSameFacingDegrees = 30.0;
