@@ -121,6 +121,14 @@ struct Hierarchy
     //! view from there (single_view_stats, single_view.h), which build_surface asks of every meshing.
     //! Derived (update_derived): set the viewpoint before, or call update_derived after changing it.
     std::optional<SingleViewStats> view;
+    //! The convex hulls of the nodes of more than kHullStoredAbove points (tiles.h) in their PCA planes,
+    //! as tree-order point indices, ascending: node k's are hull_points[hull_start[k] .. hull_start[k + 1])
+    //! (empty for smaller nodes). A cut builds a large node's tile from a sample of its points and its
+    //! hull, so that its cost follows the tiles, not the points under them. Stored in the model file
+    //! (since version 3): save_model computes them (compute_node_hulls), load_model reads them, and
+    //! set_node_hulls sets them on a hierarchy just built. Both empty: none (node_hull reads the points).
+    std::vector<std::size_t> hull_start;
+    std::vector<std::uint32_t> hull_points;
 
     std::size_t leaf_count() const;
     std::uint32_t max_depth() const;

@@ -9,6 +9,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/face_sequence.h"
 #include "libmrtile/parallel.h"
+#include "libmrtile/tiles.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <zlib.h>
@@ -526,6 +527,52 @@ StoredLevels read_levels(Reader& r, std::size_t end, const Hierarchy& h)
     return stored;
 }
 
+// Node hulls (version 3): the number of entries, each node's hull size, then every hull's point
+// indices. A hierarchy without them (just built) has them computed here.
+void write_hulls(Writer& w, const Hierarchy& h)
+{
+    std::vector<std::size_t> computed_start;
+    std::vector<std::uint32_t> computed_points;
+    const bool stored = h.hull_start.size() == h.nodes.size() + 1;
+    if (!stored)
+        compute_node_hulls(h, computed_start, computed_points);
+    const std::vector<std::size_t>& start = stored ? h.hull_start : computed_start;
+    const std::vector<std::uint32_t>& points = stored ? h.hull_points : computed_points;
+    w.u64(points.size());
+    for (std::size_t k = 0; k < h.nodes.size(); ++k)
+        w.u32(static_cast<std::uint32_t>(start[k + 1] - start[k]));
+    for (std::uint32_t i : points)
+        w.u32(i);
+}
+
+// Reads what write_hulls wrote into `h` (checked by check_hulls once the nodes are).
+void read_hulls(Reader& r, Hierarchy& h, std::size_t end)
+{
+    const std::uint64_t total = r.u64();
+    const std::size_t count = h.nodes.size();
+    if (total > (end - r.position()) / 4 || 4 * total + 4 * count > end - r.position())
+        r.fail("node hulls of " + std::to_string(total) + " points do not fit");
+    h.hull_start.assign(count + 1, 0);
+    for (std::size_t k = 0; k < count; ++k)
+        h.hull_start[k + 1] = h.hull_start[k] + r.u32();
+    if (h.hull_start[count] != total)
+        r.fail("node hulls' sizes do not add up to their " + std::to_string(total) + " points");
+    h.hull_points.resize(static_cast<std::size_t>(total));
+    for (std::uint32_t& i : h.hull_points)
+        i = r.u32();
+}
+
+// Every hull point is one of its node's points, ascending.
+void check_hulls(const Hierarchy& h, const Reader& r)
+{
+    for (std::size_t k = 0; k < h.nodes.size(); ++k)
+        for (std::size_t j = h.hull_start[k]; j < h.hull_start[k + 1]; ++j) {
+            const std::uint32_t i = h.hull_points[j];
+            if (i < h.nodes[k].begin || i >= h.nodes[k].end || (j > h.hull_start[k] && i <= h.hull_points[j - 1]))
+                r.fail("node " + std::to_string(k) + "'s hull names points not of the node, or not in order");
+        }
+}
+
 } // namespace
 
 std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
@@ -591,6 +638,7 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
             w.bytes(c.data(), 4);
     for (std::uint32_t i : h.input_index)
         w.u32(i);
+    write_hulls(w, h);
     for (const Node& node : h.nodes) {
         w.u32(node.begin);
         w.u32(node.end);
@@ -648,7 +696,7 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     char magic[8];
     r.bytes(magic, 8);
     const std::uint32_t version = r.u32();
-    if (version != kModelFormatVersion && version != 1)
+    if (version < 1 || version > kModelFormatVersion)
         r.fail("format version " + std::to_string(version) + " is not supported (this build reads versions 1 to " +
                std::to_string(kModelFormatVersion) + ")");
     const std::size_t node_size = version == 1 ? kNodeSizeV1 : kNodeSize;
@@ -665,7 +713,8 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     const std::uint64_t per_point = 24 + 4 + ((flags & kFlagColors) ? 4 : 0);
     if (n == 0 || n > std::numeric_limits<std::uint32_t>::max() || node_count == 0 || node_count > 2 * n ||
         kHeaderSize + n * per_point + node_count * node_size + ((flags & kFlagViewpoint) ? 24 : 0) + ((flags & kFlagCrs) ? 4 : 0) +
-                ((flags & kFlagDenoiseMove) ? 4 * n : 0) + ((flags & kFlagLevels) ? 8 : 0) + kTrailerSize >
+                ((flags & kFlagDenoiseMove) ? 4 * n : 0) + ((flags & kFlagLevels) ? 8 : 0) +
+                (version >= 3 ? 8 + 4 * node_count : 0) + kTrailerSize >
             bytes.size())
         r.fail("declared sizes (" + std::to_string(n) + " points, " + std::to_string(node_count) +
                " nodes) do not fit the file (" + std::to_string(bytes.size()) + " bytes): truncated or corrupted");
@@ -716,6 +765,8 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     for (std::uint32_t& i : h.input_index)
         i = r.u32();
     h.nodes.resize(node_count);
+    if (version >= 3)
+        read_hulls(r, h, end);
     for (Node& node : h.nodes) {
         node.begin = r.u32();
         node.end = r.u32();
@@ -783,6 +834,10 @@ Model parse_model(const std::string& bytes, const std::string& name, bool with_l
     update_derived(h);
     if (version == 1)
         set_coverage_gaps(h); // not stored before version 2
+    if (version >= 3)
+        check_hulls(h, r);
+    else
+        set_node_hulls(h); // not stored before version 3
     if (levels_at > 0 && with_levels) {
         Reader levels(bytes, name);
         levels.skip(levels_at);

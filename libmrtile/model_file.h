@@ -1,8 +1,8 @@
 #pragma once
 //! \file model_file.h
 //! \brief The `.mrt` model file: a built hierarchy, saved once and cut many times.
-//! \details Layout (version 2, every number little-endian whatever the host; version 1 files, without
-//! the coverage gap, are read too and their gaps computed on load):
+//! \details Layout (version 3, every number little-endian whatever the host; version 1 and 2 files,
+//! without the coverage gap (1) or the node hulls (1, 2), are read too and those computed on load):
 //! \code
 //!   header   104 bytes: magic "MRTILE\r\n", u32 version, u32 endian marker 0x01020304, u32 header size,
 //!            u32 flags (1 = colours, 2 = build time recorded, 4 = viewpoint, 8 = CRS, 16 = levels,
@@ -10,7 +10,9 @@
 //!            u32 criterion, u32 pca_limit, u32 min_cluster, u32 reclassify, f64 criterion value,
 //!            f64 build seconds, u64 payload size
 //!   payload  positions (points × 3 f64, relative to origin, tree order), colours (points × 4 u8, if
-//!            flagged), input index (points × u32), nodes (nodes × 176 bytes: begin, end, parent, left,
+//!            flagged), input index (points × u32), node hulls (u64 entries, nodes × u32 hull size (0
+//!            for nodes of kHullStoredAbove points or fewer), entries × u32 point index:
+//!            Hierarchy::hull_points), nodes (nodes × 176 bytes: begin, end, parent, left,
 //!            right, depth as 32-bit, count u64, mean 3 f64, M 6 f64, eq. 1 error f64, max plane
 //!            distance f64, box min 3 f64, box max 3 f64, coverage gap f64), viewpoint (3 f64 relative to origin, if flagged),
 //!            CRS (u32 length 1..2^20, then that many bytes: "EPSG:N" or WKT, if flagged), how far
@@ -35,7 +37,7 @@
 
 namespace mrt {
 
-inline constexpr std::uint32_t kModelFormatVersion = 2;
+inline constexpr std::uint32_t kModelFormatVersion = 3;
 
 //! \brief A LOD set's meshed levels (make_lod_levels) kept in the model file, so that exports of
 //! the model cut tiles from them instead of meshing every level again (a minute for 1M points).

@@ -48,11 +48,19 @@ struct NewPoint
 
 class LocalRefiner
 {
+    // The descendants' pseudo tiles give their apexes, hull points and spacing; their coverage gaps
+    // (a grid over the tile's points: a tenth of the focus row's time) are not asked for.
+    static TileOptions pseudo_tile_options(TileOptions options)
+    {
+        options.measure_gaps = false;
+        return options;
+    }
+
 public:
     // `changing`: the nodes whose tiles will be replaced (the index of fans and vertices holds those
     // only; the tiles made later are added as they are made).
     LocalRefiner(const Hierarchy& h, MeshResult& result, const LocalRefineOptions& options, const std::vector<std::int32_t>& changing)
-        : h_(h), mesh_(result.mesh), options_(options),
+        : h_(h), mesh_(result.mesh), options_(options), tile_options_(pseudo_tile_options(options.tiles)),
           tile_(OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh_, kFaceTile)),
           gap_(OpenMesh::getProperty<OpenMesh::FaceHandle, bool>(mesh_, kFaceGap)),
           cluster_(OpenMesh::getProperty<OpenMesh::VertexHandle, int>(mesh_, kVertexCluster))
@@ -99,7 +107,7 @@ public:
                 continue;
             if (tiles.empty())
                 for (const std::int32_t d : descendants)
-                    tiles.push_back(make_tile(h_, d, options_.tiles));
+                    tiles.push_back(make_tile(h_, d, tile_options_));
             std::vector<Mesh::VertexHandle> outline;
             const bool disc = mend_into_disc(node, {node}, region, outline);
             if (disc && replace_region(node, tiles, region, outline, stats)) {
@@ -130,7 +138,7 @@ public:
         }
         std::vector<Mesh::VertexHandle> outline;
         const bool disc = mend_into_disc(ancestor, merged, region, outline);
-        if (!disc || !replace_region(ancestor, {make_tile(h_, ancestor, options_.tiles)}, region, outline, stats))
+        if (!disc || !replace_region(ancestor, {make_tile(h_, ancestor, tile_options_)}, region, outline, stats))
             return Outcome::kept;
         for (const std::int32_t node : merged)
             hand_over(node, {ancestor});
@@ -933,6 +941,7 @@ private:
     const Hierarchy& h_;
     Mesh& mesh_;
     const LocalRefineOptions& options_;
+    const TileOptions tile_options_;
     OpenMesh::PropertyManager<OpenMesh::FPropHandleT<int>> tile_;
     OpenMesh::PropertyManager<OpenMesh::FPropHandleT<bool>> gap_;
     OpenMesh::PropertyManager<OpenMesh::VPropHandleT<int>> cluster_;

@@ -20,6 +20,10 @@ namespace mrt {
 //! spacings of each other meet; the sides of walls about 3 spacings thick and more are told apart.
 inline constexpr double kThinWallMeetFactor = 4.0;
 
+//! TileOptions::max_points' default, and the size above which a node's hull is stored (set_node_hulls):
+//! the nodes whose tiles are built from a sample of their points, and need their hull for their outline.
+inline constexpr std::size_t kHullStoredAbove = 256;
+
 struct TileOptions
 {
     //! A hull point is dropped as collinear when the turn at it is at most this fraction of the squared
@@ -58,7 +62,7 @@ struct TileOptions
     //! Fewer interior points leave gaps between tiles as wide as the sample's spacing; the gap
     //! triangulation fills them, and coarse cuts spend fewer faces for the same error (after the vertex
     //! fit). Far smaller samples (~64) leave gaps wide enough to close real holes or add handles.
-    std::size_t max_points = 256;
+    std::size_t max_points = kHullStoredAbove;
     //! Measure Tile::coverage_gap of every tile; with voronoi_trim, a tile whose cell's hull covers a
     //! hole is built from its own node's points of the cell only (see Tile::coverage_gap).
     bool measure_gaps = true;
@@ -132,6 +136,26 @@ std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>
 //! \throw InvalidInput as make_tiles, or if `fanless` is not one flag per cut entry.
 std::vector<Tile> make_tiles(const Hierarchy& h, const std::vector<std::int32_t>& cut, const TileOptions& options,
                              const std::vector<bool>& fanless);
+
+//! \brief The convex hull of all of the node's points in its PCA plane: tree-order point indices,
+//! ascending (collinear hull points dropped; 1 or 2 points for a degenerate node).
+//! \details Read from Hierarchy::hull_points where set_node_hulls stored it, otherwise computed in one
+//! pass of dot products over the node's points (only the points outside the octagon of the extremes
+//! along 8 directions are sorted: Akl and Toussaint).
+std::vector<std::uint32_t> node_hull(const Hierarchy& h, std::int32_t node);
+
+//! \brief The hull (node_hull) of every node of more than kHullStoredAbove points, as
+//! Hierarchy::hull_start and hull_points hold them (`threads` 0 = one per hardware thread; the result
+//! does not depend on it). A pass over every point per level of the tree (0.25 s CPU per million
+//! points): save_model does it, so that cuts of a loaded model read a large node's points only where
+//! its tile needs them; a hierarchy just built and cut once does not need it (a cut's nodes are one
+//! pass over the points).
+void compute_node_hulls(const Hierarchy& h, std::vector<std::size_t>& start, std::vector<std::uint32_t>& points,
+                        std::size_t threads = 0);
+
+//! \brief compute_node_hulls into `h` itself: for a hierarchy kept in memory and cut many times
+//! (refine_mesh), as loading a model gives.
+void set_node_hulls(Hierarchy& h, std::size_t threads = 0);
 
 //! Builds one tile from all of the node's points and its frame (no Voronoi partition; for tests).
 //! \throw InvalidInput as check_tile_options, or if `node` is not a node of `h`.

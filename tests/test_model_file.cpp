@@ -1,10 +1,13 @@
 // Tests of model_file.h: .mrt round trips are exact, and every kind of damage is rejected cleanly.
 #include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/lod_set.h"
 #include "libmrtile/model_file.h"
 #include "libmrtile/parallel.h"
+#include "libmrtile/reconstruct.h"
 #include "libmrtile/shapes.h"
+#include "libmrtile/tiles.h"
 
 #include <OpenMesh/Core/Utils/PropertyManager.hh>
 #include <gtest/gtest.h>
@@ -15,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 namespace mrt {
 namespace {
@@ -176,6 +180,22 @@ void refresh_checksum(std::string& bytes)
         bytes[end + static_cast<std::size_t>(i)] = static_cast<char>((value >> (8 * i)) & 0xffu);
 }
 
+// `damaged`, its checksum made good, is refused with an IoError that names `name` and says `why`.
+void expect_refused(std::string damaged, const std::string& name, const std::string& why, bool with_levels = false)
+{
+    refresh_checksum(damaged);
+    try {
+        if (with_levels)
+            deserialize_model_with_levels(damaged, name);
+        else
+            deserialize_model(damaged, name);
+        ADD_FAILURE() << "accepted; expected: " << why;
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+}
+
 std::vector<std::array<int, 3>> corners(const Mesh& m)
 {
     std::vector<std::array<int, 3>> faces;
@@ -263,16 +283,7 @@ TEST(ModelFile, damaged_stored_levels_are_rejected)
     SaveOptions options;
     options.levels = &stored;
     const std::string bytes = serialize_model(h, options);
-    auto rejected = [&](std::string damaged, const std::string& why) {
-        refresh_checksum(damaged);
-        try {
-            deserialize_model_with_levels(damaged, "levels.mrt");
-            ADD_FAILURE() << "accepted; expected: " << why;
-        } catch (const IoError& e) {
-            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
-            EXPECT_NE(std::string(e.what()).find("levels.mrt"), std::string::npos) << e.what();
-        }
-    };
+    auto rejected = [&](std::string damaged, const std::string& why) { expect_refused(std::move(damaged), "levels.mrt", why, true); };
     // The last level's faces end the section: 17 bytes each (3 corners, tile, gap).
     const std::size_t faces_end = bytes.size() - 8;
     const std::size_t face_count = stored.levels.back().mesh.n_faces();
@@ -494,27 +505,51 @@ TEST(ModelFile, orphan_nodes_are_refused)
     }
 }
 
+// Where a file of this version keeps its node hulls (after the input index; no colours) and how long
+// that section is.
+std::pair<std::size_t, std::size_t> hull_section(const std::string& bytes, const Hierarchy& h)
+{
+    const std::size_t at = 104 + 28 * h.cloud.size();
+    std::uint64_t entries = 0;
+    std::memcpy(&entries, bytes.data() + at, 8);
+    return {at, 8 + 4 * h.nodes.size() + 4 * static_cast<std::size_t>(entries)};
+}
+
+// The bytes of an older version: without the node hulls (version 2), and without the coverage gaps
+// too (version 1).
+std::string older_version(const std::string& bytes, const Hierarchy& h, std::uint32_t version)
+{
+    std::uint32_t flags = 0;
+    std::memcpy(&flags, bytes.data() + 20, 4);
+    EXPECT_EQ(flags, 0u); // no colours, viewpoint, CRS or levels: nodes end the payload
+    const auto [hulls_at, hulls_size] = hull_section(bytes, h);
+    std::string old = bytes.substr(0, hulls_at) + bytes.substr(hulls_at + hulls_size);
+    std::size_t removed = hulls_size;
+    if (version == 1) {
+        const std::size_t nodes = h.nodes.size(), node_start = old.size() - 8 - 176 * nodes;
+        std::string v1 = old.substr(0, node_start);
+        for (std::size_t k = 0; k < nodes; ++k)
+            v1 += old.substr(node_start + 176 * k, 168);
+        v1 += old.substr(old.size() - 8);
+        old = v1;
+        removed += 8 * nodes;
+    }
+    std::memcpy(&old[8], &version, 4);
+    std::uint64_t payload = 0;
+    std::memcpy(&payload, old.data() + 96, 8);
+    payload -= removed;
+    std::memcpy(&old[96], &payload, 8);
+    refresh_checksum(old);
+    return old;
+}
+
 // A version 1 file (no coverage gaps) still loads, with the gaps computed as a build would.
 TEST(ModelFile, version_1_files_load_with_their_gaps_computed)
 {
     const Hierarchy h = sample();
-    const std::string v2 = serialize_model(h);
-    std::uint32_t flags = 0;
-    std::memcpy(&flags, v2.data() + 20, 4);
-    ASSERT_EQ(flags, 0u); // no colours, viewpoint, CRS or levels: nodes end the payload
-    const std::size_t nodes = h.nodes.size(), node_start = v2.size() - 8 - 176 * nodes;
-    std::string v1 = v2.substr(0, node_start);
-    for (std::size_t k = 0; k < nodes; ++k)
-        v1 += v2.substr(node_start + 176 * k, 168);
-    v1 += v2.substr(v2.size() - 8);
-    const std::uint32_t version = 1;
-    std::memcpy(&v1[8], &version, 4);
-    std::uint64_t payload = 0;
-    std::memcpy(&payload, v1.data() + 96, 8);
-    payload -= 8 * nodes;
-    std::memcpy(&v1[96], &payload, 8);
-    refresh_checksum(v1);
-    const Hierarchy loaded = deserialize_model(v1, "old.mrt");
+    const std::string v3 = serialize_model(h);
+    const Hierarchy loaded = deserialize_model(older_version(v3, h, 1), "old.mrt");
+    const std::size_t nodes = h.nodes.size();
     ASSERT_EQ(loaded.nodes.size(), nodes);
     bool some_gap = false;
     for (std::size_t k = 0; k < nodes; ++k) {
@@ -522,7 +557,67 @@ TEST(ModelFile, version_1_files_load_with_their_gaps_computed)
         some_gap = some_gap || h.nodes[k].coverage_gap > 0;
     }
     EXPECT_TRUE(some_gap); // the torus's hole: its coarse nodes' hulls cover it
-    EXPECT_EQ(serialize_model(loaded), v2); // saved again, it is the version 2 file
+    EXPECT_EQ(serialize_model(loaded), v3); // saved again, it is the version 3 file
+}
+
+// Version 3 keeps the hull of every node of more than kHullStoredAbove points, as node_hull finds it
+// from the points: a built hierarchy has none until saved (or set_node_hulls), a loaded one reads
+// them, a version 2 file has them computed on load, and each gives the same file and the same mesh.
+TEST(ModelFile, node_hulls_are_stored_and_version_2_files_compute_them)
+{
+    const Hierarchy h = sample();
+    EXPECT_TRUE(h.hull_start.empty());
+    const std::string v3 = serialize_model(h);
+    const Hierarchy loaded = deserialize_model(v3, "new.mrt");
+    ASSERT_EQ(loaded.hull_start.size(), h.nodes.size() + 1);
+    std::size_t stored = 0;
+    for (std::size_t k = 0; k < h.nodes.size(); ++k) {
+        const auto node = static_cast<std::int32_t>(k);
+        const std::vector<std::uint32_t> kept(loaded.hull_points.begin() + static_cast<std::ptrdiff_t>(loaded.hull_start[k]),
+                                              loaded.hull_points.begin() + static_cast<std::ptrdiff_t>(loaded.hull_start[k + 1]));
+        if (h.nodes[k].count() > kHullStoredAbove) {
+            EXPECT_EQ(kept, node_hull(h, node)) << "node " << k; // computed from the points
+            EXPECT_GE(kept.size(), 3u);
+            ++stored;
+        } else {
+            EXPECT_TRUE(kept.empty()) << "node " << k;
+        }
+        EXPECT_EQ(node_hull(loaded, node), node_hull(h, node)) << "node " << k;
+    }
+    EXPECT_GT(stored, 8u);
+    const Hierarchy old = deserialize_model(older_version(v3, h, 2), "old.mrt");
+    EXPECT_EQ(old.hull_start, loaded.hull_start);
+    EXPECT_EQ(old.hull_points, loaded.hull_points);
+    EXPECT_EQ(serialize_model(old), v3);
+    Hierarchy set = h;
+    set_node_hulls(set);
+    EXPECT_EQ(set.hull_points, loaded.hull_points);
+    const Cut cut = cut_by_budget(h, 6);
+    ASSERT_GT(std::count_if(cut.begin(), cut.end(), [&](std::int32_t k) { return h.nodes[static_cast<std::size_t>(k)].count() > kHullStoredAbove; }), 0);
+    EXPECT_EQ(corners(mesh_cut(loaded, cut).mesh), corners(mesh_cut(h, cut).mesh));
+}
+
+// A hull section that names points outside its node, out of order, or sizes that do not add up is
+// refused (checksum made good), never used to build tiles.
+TEST(ModelFile, damaged_node_hulls_are_refused)
+{
+    const Hierarchy h = sample();
+    const std::string bytes = serialize_model(h);
+    const auto [at, size] = hull_section(bytes, h);
+    const Hierarchy loaded = deserialize_model(bytes, "ok.mrt");
+    // The root's hull: its first entry follows the sizes.
+    ASSERT_GT(loaded.hull_start[1], 1u);
+    const std::size_t root_first = at + 8 + 4 * h.nodes.size();
+    auto refused = [&](std::size_t offset, std::uint32_t value, const std::string& why) {
+        std::string forged = bytes;
+        std::memcpy(&forged[offset], &value, 4);
+        expect_refused(forged, "forged.mrt", why);
+    };
+    refused(root_first, static_cast<std::uint32_t>(h.cloud.size()), "hull names points not of the node");
+    refused(root_first, loaded.hull_points[1], "hull names points not of the node"); // repeated: not ascending
+    refused(at + 8, static_cast<std::uint32_t>(loaded.hull_start[1] + 1), "do not add up");
+    refused(at, 0xffffffffu, "node hulls of");
+    EXPECT_LT(size, bytes.size() / 20); // a small part of the file
 }
 
 // Missing files and unwritable destinations give IoErrors naming the path and leave nothing behind.

@@ -92,6 +92,50 @@ TEST(Tiles, hull_matches_brute_force_on_random_tilted_clusters)
     }
 }
 
+// node_hull (read from the model or computed with its octagon and 16-gon filters) against a gift
+// wrapping of all of the node's points in the same plane coordinates, on every node of more than
+// kHullStoredAbove points of a noisy torus and of a sphere: the same points.
+TEST(Tiles, node_hull_matches_gift_wrapping)
+{
+    for (int shape = 0; shape < 2; ++shape) {
+        PointCloud cloud = shape == 0 ? shapes::torus(6000) : shapes::sphere(5000);
+        shapes::add_noise(cloud, 0.002);
+        Hierarchy h = build_hierarchy(cloud);
+        Hierarchy stored = h;
+        set_node_hulls(stored);
+        std::size_t checked = 0;
+        for (std::size_t k = 0; k < h.nodes.size(); ++k) {
+            const Node& n = h.nodes[k];
+            if (n.count() <= kHullStoredAbove)
+                continue;
+            const Vec3 u = n.frame.vectors[2], v = cross(n.frame.vectors[0], u);
+            std::vector<std::pair<double, double>> p;
+            for (std::uint32_t i = n.begin; i < n.end; ++i)
+                p.push_back({dot(h.cloud.positions[i] - n.moments.mean, u), dot(h.cloud.positions[i] - n.moments.mean, v)});
+            // Gift wrapping from the leftmost point: the next corner has every other point to its left.
+            std::size_t first = 0;
+            for (std::size_t j = 1; j < p.size(); ++j)
+                if (p[j] < p[first])
+                    first = j;
+            std::vector<std::uint32_t> expected;
+            std::size_t at = first;
+            do {
+                expected.push_back(n.begin + static_cast<std::uint32_t>(at));
+                std::size_t next = at == 0 ? 1 : 0;
+                for (std::size_t j = 0; j < p.size(); ++j)
+                    if (j != at && turn(p[at], p[next], p[j]) < 0.0)
+                        next = j;
+                at = next;
+            } while (at != first && expected.size() <= p.size());
+            std::sort(expected.begin(), expected.end());
+            EXPECT_EQ(node_hull(h, static_cast<std::int32_t>(k)), expected) << "shape " << shape << " node " << k;
+            EXPECT_EQ(node_hull(stored, static_cast<std::int32_t>(k)), expected) << "shape " << shape << " node " << k;
+            ++checked;
+        }
+        EXPECT_GT(checked, 10u);
+    }
+}
+
 TEST(Tiles, collinear_hull_points_are_dropped)
 {
     // A 5 x 5 grid: the hull is the 4 corners, the 12 other border points are collinear.
