@@ -282,6 +282,10 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {tiles + " --crossing-rounds 1", "--crossing-rounds: mends one mesh"},
         {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string() + " --format lod-glb --crack-rounds 0", "--crack-rounds: mends"},
         {"reconstruct " + in + " -o " + (dir / "t").string() + " --format 3dtiles --crossing-rounds 0", "--crossing-rounds"},
+        // A flag given a value (session 42: `--thin-walls=3` was taken as the flag, `=0` as off).
+        {a + " --thin-walls=3", "--thin-walls is a flag"},
+        {a + " --thin-walls=0", "--thin-walls is a flag"},
+        {"--quiet=1 info " + (dir / "a.mrt").string(), "--quiet is a flag"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);

@@ -1910,6 +1910,9 @@ int run(int argc, char** argv)
     app.set_version_flag("--version", std::string("mrtile ") + MRTILE_VERSION + "\nheap: " + mrt::tools::heap_setting());
     app.require_subcommand(1);
     app.fallthrough(); // global flags (-q) may follow the command
+    // A flag given a value (`--thin-walls=3`, read as a spacing) is a usage error, not "on" (QA: it was
+    // accepted as the flag). Subcommands inherit this.
+    app.option_defaults()->disable_flag_override();
     Globals g;
     app.add_flag("-q,--quiet", g.quiet, "no progress output");
     app.add_flag("--below-noise", g.below_noise,
@@ -2045,6 +2048,12 @@ int run(int argc, char** argv)
         const std::vector<std::string> unknown = app.remaining(true);
         if (e.get_exit_code() != 0 && !unknown.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
             std::fprintf(stderr, "mrtile: usage error: unknown argument '%s' (see --help)\n", unknown.front().c_str());
+            return 2;
+        }
+        if (const std::string what = e.what(); dynamic_cast<const CLI::ArgumentMismatch*>(&e) &&
+                                                what.find(" was given a disallowed flag override") != std::string::npos) {
+            std::fprintf(stderr, "mrtile: usage error: --%s is a flag and takes no value (see --help)\n",
+                         what.substr(0, what.find(' ')).c_str());
             return 2;
         }
         const int code = app.exit(e);
