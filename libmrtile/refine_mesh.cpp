@@ -966,6 +966,8 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     if (!(options.min_separation >= 0.0) || !std::isfinite(options.min_separation))
         throw InvalidInput("LocalRefineOptions::min_separation must be a finite number >= 0");
     check_tile_options(options.tiles);
+    if (!(options.max_kept_share >= 0.0) || !std::isfinite(options.max_kept_share))
+        throw InvalidInput("LocalRefineOptions::max_kept_share must be a finite number >= 0 (1 or more: never mesh afresh)");
     if (!OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(result.mesh, kFaceTile) ||
         !OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(result.mesh, kFaceGap) ||
         !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
@@ -1086,9 +1088,10 @@ Cut envelope(const Hierarchy& h, const Cut& a, const Cut& b, bool upper)
 
 } // namespace
 
-LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+namespace {
+
+LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
 {
-    check_update(h, result, finer, options, "refine_mesh");
     const std::vector<std::vector<std::int32_t>> runs =
         runs_below(h, result.cut, finer, "refine_mesh: node ",
                    " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; coarsen_mesh coarsens)");
@@ -1126,9 +1129,8 @@ LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
     return stats;
 }
 
-LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
+LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
 {
-    check_update(h, result, coarser, options, "coarsen_mesh");
     const std::vector<std::vector<std::int32_t>> runs =
         runs_below(h, coarser, result.cut, "coarsen_mesh: node ",
                    " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
@@ -1166,20 +1168,68 @@ LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut&
     return stats;
 }
 
+// The points of the nodes of `cut` that are not nodes of `other`.
+std::size_t points_not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
+{
+    std::vector<char> in_other(h.nodes.size(), 0);
+    for (const std::int32_t n : other)
+        in_other[static_cast<std::size_t>(n)] = 1;
+    std::size_t points = 0;
+    for (const std::int32_t n : cut)
+        if (!in_other[static_cast<std::size_t>(n)])
+            points += h.nodes[static_cast<std::size_t>(n)].count();
+    return points;
+}
+
+// Runs an in-place step towards `target`; where the tiles it left as they were hold more than
+// LocalRefineOptions::max_kept_share of the points whose tiles were to change, meshes `target` afresh.
+template <typename Step>
+LocalRefineStats step_or_remesh(const Hierarchy& h, MeshResult& result, const Cut& target, const LocalRefineOptions& options,
+                                const Step& step)
+{
+    const std::size_t asked = points_not_in(h, result.cut, target);
+    LocalRefineStats stats = step();
+    const std::size_t short_of = stats.kept > 0 ? points_not_in(h, result.cut, target) : 0;
+    if (short_of > 0 && static_cast<double>(short_of) > options.max_kept_share * static_cast<double>(asked)) {
+        stats.faces_removed = result.mesh.n_faces();
+        result = mesh_cut(h, target, options.remesh);
+        stats.faces_added = result.mesh.n_faces();
+        stats.remeshed = true;
+        stats.kept = 0;
+    }
+    return stats;
+}
+
+} // namespace
+
+LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+{
+    check_update(h, result, finer, options, "refine_mesh");
+    return step_or_remesh(h, result, finer, options, [&] { return refine_in_place(h, result, finer, options); });
+}
+
+LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
+{
+    check_update(h, result, coarser, options, "coarsen_mesh");
+    return step_or_remesh(h, result, coarser, options, [&] { return coarsen_in_place(h, result, coarser, options); });
+}
+
 LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& cut, const LocalRefineOptions& options)
 {
     check_update(h, result, cut, options, "update_mesh");
-    // First merge where the new cut is coarser (to the coarser of the two cuts everywhere), then split
-    // where it is finer than what is meshed then (tiles kept by the first step stay as they are).
-    const LocalRefineStats merged = coarsen_mesh(h, result, envelope(h, result.cut, cut, true), options);
-    LocalRefineStats stats = refine_mesh(h, result, envelope(h, result.cut, cut, false), options);
-    stats.coarsened += merged.coarsened;
-    stats.kept += merged.kept;
-    stats.absent += merged.absent;
-    stats.refused += merged.refused;
-    stats.faces_removed += merged.faces_removed;
-    stats.faces_added += merged.faces_added;
-    return stats;
+    return step_or_remesh(h, result, cut, options, [&] {
+        // First merge where the new cut is coarser (to the coarser of the two cuts everywhere), then
+        // split where it is finer than what is meshed then (tiles kept by the first step stay as they are).
+        const LocalRefineStats merged = coarsen_in_place(h, result, envelope(h, result.cut, cut, true), options);
+        LocalRefineStats stats = refine_in_place(h, result, envelope(h, result.cut, cut, false), options);
+        stats.coarsened += merged.coarsened;
+        stats.kept += merged.kept;
+        stats.absent += merged.absent;
+        stats.refused += merged.refused;
+        stats.faces_removed += merged.faces_removed;
+        stats.faces_added += merged.faces_added;
+        return stats;
+    });
 }
 
 } // namespace mrt

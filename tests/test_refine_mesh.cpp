@@ -317,7 +317,7 @@ TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
     for (const char* name : {"bun_zipper.ply", "fandisk.obj"}) {
         const Hierarchy h = build_hierarchy(read_points(std::string(MRTILE_SHARED_DATA "/") + name));
         MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.01));
-        const TopologyStats start = topology_stats(r.mesh);
+        TopologyStats start = topology_stats(r.mesh);
         const double diagonal = h.bbox().diagonal();
         std::mt19937 random(7);
         std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -327,11 +327,16 @@ TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
             f.centre = h.cloud.positions[random() % h.cloud.positions.size()];
             f.radius = diagonal * (0.05 + 0.25 * unit(random));
             f.tolerance = std::pow(10.0, -2.0 - 1.5 * unit(random));
-            const LocalRefineStats stats = step % 3 == 2 ? coarsen_mesh(h, r, coarsen_cut(h, r.cut, f, 0.01 + 0.04 * unit(random)))
-                                                         : refine_mesh(h, r, refine_cut(h, r.cut, 0.01, {f}));
+            const bool coarsen = step % 3 == 2;
+            const Cut target = coarsen ? coarsen_cut(h, r.cut, f, 0.01 + 0.04 * unit(random)) : refine_cut(h, r.cut, 0.01, {f});
+            const LocalRefineStats stats = coarsen ? coarsen_mesh(h, r, target) : refine_mesh(h, r, target);
             changed += stats.refined + stats.coarsened;
             SCOPED_TRACE(std::string(name) + " step " + std::to_string(step));
             EXPECT_EQ(stats.refused, 0u); // every face OpenMesh is given is accepted
+            if (stats.remeshed) { // too many tiles kept: the mesh is mesh_cut's, whose topology the next steps keep
+                EXPECT_EQ(positions_of(r.mesh), positions_of(mesh_cut(h, target).mesh));
+                start = topology_stats(r.mesh);
+            }
             expect_manifold(r.mesh, start.boundary_loops, start.genus);
             EXPECT_TRUE(is_partition(h, r.cut));
             EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
@@ -410,6 +415,52 @@ TEST(RefineMesh, a_moving_camera_updates_the_mesh_both_ways)
     const LocalRefineStats none = update_mesh(h, again, r.cut);
     EXPECT_EQ(none.refined + none.coarsened + none.kept, 0u);
     EXPECT_EQ(positions_of(again.mesh), positions_of(r.mesh));
+}
+
+// QA round 49: a camera zooming in on the bunny from afar (one tile) never refined: the coarse tile's
+// region would fold in its plane, so it was kept, and kept again at every later step. Where the tiles
+// kept hold more than a tenth of the points that were to change, the cut is meshed afresh; later,
+// smaller steps change the mesh in place again.
+TEST(RefineMesh, a_camera_zooming_in_from_afar_gets_the_cut_it_asks_for)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
+    const BoundingBox box = h.bbox();
+    auto camera_at = [&](double diagonals) {
+        Camera c;
+        c.position = box.centre() + Vec3{0.3, 0.2, 1.0} * (diagonals * box.diagonal());
+        c.direction = box.centre() - c.position;
+        c.max_pixel_error = 4.0;
+        return c;
+    };
+    const MeshResult far = mesh_cut(h, cut_for_camera(h, camera_at(100.0)));
+    ASSERT_EQ(far.cut.size(), 1u);
+    const Cut near = cut_for_camera(h, camera_at(3.0));
+    ASSERT_GT(near.size(), 100u);
+    LocalRefineOptions in_place_only;
+    in_place_only.max_kept_share = 1.0;
+    MeshResult stuck = far;
+    const LocalRefineStats kept = update_mesh(h, stuck, near, in_place_only);
+    EXPECT_EQ(kept.kept, 1u);
+    EXPECT_FALSE(kept.remeshed);
+    EXPECT_EQ(stuck.cut, far.cut); // what the fallback is for
+    MeshResult zoomed = far;
+    const LocalRefineStats stats = update_mesh(h, zoomed, near);
+    EXPECT_TRUE(stats.remeshed);
+    EXPECT_EQ(stats.kept, 0u);
+    const MeshResult fresh = mesh_cut(h, near);
+    EXPECT_EQ(zoomed.cut, fresh.cut);
+    EXPECT_EQ(positions_of(zoomed.mesh), positions_of(fresh.mesh));
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, zoomed.mesh).mean,
+              0.2 * point_to_mesh_distance(h.cloud.positions, far.mesh).mean);
+    const TopologyStats topology = topology_stats(fresh.mesh);
+    const LocalRefineStats closer = update_mesh(h, zoomed, cut_for_camera(h, camera_at(1.0)));
+    EXPECT_FALSE(closer.remeshed);
+    EXPECT_GT(closer.refined, 10 * closer.kept);
+    expect_manifold(zoomed.mesh, topology.boundary_loops, topology.genus);
+    // A share that is not a number is refused.
+    MeshResult unchanged = far;
+    in_place_only.max_kept_share = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(update_mesh(h, unchanged, near, in_place_only), InvalidInput);
 }
 
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
