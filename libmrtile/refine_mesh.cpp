@@ -968,6 +968,8 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     check_tile_options(options.tiles);
     if (!(options.max_kept_share >= 0.0) || !std::isfinite(options.max_kept_share))
         throw InvalidInput("LocalRefineOptions::max_kept_share must be a finite number >= 0 (1 or more: never mesh afresh)");
+    if (!(options.max_step_ratio >= 1.0)) // infinity: never
+        throw InvalidInput("LocalRefineOptions::max_step_ratio must be at least 1 (infinity: never mesh afresh)");
     if (!OpenMesh::hasProperty<OpenMesh::FaceHandle, int>(result.mesh, kFaceTile) ||
         !OpenMesh::hasProperty<OpenMesh::FaceHandle, bool>(result.mesh, kFaceGap) ||
         !OpenMesh::hasProperty<OpenMesh::VertexHandle, int>(result.mesh, kVertexCluster))
@@ -1181,22 +1183,41 @@ std::size_t points_not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
     return points;
 }
 
-// Runs an in-place step towards `target`; where the tiles it left as they were hold more than
-// LocalRefineOptions::max_kept_share of the points whose tiles were to change, meshes `target` afresh.
+// How many of the nodes of `cut` are not nodes of `other`.
+std::size_t nodes_not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
+{
+    std::vector<char> in_other(h.nodes.size(), 0);
+    for (const std::int32_t n : other)
+        in_other[static_cast<std::size_t>(n)] = 1;
+    return static_cast<std::size_t>(
+        std::count_if(cut.begin(), cut.end(), [&](std::int32_t n) { return !in_other[static_cast<std::size_t>(n)]; }));
+}
+
+// Runs an in-place step towards `target`, or meshes `target` afresh: at once where the step replaces
+// each changing tile by LocalRefineOptions::max_step_ratio tiles or more on average (or merges as many
+// into one), after the step where the tiles it left as they were hold more than max_kept_share of the
+// points whose tiles were to change.
 template <typename Step>
 LocalRefineStats step_or_remesh(const Hierarchy& h, MeshResult& result, const Cut& target, const LocalRefineOptions& options,
                                 const Step& step)
 {
-    const std::size_t asked = points_not_in(h, result.cut, target);
-    LocalRefineStats stats = step();
-    const std::size_t short_of = stats.kept > 0 ? points_not_in(h, result.cut, target) : 0;
-    if (short_of > 0 && static_cast<double>(short_of) > options.max_kept_share * static_cast<double>(asked)) {
+    const auto remesh = [&](LocalRefineStats stats) {
         stats.faces_removed = result.mesh.n_faces();
         result = mesh_cut(h, target, options.remesh);
         stats.faces_added = result.mesh.n_faces();
         stats.remeshed = true;
         stats.kept = 0;
-    }
+        return stats;
+    };
+    const auto leaving = static_cast<double>(nodes_not_in(h, result.cut, target));
+    const auto coming = static_cast<double>(nodes_not_in(h, target, result.cut));
+    if (leaving > 0.0 && coming > 0.0 && std::max(leaving / coming, coming / leaving) >= options.max_step_ratio)
+        return remesh({});
+    const std::size_t asked = points_not_in(h, result.cut, target);
+    const LocalRefineStats stats = step();
+    const std::size_t short_of = stats.kept > 0 ? points_not_in(h, result.cut, target) : 0;
+    if (short_of > 0 && static_cast<double>(short_of) > options.max_kept_share * static_cast<double>(asked))
+        return remesh(stats);
     return stats;
 }
 

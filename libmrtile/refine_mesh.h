@@ -19,8 +19,9 @@
 //! pieces, slivers); a tile whose region, or else its fan alone, is not one disc that can be
 //! re-triangulated without folding in its plane or crossing the faces around it is left
 //! as it was (LocalRefineStats::kept), unless such tiles hold more than a tenth of the points that were
-//! to change: then the cut asked for is meshed afresh (LocalRefineOptions::max_kept_share). For
-//! interactive refinement; mesh_cut for the final mesh.
+//! to change: then the cut asked for is meshed afresh (LocalRefineOptions::max_kept_share), as it is at
+//! once for a step that replaces each tile by 16 or more (max_step_ratio). For interactive refinement;
+//! mesh_cut for the final mesh.
 
 #include "libmrtile/cut.h"
 #include "libmrtile/hierarchy.h"
@@ -57,7 +58,14 @@ struct LocalRefineOptions
     //! 0.1 to 0.005 kept 8 of 8 tiles. A few kept tiles of many (the 4M torus's budget row: 5 of 986) stay,
     //! as they were. 1 or more: never mesh afresh.
     double max_kept_share = 0.1;
-    //! The options of that fresh mesh_cut: those the mesh being changed was made with.
+    //! A step that replaces each changing tile by this many tiles or more on average (or merges as many
+    //! into one) meshes the cut asked for afresh instead, at once: in place, the few vertices of the coarse
+    //! outlines it keeps leave long faces (QA round 49: a 40k-point torus from tolerance 0.02 to 0.0005,
+    //! 49 tiles into about 1,500, kept 19 of its old vertices and had 23× the maximum distance of a fresh
+    //! mesh), and a fresh mesh then costs little more. The benchmark's steps replace a tile by 5-11.
+    //! Infinity: never.
+    double max_step_ratio = 16.0;
+    //! The options of those fresh mesh_cuts: those the mesh being changed was made with.
     MeshOptions remesh;
 };
 
@@ -77,9 +85,10 @@ struct LocalRefineStats
     //! triangulation that would join two outline vertices already joined outside the region is
     //! refused before any change (it made 15 refusals before).
     std::size_t refused = 0;
-    //! The in-place change kept too many tiles (LocalRefineOptions::max_kept_share), and the cut asked for
-    //! was meshed afresh: result is mesh_cut's, `kept` 0, faces_removed / faces_added the whole old and
-    //! new mesh's faces (the other counts: the in-place attempt's).
+    //! The step was too large (LocalRefineOptions::max_step_ratio), or the in-place change kept too many
+    //! tiles (max_kept_share), and the cut asked for was meshed afresh: result is mesh_cut's, `kept` 0,
+    //! faces_removed / faces_added the whole old and new mesh's faces (the other counts: the in-place
+    //! attempt's, 0 for a step too large).
     bool remeshed = false;
 };
 

@@ -418,9 +418,9 @@ TEST(RefineMesh, a_moving_camera_updates_the_mesh_both_ways)
 }
 
 // QA round 49: a camera zooming in on the bunny from afar (one tile) never refined: the coarse tile's
-// region would fold in its plane, so it was kept, and kept again at every later step. Where the tiles
-// kept hold more than a tenth of the points that were to change, the cut is meshed afresh; later,
-// smaller steps change the mesh in place again.
+// region would fold in its plane, so it was kept, and kept again at every later step. Such a step (one
+// tile into hundreds) is now meshed afresh, as is one whose kept tiles hold more than a tenth of the
+// points that were to change; later, smaller steps change the mesh in place again.
 TEST(RefineMesh, a_camera_zooming_in_from_afar_gets_the_cut_it_asks_for)
 {
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
@@ -438,6 +438,7 @@ TEST(RefineMesh, a_camera_zooming_in_from_afar_gets_the_cut_it_asks_for)
     ASSERT_GT(near.size(), 100u);
     LocalRefineOptions in_place_only;
     in_place_only.max_kept_share = 1.0;
+    in_place_only.max_step_ratio = std::numeric_limits<double>::infinity();
     MeshResult stuck = far;
     const LocalRefineStats kept = update_mesh(h, stuck, near, in_place_only);
     EXPECT_EQ(kept.kept, 1u);
@@ -461,6 +462,38 @@ TEST(RefineMesh, a_camera_zooming_in_from_afar_gets_the_cut_it_asks_for)
     MeshResult unchanged = far;
     in_place_only.max_kept_share = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(update_mesh(h, unchanged, near, in_place_only), InvalidInput);
+}
+
+// QA round 49: one step from 49 tiles of a torus to about 1,500 kept 19 vertices of the coarse
+// outlines, whose long faces had 23 times a fresh mesh's maximum distance. A step that replaces each
+// tile by 16 or more is meshed afresh at once.
+TEST(RefineMesh, a_step_of_many_levels_at_once_is_meshed_afresh)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(40000));
+    const MeshResult coarse = mesh_cut(h, cut_by_tolerance(h, 0.02));
+    const Cut fine = cut_by_tolerance(h, 0.0005);
+    ASSERT_GT(fine.size(), 16 * coarse.cut.size());
+    MeshResult stepped = coarse;
+    const LocalRefineStats stats = refine_mesh(h, stepped, fine);
+    EXPECT_TRUE(stats.remeshed);
+    EXPECT_EQ(stats.refined, 0u); // not tried in place
+    const MeshResult fresh = mesh_cut(h, fine);
+    EXPECT_EQ(positions_of(stepped.mesh), positions_of(fresh.mesh));
+    LocalRefineOptions in_place;
+    in_place.max_step_ratio = std::numeric_limits<double>::infinity();
+    MeshResult forced = coarse;
+    const LocalRefineStats forced_stats = refine_mesh(h, forced, fine, in_place);
+    EXPECT_FALSE(forced_stats.remeshed);
+    EXPECT_GT(forced_stats.refined, 40u);
+    expect_manifold(forced.mesh, 0, 1);
+    EXPECT_GT(point_to_mesh_distance(h.cloud.positions, forced.mesh).max,
+              4.0 * point_to_mesh_distance(h.cloud.positions, fresh.mesh).max); // what it avoids
+    // And back: merging 16 or more tiles into one is meshed afresh too.
+    const LocalRefineStats back = coarsen_mesh(h, stepped, coarse.cut);
+    EXPECT_TRUE(back.remeshed);
+    EXPECT_EQ(positions_of(stepped.mesh), positions_of(mesh_cut(h, coarse.cut).mesh));
+    in_place.max_step_ratio = 0.5;
+    EXPECT_THROW(refine_mesh(h, forced, fine, in_place), InvalidInput);
 }
 
 TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)

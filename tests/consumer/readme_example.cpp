@@ -31,12 +31,13 @@ int main(int argc, char** argv)
     std::printf("%zu tiles, %zu faces, %zu refused\n", result.tiles, static_cast<std::size_t>(result.mesh.n_faces()),
                 result.surface.refused_faces);
 
-    // The same focus reached incrementally: a coarse mesh patched in place where the cut got finer.
-    mrt::MeshResult coarse = mrt::mesh_cut(h, mrt::cut_by_tolerance(h, 0.01));
-    const mrt::LocalRefineStats patched = mrt::refine_mesh(h, coarse, mrt::refine_cut(h, coarse.cut, 0.01, {focus}));
-    std::printf("refined %zu tiles in place (%zu kept), %zu faces\n", patched.refined, patched.kept,
-                static_cast<std::size_t>(coarse.mesh.n_faces()));
-    const mrt::LocalRefineStats merged = mrt::coarsen_mesh(h, coarse, mrt::coarsen_cut(h, coarse.cut, focus, 0.01));
+    // The focus reached incrementally: a mesh patched in place where the cut got finer (a step of a few
+    // levels: one of 16 or more new tiles per tile is meshed afresh, LocalRefineOptions::max_step_ratio).
+    mrt::MeshResult coarse = mrt::mesh_cut(h, mrt::cut_by_tolerance(h, 0.002));
+    const mrt::LocalRefineStats patched = mrt::refine_mesh(h, coarse, mrt::refine_cut(h, coarse.cut, 0.002, {focus}));
+    std::printf("refined %zu tiles in place (%zu kept, remeshed %d), %zu faces\n", patched.refined, patched.kept,
+                static_cast<int>(patched.remeshed), static_cast<std::size_t>(coarse.mesh.n_faces()));
+    const mrt::LocalRefineStats merged = mrt::coarsen_mesh(h, coarse, mrt::coarsen_cut(h, coarse.cut, focus, 0.002));
     std::printf("coarsened %zu groups back (%zu kept), %zu faces\n", merged.coarsened, merged.kept,
                 static_cast<std::size_t>(coarse.mesh.n_faces()));
     return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0 &&
