@@ -1092,11 +1092,23 @@ Cut envelope(const Hierarchy& h, const Cut& a, const Cut& b, bool upper)
 
 namespace {
 
+// For each node of the mesh's cut, the nodes of `finer` under it; InvalidInput where `finer` is coarser.
+std::vector<std::vector<std::int32_t>> refine_runs(const Hierarchy& h, const Cut& meshed, const Cut& finer)
+{
+    return runs_below(h, meshed, finer, "refine_mesh: node ",
+                      " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; coarsen_mesh coarsens)");
+}
+
+// For each node of `coarser`, the nodes of the mesh's cut under it; InvalidInput where `coarser` is finer.
+std::vector<std::vector<std::int32_t>> coarsen_runs(const Hierarchy& h, const Cut& coarser, const Cut& meshed)
+{
+    return runs_below(h, coarser, meshed, "coarsen_mesh: node ",
+                      " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
+}
+
 LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
 {
-    const std::vector<std::vector<std::int32_t>> runs =
-        runs_below(h, result.cut, finer, "refine_mesh: node ",
-                   " of the mesh's cut is finer than the cut asked for (refine_mesh only refines; coarsen_mesh coarsens)");
+    const std::vector<std::vector<std::int32_t>> runs = refine_runs(h, result.cut, finer);
     std::vector<std::int32_t> changing;
     for (std::size_t k = 0; k < result.cut.size(); ++k)
         if (runs[k].size() != 1 || runs[k].front() != result.cut[k])
@@ -1133,9 +1145,7 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
 
 LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
 {
-    const std::vector<std::vector<std::int32_t>> runs =
-        runs_below(h, coarser, result.cut, "coarsen_mesh: node ",
-                   " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
+    const std::vector<std::vector<std::int32_t>> runs = coarsen_runs(h, coarser, result.cut);
     std::vector<std::int32_t> changing;
     for (std::size_t k = 0; k < coarser.size(); ++k)
         if (runs[k].size() != 1 || runs[k].front() != coarser[k])
@@ -1226,12 +1236,14 @@ LocalRefineStats step_or_remesh(const Hierarchy& h, MeshResult& result, const Cu
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
 {
     check_update(h, result, finer, options, "refine_mesh");
+    refine_runs(h, result.cut, finer); // the direction, before a step too large is meshed afresh
     return step_or_remesh(h, result, finer, options, [&] { return refine_in_place(h, result, finer, options); });
 }
 
 LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
 {
     check_update(h, result, coarser, options, "coarsen_mesh");
+    coarsen_runs(h, coarser, result.cut); // the direction, before a step too large is meshed afresh
     return step_or_remesh(h, result, coarser, options, [&] { return coarsen_in_place(h, result, coarser, options); });
 }
 

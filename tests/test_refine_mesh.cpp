@@ -508,6 +508,10 @@ TEST(RefineMesh, nothing_to_refine_changes_nothing_and_bad_input_is_refused)
 
     MeshResult m = base;
     EXPECT_THROW(refine_mesh(h, m, cut_by_tolerance(h, 0.1)), InvalidInput); // coarser somewhere
+    // Far coarser or finer (16 tiles or more into one): refused too, not meshed afresh.
+    ASSERT_GE(base.cut.size(), 32u);
+    EXPECT_THROW(refine_mesh(h, m, cut_by_budget(h, 2)), InvalidInput);
+    EXPECT_THROW(coarsen_mesh(h, m, cut_by_tolerance(h, 0.0005)), InvalidInput);
     Cut not_a_partition = base.cut;
     not_a_partition.pop_back();
     EXPECT_THROW(refine_mesh(h, m, not_a_partition), InvalidInput);
