@@ -1106,9 +1106,10 @@ std::vector<std::vector<std::int32_t>> coarsen_runs(const Hierarchy& h, const Cu
                       " of the cut asked for is finer than the mesh's cut (coarsen_mesh only coarsens; refine_mesh refines)");
 }
 
-LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
+// `runs`: refine_runs(h, result.cut, finer).
+LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const Cut& finer,
+                                 const std::vector<std::vector<std::int32_t>>& runs, const LocalRefineOptions& options)
 {
-    const std::vector<std::vector<std::int32_t>> runs = refine_runs(h, result.cut, finer);
     std::vector<std::int32_t> changing;
     for (std::size_t k = 0; k < result.cut.size(); ++k)
         if (runs[k].size() != 1 || runs[k].front() != result.cut[k])
@@ -1143,9 +1144,10 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
     return stats;
 }
 
-LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
+// `runs`: coarsen_runs(h, coarser, result.cut).
+LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const Cut& coarser,
+                                  const std::vector<std::vector<std::int32_t>>& runs, const LocalRefineOptions& options)
 {
-    const std::vector<std::vector<std::int32_t>> runs = coarsen_runs(h, coarser, result.cut);
     std::vector<std::int32_t> changing;
     for (std::size_t k = 0; k < coarser.size(); ++k)
         if (runs[k].size() != 1 || runs[k].front() != coarser[k])
@@ -1180,27 +1182,24 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
     return stats;
 }
 
-// The points of the nodes of `cut` that are not nodes of `other`.
-std::size_t points_not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
+// The nodes of `cut` that are not nodes of `other`: how many, and their points.
+struct CutDifference
 {
-    std::vector<char> in_other(h.nodes.size(), 0);
-    for (const std::int32_t n : other)
-        in_other[static_cast<std::size_t>(n)] = 1;
-    std::size_t points = 0;
-    for (const std::int32_t n : cut)
-        if (!in_other[static_cast<std::size_t>(n)])
-            points += h.nodes[static_cast<std::size_t>(n)].count();
-    return points;
-}
+    std::size_t nodes = 0, points = 0;
+};
 
-// How many of the nodes of `cut` are not nodes of `other`.
-std::size_t nodes_not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
+CutDifference not_in(const Hierarchy& h, const Cut& cut, const Cut& other)
 {
     std::vector<char> in_other(h.nodes.size(), 0);
     for (const std::int32_t n : other)
         in_other[static_cast<std::size_t>(n)] = 1;
-    return static_cast<std::size_t>(
-        std::count_if(cut.begin(), cut.end(), [&](std::int32_t n) { return !in_other[static_cast<std::size_t>(n)]; }));
+    CutDifference d;
+    for (const std::int32_t n : cut)
+        if (!in_other[static_cast<std::size_t>(n)]) {
+            ++d.nodes;
+            d.points += h.nodes[static_cast<std::size_t>(n)].count();
+        }
+    return d;
 }
 
 // Runs an in-place step towards `target`, or meshes `target` afresh: at once where the step replaces
@@ -1219,14 +1218,13 @@ LocalRefineStats step_or_remesh(const Hierarchy& h, MeshResult& result, const Cu
         stats.kept = 0;
         return stats;
     };
-    const auto leaving = static_cast<double>(nodes_not_in(h, result.cut, target));
-    const auto coming = static_cast<double>(nodes_not_in(h, target, result.cut));
-    if (leaving > 0.0 && coming > 0.0 && std::max(leaving / coming, coming / leaving) >= options.max_step_ratio)
+    const CutDifference leaving = not_in(h, result.cut, target); // the tiles to change
+    const auto old_tiles = static_cast<double>(leaving.nodes), new_tiles = static_cast<double>(not_in(h, target, result.cut).nodes);
+    if (old_tiles > 0.0 && new_tiles > 0.0 && std::max(old_tiles / new_tiles, new_tiles / old_tiles) >= options.max_step_ratio)
         return remesh({});
-    const std::size_t asked = points_not_in(h, result.cut, target);
     const LocalRefineStats stats = step();
-    const std::size_t short_of = stats.kept > 0 ? points_not_in(h, result.cut, target) : 0;
-    if (short_of > 0 && static_cast<double>(short_of) > options.max_kept_share * static_cast<double>(asked))
+    const std::size_t short_of = stats.kept > 0 ? not_in(h, result.cut, target).points : 0;
+    if (short_of > 0 && static_cast<double>(short_of) > options.max_kept_share * static_cast<double>(leaving.points))
         return remesh(stats);
     return stats;
 }
@@ -1236,15 +1234,17 @@ LocalRefineStats step_or_remesh(const Hierarchy& h, MeshResult& result, const Cu
 LocalRefineStats refine_mesh(const Hierarchy& h, MeshResult& result, const Cut& finer, const LocalRefineOptions& options)
 {
     check_update(h, result, finer, options, "refine_mesh");
-    refine_runs(h, result.cut, finer); // the direction, before a step too large is meshed afresh
-    return step_or_remesh(h, result, finer, options, [&] { return refine_in_place(h, result, finer, options); });
+    // The direction is checked here, before a step too large is meshed afresh.
+    const std::vector<std::vector<std::int32_t>> runs = refine_runs(h, result.cut, finer);
+    return step_or_remesh(h, result, finer, options, [&] { return refine_in_place(h, result, finer, runs, options); });
 }
 
 LocalRefineStats coarsen_mesh(const Hierarchy& h, MeshResult& result, const Cut& coarser, const LocalRefineOptions& options)
 {
     check_update(h, result, coarser, options, "coarsen_mesh");
-    coarsen_runs(h, coarser, result.cut); // the direction, before a step too large is meshed afresh
-    return step_or_remesh(h, result, coarser, options, [&] { return coarsen_in_place(h, result, coarser, options); });
+    // The direction is checked here, before a step too large is meshed afresh.
+    const std::vector<std::vector<std::int32_t>> runs = coarsen_runs(h, coarser, result.cut);
+    return step_or_remesh(h, result, coarser, options, [&] { return coarsen_in_place(h, result, coarser, runs, options); });
 }
 
 LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& cut, const LocalRefineOptions& options)
@@ -1253,8 +1253,10 @@ LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
     return step_or_remesh(h, result, cut, options, [&] {
         // First merge where the new cut is coarser (to the coarser of the two cuts everywhere), then
         // split where it is finer than what is meshed then (tiles kept by the first step stay as they are).
-        const LocalRefineStats merged = coarsen_in_place(h, result, envelope(h, result.cut, cut, true), options);
-        LocalRefineStats stats = refine_in_place(h, result, envelope(h, result.cut, cut, false), options);
+        const Cut upper = envelope(h, result.cut, cut, true);
+        const LocalRefineStats merged = coarsen_in_place(h, result, upper, coarsen_runs(h, upper, result.cut), options);
+        const Cut lower = envelope(h, result.cut, cut, false);
+        LocalRefineStats stats = refine_in_place(h, result, lower, refine_runs(h, result.cut, lower), options);
         stats.coarsened += merged.coarsened;
         stats.kept += merged.kept;
         stats.absent += merged.absent;
