@@ -7,6 +7,7 @@
 // bit for bit.
 #include "libmrtile/refine_mesh.h"
 
+#include "libmrtile/box_grid.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/mesh_stats.h"
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -145,7 +147,199 @@ public:
         return Outcome::refined;
     }
 
+    // Tiles new to the cut (`fresh`) that have no vertex in the mesh: their points lie beyond the
+    // outline of the region they came from, in a neighbour's fan (their parent's points reach into a
+    // neighbour's Voronoi cell: mesh_cut's tiles are cut at those cells, a node's own hull is not), or
+    // their parent had nothing in the mesh. Each is adopted by the tile whose region covers it: that
+    // region is re-triangulated with the tile's own pseudo-tile points and the orphans', as mesh_cut
+    // gives the orphan a fan of its own in that neighbour's cell. Without this, such a tile stayed
+    // without a vertex for good, and every later refinement of it found nothing to re-triangulate
+    // (QA round 49: up to 24% of the tiles after long random runs). Hosts are tried nearest first
+    // (the tiles of the vertices nearest the orphan's centre), at most kAdoptionTries each.
+    void adopt_orphans(const std::vector<std::int32_t>& fresh, LocalRefineStats& stats)
+    {
+        std::vector<std::int32_t> orphans;
+        for (const std::int32_t node : fresh)
+            if (!has_vertex(node))
+                orphans.push_back(node);
+        if (orphans.empty())
+            return;
+        std::vector<char> is_orphan(h_.nodes.size(), 0);
+        for (const std::int32_t node : orphans)
+            is_orphan[static_cast<std::size_t>(node)] = 1;
+        const double cell = file_all_faces();
+        // Per orphan, the hosts to try: the tiles of its nearest vertices, nearest first. The vertices
+        // by grid cell; a query box doubles until it holds enough vertices within its half-width (all
+        // the nearest ones, then) or spans all vertices.
+        BoxGrid vertex_grid(cell);
+        std::vector<Mesh::VertexHandle> live;
+        for (const auto v : mesh_.vertices())
+            if (cluster_[v] >= 0 && !is_orphan[static_cast<std::size_t>(cluster_[v])]) {
+                const Vec3 p = to_vec3(mesh_.point(v));
+                vertex_grid.insert(static_cast<std::uint32_t>(v.idx()), {p, p});
+                live.push_back(v);
+            }
+        if (live.empty())
+            return;
+        std::vector<std::vector<Mesh::VertexHandle>> hosts(orphans.size());
+        for (std::size_t k = 0; k < orphans.size(); ++k) {
+            const Node& orphan = h_.nodes[static_cast<std::size_t>(orphans[k])];
+            const Vec3 centre = orphan.moments.mean;
+            std::vector<std::pair<double, int>> by_distance;
+            auto consider = [&](Mesh::VertexHandle v, double reach) {
+                const double d2 = squared_distance(to_vec3(mesh_.point(v)), centre);
+                if (d2 <= reach * reach)
+                    by_distance.push_back({d2, v.idx()});
+            };
+            for (double reach = cell;; reach *= 2.0) {
+                by_distance.clear();
+                const Vec3 half{reach, reach, reach};
+                const BoundingBox query{centre - half, centre + half};
+                if (vertex_grid.cell_count(query) > static_cast<double>(live.size())) { // as cheap to look at them all
+                    for (const auto v : live)
+                        consider(v, std::numeric_limits<double>::infinity());
+                    break;
+                }
+                vertex_grid.for_each_candidate(query, [&](std::uint32_t id) { consider(Mesh::VertexHandle(static_cast<int>(id)), reach); });
+                if (by_distance.size() >= kAdoptionVertices)
+                    break;
+            }
+            const std::size_t nearest = std::min<std::size_t>(by_distance.size(), kAdoptionVertices);
+            std::partial_sort(by_distance.begin(), by_distance.begin() + static_cast<std::ptrdiff_t>(nearest), by_distance.end());
+            for (std::size_t i = 0; i < nearest && hosts[k].size() < kAdoptionTries; ++i) {
+                const Mesh::VertexHandle v(by_distance[i].second);
+                const bool seen = std::any_of(hosts[k].begin(), hosts[k].end(), [&](Mesh::VertexHandle w) { return cluster_[w] == cluster_[v]; });
+                // A host across a crease (fandisk: the orphan on one face, the nearest vertex's tile on
+                // the other) would take points off its plane into its region and fold it over its
+                // neighbours (8 crossing faces in a random run): its plane must be near the orphan's.
+                const Vec3& host_normal = h_.nodes[static_cast<std::size_t>(cluster_[v])].frame.vectors[0];
+                if (!seen && std::abs(dot(host_normal, orphan.frame.vectors[0])) >= kAdoptionMinCos)
+                    hosts[k].push_back(v);
+            }
+        }
+        for (std::size_t attempt = 0; attempt < kAdoptionTries; ++attempt) {
+            // The orphans still without a vertex, grouped by this attempt's host (in orphan order).
+            std::vector<std::pair<std::int32_t, std::vector<std::int32_t>>> groups;
+            std::vector<Mesh::VertexHandle> seeds;
+            for (std::size_t k = 0; k < orphans.size(); ++k) {
+                if (attempt >= hosts[k].size() || has_vertex(orphans[k]))
+                    continue;
+                const auto v = hosts[k][attempt];
+                if (mesh_.status(v).deleted()) // an earlier adoption re-made the host's region: ask again next time
+                    continue;
+                const std::int32_t host = cluster_[v];
+                auto group = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == host; });
+                if (group == groups.end()) {
+                    groups.push_back({host, {}});
+                    seeds.push_back(v);
+                    group = groups.end() - 1;
+                }
+                group->second.push_back(orphans[k]);
+            }
+            for (std::size_t g = 0; g < groups.size(); ++g) {
+                const auto& [host, adopted] = groups[g];
+                index_tile(host, seeds[g]);
+                std::vector<Mesh::FaceHandle> region = region_of(host);
+                if (region.empty())
+                    continue;
+                std::vector<Mesh::VertexHandle> outline;
+                if (!mend_into_disc(host, {host}, region, outline))
+                    continue;
+                // The host's own points first: it must keep its vertices (an orphan's point too near
+                // one of them is left out, as any descendant's point near a point already taken is).
+                std::vector<Tile> tiles{make_tile(h_, host, tile_options_)};
+                for (const std::int32_t node : adopted)
+                    tiles.push_back(make_tile(h_, node, tile_options_));
+                if (replace_region(host, tiles, region, outline, stats))
+                    for (const std::int32_t node : adopted)
+                        stats.adopted += has_vertex(node) ? 1 : 0;
+            }
+        }
+    }
+
 private:
+    // adopt_orphans: hosts tried per orphan, among the tiles of how many of its nearest vertices, whose
+    // planes turn at most 60 degrees from the orphan's.
+    static constexpr std::size_t kAdoptionTries = 3;
+    static constexpr std::size_t kAdoptionVertices = 24;
+    static constexpr double kAdoptionMinCos = 0.5;
+
+    // Files every face of the mesh in all_faces_ (cells twice the mean edge length): a host's new faces
+    // are tested against every face near them, not only those within two rings of its outline. An
+    // orphan's points can lie on another sheet that its host's plane sees through the host's region
+    // (the bunny refined from 0.01 to 0.002: three faces of an ear crossed).
+    // Returns the cell size.
+    double file_all_faces()
+    {
+        double sum = 0.0;
+        std::size_t edges = 0;
+        for (const auto e : mesh_.edges())
+            if (!mesh_.status(e).deleted()) {
+                sum += mesh_.calc_edge_length(e);
+                ++edges;
+            }
+        const double cell = edges > 0 && sum > 0.0 ? 2.0 * sum / static_cast<double>(edges) : 1.0;
+        all_faces_.emplace(cell);
+        for (const auto f : mesh_.faces())
+            all_faces_->insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
+        return cell;
+    }
+
+    // Whether a new face crosses a face of all_faces_ (none filed: false). The new faces are marked in
+    // face_stamp_ by crosses_surroundings, which runs first.
+    bool crosses_anything(const std::vector<Mesh::FaceHandle>& added)
+    {
+        if (!all_faces_)
+            return false;
+        for (const auto f : added) {
+            const BoundingBox box = triangle_box(face_corners(mesh_, f));
+            const bool hit = all_faces_->any_candidate(box, [&](std::uint32_t id) {
+                const Mesh::FaceHandle g(static_cast<int>(id));
+                if (mesh_.status(g).deleted() || face_stamp_[id] == stamp_)
+                    return false; // gone, or one of the new faces (tested against each other by construction)
+                return box.meets(triangle_box(face_corners(mesh_, g))) && faces_intersect(mesh_, f, g);
+            });
+            if (hit)
+                return true;
+        }
+        return false;
+    }
+
+    // Whether the node has a vertex in the mesh (v:cluster = node).
+    bool has_vertex(std::int32_t node) const
+    {
+        const auto own = vertices_.find(node);
+        if (own == vertices_.end())
+            return false;
+        return std::any_of(own->second.begin(), own->second.end(),
+                           [&](Mesh::VertexHandle v) { return !mesh_.status(v).deleted() && cluster_[v] == node; });
+    }
+
+    // Adds a tile the index does not hold yet (a tile of the cut that is not changing) from one of its
+    // vertices: its vertices are joined by its fan's edges, its fan faces are theirs with f:tile = node.
+    void index_tile(std::int32_t node, Mesh::VertexHandle seed)
+    {
+        if (fans_.count(node) != 0 || vertices_.count(node) != 0)
+            return;
+        std::vector<Mesh::VertexHandle>& own = vertices_[node];
+        std::vector<Mesh::FaceHandle>& fan = fans_[node];
+        std::vector<Mesh::VertexHandle> stack{seed};
+        std::vector<int> seen{seed.idx()};
+        while (!stack.empty()) {
+            const auto v = stack.back();
+            stack.pop_back();
+            own.push_back(v);
+            for (const auto g : mesh_.vf_range(v))
+                if (tile_[g] == node && std::find(fan.begin(), fan.end(), g) == fan.end())
+                    fan.push_back(g);
+            for (const auto w : mesh_.vv_range(v))
+                if (cluster_[w] == node && std::find(seen.begin(), seen.end(), w.idx()) == seen.end()) {
+                    seen.push_back(w.idx());
+                    stack.push_back(w);
+                }
+        }
+    }
+
     // The region (marked in in_region_) made one disc if it can be: its main piece kept (strips joined
     // to it by a corner only may stay), every fan face of the replaced nodes still in it (a face left
     // naming a node would name no tile of the cut), vertices where it touches itself mended
@@ -715,7 +909,7 @@ private:
         }
         // New faces that cross faces just outside the outline (a region steep in its plane can fold
         // over its surroundings): tested against the faces within two rings of the outline.
-        const bool crossing = !refused && options_.no_crossings && crosses_surroundings(outline, added);
+        const bool crossing = !refused && options_.no_crossings && (crosses_surroundings(outline, added) || crosses_anything(added));
         if (refused || crossing) {
             for (const auto f : added)
                 mesh_.delete_face(f, false);
@@ -729,6 +923,8 @@ private:
             if (tile_[f] >= 0)
                 fans_[tile_[f]].push_back(f);
             touched_faces_.push_back(f);
+            if (all_faces_)
+                all_faces_->insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
         }
         touched_vertices_.insert(touched_vertices_.end(), corner.begin(), corner.end());
         // The fan's own vertices inside the outline (its apex) are left without faces: remove them.
@@ -953,6 +1149,7 @@ private:
     std::vector<std::uint32_t> face_stamp_; // per face: the crossing test's call that last saw it
     std::vector<std::uint32_t> vertex_stamp_; // per vertex: the same, for the vertices whose faces were taken
     std::uint32_t stamp_ = 0;
+    std::optional<BoxGrid> all_faces_; // every face, filed once orphans are to be adopted (file_all_faces)
 };
 
 // What refine_mesh and coarsen_mesh check before any change.
@@ -1116,7 +1313,7 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
             changing.push_back(result.cut[k]);
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
-    Cut meshed;
+    Cut meshed, fresh;
     meshed.reserve(finer.size());
     for (std::size_t k = 0; k < result.cut.size(); ++k) {
         const std::int32_t node = result.cut[k];
@@ -1129,10 +1326,12 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
         case LocalRefiner::Outcome::refined:
             ++stats.refined;
             meshed.insert(meshed.end(), run.begin(), run.end());
+            fresh.insert(fresh.end(), run.begin(), run.end());
             break;
         case LocalRefiner::Outcome::absent:
             ++stats.absent;
             meshed.insert(meshed.end(), run.begin(), run.end());
+            fresh.insert(fresh.end(), run.begin(), run.end());
             break;
         case LocalRefiner::Outcome::kept:
             ++stats.kept;
@@ -1140,6 +1339,7 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
             break;
         }
     }
+    refiner.adopt_orphans(fresh, stats);
     finish(h, result, refiner, std::move(meshed));
     return stats;
 }
@@ -1154,7 +1354,7 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
             changing.insert(changing.end(), runs[k].begin(), runs[k].end());
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
-    Cut meshed;
+    Cut meshed, fresh;
     meshed.reserve(result.cut.size());
     for (std::size_t k = 0; k < coarser.size(); ++k) {
         const std::int32_t node = coarser[k];
@@ -1167,10 +1367,12 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
         case LocalRefiner::Outcome::refined: // re-triangulated (as the coarser tile)
             ++stats.coarsened;
             meshed.push_back(node);
+            fresh.push_back(node);
             break;
         case LocalRefiner::Outcome::absent:
             ++stats.absent;
             meshed.push_back(node);
+            fresh.push_back(node);
             break;
         case LocalRefiner::Outcome::kept:
             ++stats.kept;
@@ -1178,6 +1380,7 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
             break;
         }
     }
+    refiner.adopt_orphans(fresh, stats);
     finish(h, result, refiner, std::move(meshed));
     return stats;
 }
@@ -1260,6 +1463,7 @@ LocalRefineStats update_mesh(const Hierarchy& h, MeshResult& result, const Cut& 
         stats.coarsened += merged.coarsened;
         stats.kept += merged.kept;
         stats.absent += merged.absent;
+        stats.adopted += merged.adopted;
         stats.refused += merged.refused;
         stats.faces_removed += merged.faces_removed;
         stats.faces_added += merged.faces_added;

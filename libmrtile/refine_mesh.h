@@ -20,7 +20,10 @@
 //! re-triangulated without folding in its plane or crossing the faces around it is left
 //! as it was (LocalRefineStats::kept), unless such tiles hold more than a tenth of the points that were
 //! to change: then the cut asked for is meshed afresh (LocalRefineOptions::max_kept_share), as it is at
-//! once for a step that replaces each tile by 16 or more (max_step_ratio). For interactive refinement;
+//! once for a step that replaces each tile by 16 or more (max_step_ratio). A new tile all of whose points
+//! lie beyond its region's outline (in a neighbour's fan: mesh_cut cuts tiles at the cut's Voronoi cells,
+//! a node's own points can reach into a neighbour's) is adopted by that neighbour, whose region is then
+//! re-triangulated with both tiles' points (LocalRefineStats::adopted). For interactive refinement;
 //! mesh_cut for the final mesh.
 
 #include "libmrtile/cut.h"
@@ -78,6 +81,10 @@ struct LocalRefineStats
     //! mesh (mesh_cut left them out, or an earlier refinement kept none of their points): replaced in
     //! the cut with nothing to re-triangulate.
     std::size_t absent = 0;
+    //! New tiles of the cut (a split node's descendants, a merge's ancestor) that had no vertex after their
+    //! region was re-triangulated, their points lying in a neighbour's fan (or their region absent), and got
+    //! one when that neighbour's region was re-triangulated with their points and its own.
+    std::size_t adopted = 0;
     std::size_t faces_removed = 0; //!< faces of the refined tiles' regions (fans and the strips around them)
     std::size_t faces_added = 0;   //!< faces that replace them
     //! Of `kept`: tiles put back as they were after OpenMesh refused a new face (add_face returned an

@@ -140,6 +140,17 @@ std::size_t expect_far_vertices_kept(const Mesh& before, const Mesh& after, cons
     return far;
 }
 
+// The tiles of the cut that have no vertex in the mesh.
+std::size_t tiles_without_a_vertex(const MeshResult& r)
+{
+    OpenMesh::VPropHandleT<int> cluster;
+    EXPECT_TRUE(r.mesh.get_property_handle(cluster, kVertexCluster));
+    std::set<int> with_vertex;
+    for (const auto v : r.mesh.vertices())
+        with_vertex.insert(r.mesh.property(cluster, v));
+    return static_cast<std::size_t>(std::count_if(r.cut.begin(), r.cut.end(), [&](std::int32_t n) { return with_vertex.count(n) == 0; }));
+}
+
 // A focus region refined on a closed torus: the mesh stays closed with genus 1, the cut becomes the
 // refined one, everything away from the region keeps its vertices bit for bit, and the points in the
 // region come nearer the mesh.
@@ -343,6 +354,8 @@ TEST(RefineMesh, random_refinements_and_coarsenings_keep_every_invariant)
             expect_ids_name_tiles_of_the_cut(r);
         }
         EXPECT_GT(changed, 50u) << name;
+        // Tiles without a vertex do not pile up: about as many as a fresh mesh of the same cut has.
+        EXPECT_LE(tiles_without_a_vertex(r), tiles_without_a_vertex(mesh_cut(h, r.cut)) + 1) << name;
     }
 }
 
@@ -415,6 +428,30 @@ TEST(RefineMesh, a_moving_camera_updates_the_mesh_both_ways)
     const LocalRefineStats none = update_mesh(h, again, r.cut);
     EXPECT_EQ(none.refined + none.coarsened + none.kept, 0u);
     EXPECT_EQ(positions_of(again.mesh), positions_of(r.mesh));
+}
+
+// QA round 49: after one update_mesh on a torus, 9 of 834 tiles had no vertex (a fresh mesh of the same
+// cut: none), and a later refinement found nothing of theirs to re-triangulate. Their points lay in a
+// neighbour's fan, beyond the outline of the region they came from; that neighbour now adopts them.
+TEST(RefineMesh, new_tiles_whose_points_lie_in_a_neighbours_fan_get_vertices)
+{
+    const Hierarchy h = build_hierarchy(shapes::torus(40000));
+    MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.01));
+    Camera camera;
+    camera.position = Vec3{0.4214, -1.954, 3.234} - h.cloud.origin;
+    camera.direction = (Vec3{0, 0, 0} - h.cloud.origin) - camera.position;
+    camera.max_pixel_error = 2.31;
+    const LocalRefineStats stats = update_mesh(h, r, cut_for_camera(h, camera));
+    EXPECT_FALSE(stats.remeshed);
+    EXPECT_GT(stats.refined, 100u);
+    EXPECT_GE(stats.adopted, 5u);
+    const MeshResult fresh = mesh_cut(h, r.cut);
+    ASSERT_EQ(tiles_without_a_vertex(fresh), 0u);
+    EXPECT_EQ(tiles_without_a_vertex(r), 0u);
+    expect_manifold(r.mesh, 0, 1);
+    EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
+    expect_ids_name_tiles_of_the_cut(r);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, r.mesh).mean, 3.0 * point_to_mesh_distance(h.cloud.positions, fresh.mesh).mean);
 }
 
 // QA round 49: a camera zooming in on the bunny from afar (one tile) never refined: the coarse tile's

@@ -43,7 +43,7 @@ struct CutMeasurement
 struct RefineMeasurement
 {
     std::uint64_t tiles_before = 0, tiles_after = 0, fresh_tiles = 0;
-    std::uint64_t changed = 0, kept = 0, absent = 0; // tiles re-triangulated (split or merged), left, absent
+    std::uint64_t changed = 0, kept = 0, absent = 0, adopted = 0; // tiles re-triangulated (split or merged), left, absent, adopted
     std::uint64_t faces = 0, fresh_faces = 0, faces_added = 0;
     Timing refine, fresh;
     DistanceStats distance, fresh_distance; // of the points measured (see the table's notes)
@@ -104,6 +104,7 @@ RefineMeasurement measure_refine(const Hierarchy& h, const MeshResult& base, con
     m.changed = stats.refined + stats.coarsened;
     m.kept = stats.kept;
     m.absent = stats.absent;
+    m.adopted = stats.adopted;
     m.faces_added = stats.faces_added;
     m.tiles_after = refined.cut.size();
     m.faces = refined.mesh.n_faces();
@@ -217,7 +218,7 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
                                    "camera moved to the other side (update_mesh)", "bun_zipper.ply: tolerance 0.005 → 0.001"};
     Table t;
     t.title = "Incremental refinement (`refine_mesh`) vs. a fresh `mesh_cut` of the same cut: " + input + " and the bunny";
-    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"changed / kept / absent"},
+    t.columns = {{"refinement", Align::Left}, {"tiles before → after (fresh)"}, {"changed / kept / absent / adopted"},
                  {"faces (fresh)"}, {"refine s"}, {"fresh mesh_cut s"}, {"speed-up"},
                  {"output triangles/s (≥ 1M)"}, {"mean dist (fresh)"}, {"max dist (fresh)"}};
     for (std::size_t i = 0; i < kRefines; ++i)
@@ -226,7 +227,7 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
         const double rate = static_cast<double>(r.faces) / r.refine.cpu;
         t.rows.push_back({names[i],
                           with_commas(r.tiles_before) + " → " + with_commas(r.tiles_after) + " (" + with_commas(r.fresh_tiles) + ")",
-                          with_commas(r.changed) + " / " + with_commas(r.kept) + " / " + with_commas(r.absent),
+                          with_commas(r.changed) + " / " + with_commas(r.kept) + " / " + with_commas(r.absent) + " / " + with_commas(r.adopted),
                           with_commas(r.faces) + " (" + with_commas(r.fresh_faces) + ")", fixed(r.refine.cpu, 3),
                           fixed(r.fresh.cpu, 2), fixed(r.fresh.cpu / r.refine.cpu, 1) + "×",
                           with_commas(static_cast<std::uint64_t>(rate)) + " " + verdict(rate >= kMinTrianglesPerSecond),
@@ -240,9 +241,10 @@ Table refine_table(const CutsMeasurement& m, const std::string& input)
         "0.7 bbox diagonals on +x, 0.2 up, looking at the centre (pixel error 4), then the same on −x, and `update_mesh` "
         "instead of `refine_mesh` (it coarsens behind and refines in front). Refine s: "
         "`refine_mesh(h, base, finer)` in place (CPU, once; the copy of the base mesh is not timed); fresh: `mesh_cut(h, finer)` "
-        "(CPU, once). Changed / kept / absent: tiles re-triangulated (refined, or merged groups) / left as they were (their region was not one disc, "
+        "(CPU, once). Changed / kept / absent / adopted: tiles re-triangulated (refined, or merged groups) / left as they were (their region was not one disc, "
         "would fold or would cross its surroundings; the cut after keeps them, so it can have fewer tiles than the fresh "
-        "one) / split with nothing of theirs in the mesh.",
+        "one) / split with nothing of theirs in the mesh / new tiles whose points lay in a neighbour's fan, given vertices by "
+        "re-triangulating that neighbour's region with theirs (`LocalRefineStats::adopted`).",
         "Output triangles/s: the whole refined mesh's faces / refine CPU seconds; it needs a meshed base cut, so it is "
         "the incremental path, not a cut meshed from the model alone (the table above). Distances: focus row, the "
         "points inside the sphere; budget and camera rows, every 40th point; bunny, every point; to the mesh, as fractions of the bbox "
