@@ -1333,8 +1333,13 @@ PlyHeader read_ply_header(Input& in)
             have_format = true;
         } else if (keyword == "element") {
             PlyElement element;
-            if (!tokens.next(a) || !tokens.next(b) || !parse_count(b, element.count) || tokens.next(c))
+            if (!tokens.next(a) || !tokens.next(b) || tokens.next(c))
                 fail_line(in, "expected 'element <name> <count>'");
+            // A count that is no whole number from 0 up, or too large for any file (QA round 50: 2e19 and
+            // -5 were told only the expected form).
+            if (!parse_count(b, element.count))
+                fail_line(in, "element " + quote_token(a) + " has count " + quote_token(b) +
+                                  ": not a whole number from 0 to 2^64 - 1");
             element.name = std::string(a);
             // Two vertex elements (two clouds' headers run together, 250 + 250): only the first would be
             // read, the second skipped as an element the reader does not need.

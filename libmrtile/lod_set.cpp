@@ -297,10 +297,16 @@ void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
 // 0.0077, and `lods` stopped at one level, since the error did not fall). So level 0 becomes the
 // tolerance cut at the best-N cut's tolerance: every node of it lies at or above a node of the best-N
 // cut (that node meets the tolerance), so it has at most as many tiles and the levels nest.
+// Level 0's faces at most: three quarters of its triangles (room for skirts in a tileset's root).
+std::size_t first_level_budget(const LodSetOptions& o)
+{
+    return (o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles) * 3 / 4;
+}
+
 LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& finest)
 {
     const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
-    const auto budget = static_cast<double>(triangles * 3 / 4);
+    const auto budget = static_cast<double>(first_level_budget(o));
     std::size_t tiles = std::max<std::size_t>(1, triangles / 32);
     LodLevel level;
     for (int attempt = 0; attempt < 6; ++attempt) {
@@ -310,6 +316,13 @@ LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& fine
         if (faces <= budget || tiles == 1)
             break;
         tiles = std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(tiles) * 0.9 * budget / faces));
+    }
+    if (level.cut.size() >= finest.size()) {
+        // The finest cut fits: it is the one level (its own tolerance cut is coarser where the finest
+        // ends at the noise floor: a 40k-point wedge got a level 0 of 907 tiles and a finest of 946,
+        // nearly the same mesh twice in its tileset, QA round 50).
+        level.tolerance = 0.0;
+        return level;
     }
     level.tolerance = cut_tolerance(h, level.cut);
     LodLevel nested;
@@ -420,7 +433,7 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
         levels.push_back(first_level(h, o, finest));
         tolerances = finer_tolerances(h, o, levels.front().tolerance, finest.size());
     }
-    const std::size_t meshed = levels.size();
+    std::size_t meshed = levels.size();
     // The finer levels are independent meshing jobs: cut them, mesh them on worker threads (largest
     // first), each in its place.
     std::vector<LodLevel> finer;
@@ -432,8 +445,24 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
         if (level.cut.size() > previous) // no finer than the previous level (e.g. below the build tolerance): skip
             finer.push_back(std::move(level));
     }
-    if (o.tolerances.empty() && o.levels == 0)
+    if (o.tolerances.empty() && o.levels == 0) {
         drop_small_steps(finer);
+        // Level 0 too is kept only with kMinLevelGrowth × its tiles in the next level; the finest is
+        // kept in its place where it would fit level 0's budget (by level 0's faces per tile).
+        while (meshed == 1 && !finer.empty() &&
+               static_cast<double>(finer.front().cut.size()) < kMinLevelGrowth * static_cast<double>(levels.front().cut.size())) {
+            if (finer.size() > 1) {
+                finer.erase(finer.begin());
+                continue;
+            }
+            const double faces_per_tile = static_cast<double>(levels.front().mesh.n_faces()) / static_cast<double>(levels.front().cut.size());
+            if (faces_per_tile * static_cast<double>(finer.front().cut.size()) <= static_cast<double>(first_level_budget(o))) {
+                levels.clear();
+                meshed = 0;
+            }
+            break;
+        }
+    }
     levels.reserve(meshed + finer.size());
     for (LodLevel& level : finer)
         levels.push_back(std::move(level));

@@ -42,7 +42,8 @@ struct LodSetOptions
     std::size_t first_level_triangles = 0;
     //! Number of levels; 0 = halve the tolerance until the cut reaches the hierarchy's leaves (at most
     //! max_levels), leaving out a level whose next finer one has less than 1.5× its tiles (a step
-    //! that adds a few tiles costs a whole mesh and shows nothing new).
+    //! that adds a few tiles costs a whole mesh and shows nothing new), level 0 included: where the
+    //! finest mesh fits level 0's budget it is the one level.
     std::size_t levels = 0;
     //! The most levels `levels = 0` makes (each halves the tolerance: 2^-16 of level 0's is below any
     //! scan's noise); an explicit `levels` may ask for more.

@@ -505,7 +505,7 @@ TEST(Cli, far_points_left_out_are_noted)
     EXPECT_EQ(r.out.find("from the mesh"), std::string::npos) << r.out;
     r = mrtile("reconstruct " + strays.string() + " -o " + (dir / "s.ply").string() + " --stats-json " + (dir / "s.json").string(), dir);
     EXPECT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(r.out.find("note: 2 input points lie far from the mesh (beyond 5% of the diagonal"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("note: 2 distinct input points lie far from the mesh (beyond 5% of the diagonal"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("they widen the diagonal"), std::string::npos) << r.out; // outside the mesh's extent
     const nlohmann::json j = nlohmann::json::parse(slurp(dir / "s.json"));
     EXPECT_EQ(j["far_points"].get<std::size_t>(), 2u);
@@ -965,7 +965,7 @@ TEST(Cli, huge_page_malloc_is_chosen_and_changes_no_output)
             ++files;
             EXPECT_EQ(slurp(entry.path()), slurp(dir / "h1" / fs::relative(entry.path(), dir / "h0"))) << entry.path();
         }
-    EXPECT_GE(files, 3u);
+    EXPECT_GE(files, 2u); // tileset.json and at least one tile (this small sphere's finest mesh is one level)
 }
 
 // `mesh --triangles N`: the mesh fits the target and comes close; combined with another cut kind it is

@@ -254,6 +254,31 @@ TEST(LodSet, a_wide_survey_gets_the_draco_bits_its_finest_level_needs)
 
 // A noisy sample's LOD set ends at its noise floor, not at the leaves (levels below it would mesh
 // noise: blobs that break the surface into pieces), and its first level is no finer than that.
+// QA round 50: a small noisy model got a level 0 nearly as fine as its finest level (a 40k-point wedge:
+// 907 and 946 tiles), so its tileset held about the same mesh twice: level 0 was cut at the tolerance
+// of the finest cut, which is coarser where the finest ends at the noise floor. Where the finest mesh
+// fits level 0's budget it is now the one level; otherwise every automatic level, level 0 included, has
+// at most 1/1.5 of the next one's tiles.
+TEST(LodSet, a_model_whose_finest_mesh_fits_level_0_is_one_level)
+{
+    PointCloud c = shapes::sphere(10000);
+    shapes::add_noise(c, 0.002);
+    const Hierarchy h = build_hierarchy(c);
+    LodSetOptions o;
+    o.tileset = false;
+    const std::vector<LodLevel> one = make_lod_levels(h, o);
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one.front().cut, cut_by_tolerance(h, 0.0));
+    EXPECT_LE(one.front().mesh.n_faces(), o.max_tile_triangles * 3 / 4);
+    o.first_level_triangles = 1024; // level 0 at most 768 faces: the finest (about 7,000) does not fit
+    const std::vector<LodLevel> several = make_lod_levels(h, o);
+    ASSERT_GE(several.size(), 2u);
+    EXPECT_LE(several.front().mesh.n_faces(), 768u);
+    EXPECT_EQ(several.back().cut, cut_by_tolerance(h, 0.0));
+    for (std::size_t k = 0; k + 1 < several.size(); ++k)
+        EXPECT_GE(static_cast<double>(several[k + 1].cut.size()), 1.5 * static_cast<double>(several[k].cut.size())) << k;
+}
+
 TEST(LodSet, noisy_sample_ends_at_the_noise_floor)
 {
     PointCloud c = shapes::sphere(30000);

@@ -1938,6 +1938,10 @@ TEST(ReadErrors, malformed_ply_headers)
         {"ply\nformat ascii 1.0\nelement vertex 1 12\n" + xyz + "end_header\n1 2 3\n", "line 3"},
         {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x extra\n", "line 4"},
         {"ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "property list uchar int l m\n", "line 7"},
+        // Counts out of range say so (QA round 50: only the expected form was given).
+        {"ply\nformat ascii 1.0\nelement vertex 20000000000000000000\n" + xyz + "end_header\n1 2 3\n",
+         "line 3: element 'vertex' has count '20000000000000000000': not a whole number from 0 to 2^64 - 1"},
+        {"ply\nformat ascii 1.0\nelement vertex -5\n" + xyz + "end_header\n1 2 3\n", "has count '-5'"},
     };
     for (std::size_t i = 0; i < cases.size(); ++i) {
         SCOPED_TRACE(cases[i].body);

@@ -739,16 +739,20 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     // Inside the mesh's own extent they are sampled surface the mesh leaves out, not strays (QA round 5).
     if (j.contains("far_points") && j["far_points"].is_number() && j["far_points"].get<std::size_t>() > 0) {
         const double diagonal = j.value("diagonal", 0.0);
+        // Counted after duplicates are merged (QA round 50: 5,000 "no return" points at the origin were
+        // "1 input points"): one point, one verb.
+        const std::size_t far = j["far_points"].get<std::size_t>();
+        const char* lie = far == 1 ? "point lies" : "points lie";
         if (j.value("mesh_diagonal", 0.0) < 0.9 * diagonal)
-            std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
+            std::printf("note: %zu distinct input %s far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
                         "tile's error): pieces too small to mesh or strays, left out (--remove-outliers drops strays); "
                         "they widen the diagonal (%.6g) that the fractions above are of\n",
-                        j["far_points"].get<std::size_t>(), 100.0 * kFarFraction, diagonal);
+                        far, lie, 100.0 * kFarFraction, diagonal);
         else
-            std::printf("note: %zu input points lie far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
+            std::printf("note: %zu distinct input %s far from the mesh (beyond %.0f%% of the diagonal and twice the coarsest "
                         "tile's error), within its extent: sampled surface the mesh leaves out (a hole over sparse "
-                        "points, or a piece too small to mesh)\n",
-                        j["far_points"].get<std::size_t>(), 100.0 * kFarFraction);
+                        "points, or a piece too small to mesh), or strays inside it (--remove-outliers drops strays)\n",
+                        far, lie, 100.0 * kFarFraction);
     }
     // Crossing faces were counted in the stats only (QA round 43: 207 pairs on a sampled fandisk, on
     // the console not a word).
@@ -1382,9 +1386,10 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
                          // viewer (QA round 43: the rocker arm's level 0 kept a 26-edge loop, said nowhere).
                          {"boundary_loops", q.topology.boundary_loops}, {"components", q.topology.components},
                          {"genus", q.topology.genus}});
-        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, %zu boundary loops, genus %d, mean/max distance %.3g/%.3g\n",
+        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, %zu boundary loops, %zu %s, genus %d, mean/max distance %.3g/%.3g\n",
                     level, l.tolerance, l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.topology.boundary_loops,
-                    q.topology.genus, q.point_to_mesh.mean, q.point_to_mesh.max);
+                    q.topology.components, q.topology.components == 1 ? "component" : "components", q.topology.genus,
+                    q.point_to_mesh.mean, q.point_to_mesh.max);
     }
     if (quality.size() < set.levels.size())
         std::printf("stopped after level %zu: the next level did not lower the measured mean error\n", quality.size() - 1);
