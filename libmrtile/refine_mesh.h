@@ -13,7 +13,7 @@
 //! squares. Nothing beyond the outline changes, so the mesh stays a 2-manifold, a closed surface stays
 //! closed with its genus, and no crack can open between refined and untouched tiles. The price, measured
 //! in the README against a fresh mesh_cut of the same cut: 1.06-1.3× its mean distance on a noisy torus,
-//! 1.6× on the bunny refined by two levels, 1.4-3.7× its maximum, 1.2-1.6× its faces (more where one
+//! 1.5× on the bunny refined by two levels, 1.4-3.7× its maximum, 1.2-1.6× its faces (more where one
 //! step refines a coarse curved tile many levels deep, and refinements chained over many steps drift:
 //! the bunny refined in five halvings, 4× the mean distance); none of mesh_cut's repairs (holes,
 //! pieces, slivers); a tile whose region, or else its fan alone, is not one disc that can be
