@@ -262,6 +262,11 @@ public:
         all_faces_.reset();
     }
 
+    // With LocalRefineOptions::refit (the quality mode): every region's new faces are tested against
+    // all faces near them, not only those within two rings of its outline (a terrain in a random run:
+    // 3 crossing faces that the ring test missed).
+    void test_against_all_faces() { file_all_faces(); }
+
     // Tiles new to the cut (`fresh`) that have no vertex in the mesh: their points lie beyond the
     // outline of the region they came from, in a neighbour's fan (their parent's points reach into a
     // neighbour's Voronoi cell: mesh_cut's tiles are cut at those cells, a node's own hull is not), or
@@ -1438,6 +1443,8 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
             changing.push_back(result.cut[k]);
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
+    if (options.refit && options.fit && options.no_crossings)
+        refiner.test_against_all_faces();
     Cut meshed, fresh;
     meshed.reserve(finer.size());
     for (std::size_t k = 0; k < result.cut.size(); ++k) {
@@ -1479,6 +1486,8 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
             changing.insert(changing.end(), runs[k].begin(), runs[k].end());
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
+    if (options.refit && options.fit && options.no_crossings)
+        refiner.test_against_all_faces();
     Cut meshed, fresh;
     meshed.reserve(result.cut.size());
     for (std::size_t k = 0; k < coarser.size(); ++k) {

@@ -55,8 +55,10 @@ struct LocalRefineOptions
     //! 1.91x the mean and 3.4x the maximum distance of a fresh mesh_cut without it, 1.21x and 1.6x with it;
     //! 0.01 to 0.005: 1.77x to 1.32x the mean, the maximum 1.14x to 0.77x; the benchmark's rows 12-25%
     //! nearer (the bunny row 0.000212 to 0.000158 of the diagonal, fresh 0.000139). New faces that then
-    //! cross a face beyond the copy get their new corners put back. Costs 3.5-5x the step's time (the
-    //! bunny row 0.11 to 0.45 s), so it is off by default: interaction wants the speed, and mesh_cut of
+    //! cross a face beyond the copy get their new corners put back, and every region's new faces are
+    //! tested against all faces near them (no_crossings tests those within two rings of the outline
+    //! only: a terrain in a random run kept 3 crossing faces). Costs 3.5-7x the step's time (the
+    //! bunny row 0.12 to 0.44 s), so it is off by default: interaction wants the speed, and mesh_cut of
     //! result.cut gives the fresh mesh at any time.
     bool refit = false;
     //! Test the new faces of each region against the faces within two rings of its outline, and leave
