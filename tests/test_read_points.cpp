@@ -1956,6 +1956,10 @@ TEST(ReadErrors, bad_values_name_the_line)
     struct Case { std::string name, body, expect; };
     const std::vector<Case> cases = {
         {"word.xyz", "1 2 3\n4 5 6\n7 eight 9\n", "line 3: 'eight' is not a number"},
+        // UTF-16 text, with and without its byte order mark (QA round 50: "'??1?' is not a number").
+        {"bom16.xyz", std::string("\xFF\xFE" "1\0 \0" "2\0 \0" "3\0\n\0", 14),
+         "line 1 opens with a UTF-16 byte order mark: UTF-16 text or binary data; save text as UTF-8 or ASCII"},
+        {"nul16.xyz", std::string("1\0 \0" "2\0 \0" "3\0\n\0", 12), "line 1 has NUL bytes"},
         {"nan.xyz", "1 2 3\n\n4 nan 6\n", "line 3"},
         {"inf.csv", "1,2,3\n-inf,5,6\n", "line 2"},
         {"huge.txt", "1 2 3\n1e999 5 6\n", "line 2"},
