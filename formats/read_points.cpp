@@ -1453,9 +1453,13 @@ VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_
 
 std::uint64_t list_length(const Input& in, const PlyElement& element, double value)
 {
-    if (!(value >= 0) || value != std::floor(value) || value > 4294967295.0)
-        throw InvalidInput(in.name() + ": bad list length " + std::to_string(value) + " in a " +
-                           element.name + " element");
+    if (!(value >= 0) || value != std::floor(value) || value > 4294967295.0) {
+        // Where it is, and the value as written (QA round 50: "bad list length -1.000000").
+        char written[32];
+        std::snprintf(written, sizeof written, "%.17g", value);
+        throw InvalidInput(in.name() + ": bad list length " + written + " in a " + element.name + " element (its count ends at byte " +
+                           std::to_string(in.offset()) + "): not a whole number from 0 to 2^32 - 1");
+    }
     return static_cast<std::uint64_t>(value);
 }
 

@@ -1915,6 +1915,26 @@ TEST(ReadErrors, ply_declaring_the_vertex_element_twice)
     expect_error<InvalidInput>([&] { read_points(binary); }, {binary.string(), "line 9: a second 'vertex' element"});
 }
 
+// A binary list count that is no length names where it is and the value as written (QA round 50:
+// "bad list length -1.000000").
+TEST(ReadErrors, a_negative_binary_list_count_names_its_byte)
+{
+    const fs::path dir = test_dir();
+    std::string body = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                       "property float z\nproperty list char int idx\nend_header\n";
+    const std::size_t header = body.size();
+    for (const float v : {1.0f, 2.0f, 3.0f})
+        body.append(reinterpret_cast<const char*>(&v), sizeof v);
+    body.push_back('\0');
+    for (const float v : {4.0f, 5.0f, 6.0f})
+        body.append(reinterpret_cast<const char*>(&v), sizeof v);
+    body.push_back(static_cast<char>(-1));
+    const fs::path path = write_file(dir / "negative_list.ply", body);
+    expect_error<InvalidInput>([&] { read_points(path); },
+                               {path.string(), "bad list length -1 in a vertex element (its count ends at byte " +
+                                                   std::to_string(header + 26) + "): not a whole number from 0 to 2^32 - 1"});
+}
+
 TEST(ReadErrors, malformed_ply_headers)
 {
     const fs::path dir = test_dir();
