@@ -1119,14 +1119,30 @@ PointCloud read_off(Input& in, const ReadOptions& options)
     const std::size_t most = fewest + (has('C') ? 4 : 0);
     PointCloud cloud;
     reserve_capped(cloud, vertex_count, kReserveCap, false);
+    // COFF colours (QA round 50: dropped without a word): 3 or 4 components after the normals (the
+    // Geomview order: normals, colour, texture), in 0-1 or 0-255 (ColorRange); a colour map index, or
+    // any vertex without components, leaves the cloud without colours.
+    bool all_colored = options.keep_colors && has('C');
+    ColorRange color_range;
+    std::vector<Rgba> colors;
+    const std::size_t colour_at = 3 + (has('N') ? 3 : 0);
     for (std::uint64_t i = 0; i < vertex_count; ++i) {
         if (!next_content_line(in, tokens, token))
             throw IoError(in.name() + ": truncated: file ends at line " + std::to_string(in.line_number()) +
                           " after " + std::to_string(i) + " of " + std::to_string(vertex_count) + " vertices");
         cloud.positions.push_back(position_on_line(in, tokens, token));
         std::size_t values = 3;
-        while (tokens.next(token))
+        double channels[4] = {0, 0, 0, 255};
+        while (tokens.next(token)) {
+            if (all_colored && values >= colour_at && values < colour_at + 4)
+                channels[values - colour_at] = number_on_line(in, token);
             ++values;
+        }
+        const std::size_t components = values >= fewest ? values - fewest : 0;
+        if (all_colored && (components == 3 || components == 4))
+            colors.push_back(color_range.to_bytes(channels, static_cast<int>(components), colors));
+        else
+            all_colored = false;
         if (values < fewest || values > most)
             fail_line(in, "vertex " + std::to_string(i) + " of " + std::to_string(vertex_count) + " has " +
                               std::to_string(values) + " values, a " + std::string(prefix) + "OFF vertex has " +
@@ -1140,6 +1156,8 @@ PointCloud read_off(Input& in, const ReadOptions& options)
     // then its colour up to the line's end. A vertex line where a face belongs (a coordinate that is no
     // count or index), a face too many, or any data when no face is declared is refused. Fewer faces
     // than declared leave the points whole, and read.
+    if (all_colored && vertex_count > 0)
+        cloud.colors = std::move(colors);
     const std::string declared = std::to_string(vertex_count) + " vertices" +
                                  (face_count == UINT64_MAX ? "" : " and " + std::to_string(face_count) + " faces");
     for (std::uint64_t f = 0; next_content_line(in, tokens, token); ++f) {

@@ -593,6 +593,25 @@ TEST(ReadOff, variants)
     });
 }
 
+// COFF colours (QA round 50: dropped without a word): 0-255 or 0-1, after the normals of NCOFF; a
+// colour map index gives no colours, and so do colours asked to be dropped.
+TEST(ReadOff, coff_colours_are_read)
+{
+    const fs::path dir = test_dir();
+    const PointCloud bytes = read_points(write_file(dir / "bytes.off", "COFF\n2 0 0\n0 0 0 255 0 0 255\n1 0 0 0 128 255 64\n"));
+    ASSERT_EQ(bytes.colors.size(), 2u);
+    EXPECT_EQ(bytes.colors[0], (std::array<std::uint8_t, 4>{255, 0, 0, 255}));
+    EXPECT_EQ(bytes.colors[1], (std::array<std::uint8_t, 4>{0, 128, 255, 64}));
+    const PointCloud unit = read_points(write_file(dir / "unit.off", "NCOFF\n2 0 0\n0 0 0 0 0 1 1 0 0\n1 0 0 0 0 1 0 0.5 1\n"));
+    ASSERT_EQ(unit.colors.size(), 2u);
+    EXPECT_EQ(unit.colors[0], (std::array<std::uint8_t, 4>{255, 0, 0, 255}));
+    EXPECT_EQ(unit.colors[1][2], 255);
+    EXPECT_TRUE(read_points(write_file(dir / "index.off", "COFF\n2 0 0\n0 0 0 7\n1 0 0 3\n")).colors.empty());
+    ReadOptions no_colours;
+    no_colours.keep_colors = false;
+    EXPECT_TRUE(read_points(dir / "bytes.off", no_colours).colors.empty());
+}
+
 TEST(ReadPoints, gzip_compressed_files_read_like_plain_ones)
 {
     const fs::path dir = test_dir();
