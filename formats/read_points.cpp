@@ -206,13 +206,12 @@ public:
             line.remove_prefix(3);
         // UTF-16 text (Windows' "Unicode"): every other byte of its digits is NUL (QA round 50: "'??1?' is
         // not a number", nothing of why).
-        if (line_number_ == 0 && (line.substr(0, 2) == "\xFF\xFE" || line.substr(0, 2) == "\xFE\xFF" ||
-                                  line.find('\0') != std::string_view::npos))
-            throw InvalidInput(name_ + ": line 1 " +
-                               (line.substr(0, 2) == "\xFF\xFE" || line.substr(0, 2) == "\xFE\xFF"
-                                    ? std::string("opens with a UTF-16 byte order mark")
-                                    : std::string("has NUL bytes")) +
-                               ": UTF-16 text or binary data; save text as UTF-8 or ASCII");
+        if (line_number_ == 0) {
+            const bool utf16_mark = line.substr(0, 2) == "\xFF\xFE" || line.substr(0, 2) == "\xFE\xFF";
+            if (utf16_mark || line.find('\0') != std::string_view::npos)
+                throw InvalidInput(name_ + ": line 1 " + (utf16_mark ? "opens with a UTF-16 byte order mark" : "has NUL bytes") +
+                                   ": UTF-16 text or binary data; save text as UTF-8 or ASCII");
+        }
         ++line_number_;
         return true;
     }

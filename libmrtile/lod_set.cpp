@@ -356,18 +356,22 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
 // Automatic levels halve the tolerance until the cut reaches the leaves; near the leaves a halving may
 // add only a few tiles (a noisy 1M-point torus: 84,935 tiles, then its 84,940 leaves), and such a level
 // costs a full mesh of the finest size for a viewer gain of nothing. Working back from the finest level
-// (the leaves, always kept), a level is kept only when the next kept one has kMinLevelGrowth × its tiles.
+// (the leaves, always kept), a level after level 0 (`first_tiles` tiles, kept) is kept only when the next
+// kept one has kMinLevelGrowth × its tiles and it has as much more than level 0.
 constexpr double kMinLevelGrowth = 1.5;
 
-void drop_small_steps(std::vector<LodLevel>& levels)
+void drop_small_steps(std::vector<LodLevel>& levels, std::size_t first_tiles)
 {
     if (levels.size() < 2)
         return;
     std::vector<LodLevel> kept;
     kept.push_back(std::move(levels.back()));
-    for (std::size_t i = levels.size() - 1; i-- > 0;)
-        if (static_cast<double>(kept.back().cut.size()) >= kMinLevelGrowth * static_cast<double>(levels[i].cut.size()))
+    for (std::size_t i = levels.size() - 1; i-- > 0;) {
+        const auto tiles = static_cast<double>(levels[i].cut.size());
+        if (static_cast<double>(kept.back().cut.size()) >= kMinLevelGrowth * tiles &&
+            tiles >= kMinLevelGrowth * static_cast<double>(first_tiles))
             kept.push_back(std::move(levels[i]));
+    }
     std::reverse(kept.begin(), kept.end());
     levels = std::move(kept);
 }
@@ -445,22 +449,17 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
         if (level.cut.size() > previous) // no finer than the previous level (e.g. below the build tolerance): skip
             finer.push_back(std::move(level));
     }
-    if (o.tolerances.empty() && o.levels == 0) {
-        drop_small_steps(finer);
-        // Level 0 too is kept only with kMinLevelGrowth × its tiles in the next level; the finest is
-        // kept in its place where it would fit level 0's budget (by level 0's faces per tile).
-        while (meshed == 1 && !finer.empty() &&
-               static_cast<double>(finer.front().cut.size()) < kMinLevelGrowth * static_cast<double>(levels.front().cut.size())) {
-            if (finer.size() > 1) {
-                finer.erase(finer.begin());
-                continue;
-            }
-            const double faces_per_tile = static_cast<double>(levels.front().mesh.n_faces()) / static_cast<double>(levels.front().cut.size());
+    if (o.tolerances.empty() && o.levels == 0) { // automatic levels: level 0 is first_level's
+        const LodLevel& first = levels.front();
+        drop_small_steps(finer, first.cut.size());
+        // The finest alone left, with under kMinLevelGrowth × level 0's tiles: it is the one level
+        // where it would fit level 0's budget (by level 0's faces per tile).
+        if (finer.size() == 1 && static_cast<double>(finer.front().cut.size()) < kMinLevelGrowth * static_cast<double>(first.cut.size())) {
+            const double faces_per_tile = static_cast<double>(first.mesh.n_faces()) / static_cast<double>(first.cut.size());
             if (faces_per_tile * static_cast<double>(finer.front().cut.size()) <= static_cast<double>(first_level_budget(o))) {
                 levels.clear();
                 meshed = 0;
             }
-            break;
         }
     }
     levels.reserve(meshed + finer.size());

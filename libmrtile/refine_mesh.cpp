@@ -81,6 +81,11 @@ public:
         for (const auto v : mesh_.vertices())
             if (wanted(cluster_[v]))
                 vertices_[cluster_[v]].push_back(v);
+        // With LocalRefineOptions::refit (the quality mode) every region's new faces are tested against
+        // all faces near them, not only those within two rings of its outline (a terrain in a random run:
+        // 3 crossing faces that the ring test missed).
+        if (options.refit && options.fit && options.no_crossings)
+            file_all_faces();
     }
 
     // Normals of the new faces and of the vertices whose faces changed (the rest keep theirs), before
@@ -224,7 +229,8 @@ public:
             mesh_.point(movable[k]) = copy.point(in_copy.at(movable[k].idx()));
         }
         // The fit undoes crossings within the copy; one with a face beyond it (a thin part's other
-        // side: the bunny's ear in a random run) puts the corners of the new faces involved back.
+        // side: the bunny's ear in a random run) puts the corners of the new faces involved back. The
+        // faces at a new vertex moved: they are filed again where they are now.
         file_all_faces();
         std::unordered_map<int, std::size_t> index;
         for (std::size_t k = 0; k < movable.size(); ++k)
@@ -237,35 +243,25 @@ public:
                            return true;
                        }),
                        suspects.end());
+        for (const auto f : suspects)
+            file_face(f);
         for (int pass = 0; pass < kRefitCrossingPasses && !suspects.empty(); ++pass) {
             std::vector<std::size_t> back;
-            for (const auto f : suspects) {
-                const BoundingBox box = triangle_box(face_corners(mesh_, f));
-                const bool crossed = all_faces_->any_candidate(box, [&](std::uint32_t id) {
-                    const Mesh::FaceHandle g(static_cast<int>(id));
-                    return g != f && !mesh_.status(g).deleted() && box.meets(triangle_box(face_corners(mesh_, g))) && faces_intersect(mesh_, f, g);
-                });
-                if (crossed)
+            for (const auto f : suspects)
+                if (crosses_a_filed_face(f, [&](Mesh::FaceHandle g) { return g == f; }))
                     for (const auto v : mesh_.fv_range(f))
                         if (const auto it = index.find(v.idx()); it != index.end() && mesh_.point(v) != before[it->second])
                             back.push_back(it->second);
-            }
             suspects.clear();
             for (const std::size_t k : back) {
                 mesh_.point(movable[k]) = before[k];
                 for (const auto g : mesh_.vf_range(movable[k])) {
-                    all_faces_->insert(static_cast<std::uint32_t>(g.idx()), triangle_box(face_corners(mesh_, g)));
+                    file_face(g);
                     suspects.push_back(g);
                 }
             }
         }
-        all_faces_.reset();
     }
-
-    // With LocalRefineOptions::refit (the quality mode): every region's new faces are tested against
-    // all faces near them, not only those within two rings of its outline (a terrain in a random run:
-    // 3 crossing faces that the ring test missed).
-    void test_against_all_faces() { file_all_faces(); }
 
     // Tiles new to the cut (`fresh`) that have no vertex in the mesh: their points lie beyond the
     // outline of the region they came from, in a neighbour's fan (their parent's points reach into a
@@ -384,13 +380,16 @@ private:
     static constexpr std::size_t kAdoptionVertices = 24;
     static constexpr double kAdoptionMinCos = 0.5;
 
-    // Files every face of the mesh in all_faces_ (cells twice the mean edge length): a host's new faces
-    // are tested against every face near them, not only those within two rings of its outline. An
-    // orphan's points can lie on another sheet that its host's plane sees through the host's region
-    // (the bunny refined from 0.01 to 0.002: three faces of an ear crossed).
-    // Returns the cell size.
+    // Files every face of the mesh in all_faces_ (cells twice the mean edge length), once per refiner:
+    // faces added later are filed as they are added (replace_faces), faces whose corners moved again
+    // (refit), and deleted ones are skipped when met. A host's new faces are tested against every face
+    // near them, not only those within two rings of its outline: an orphan's points can lie on another
+    // sheet that its host's plane sees through the host's region (the bunny refined from 0.01 to 0.002:
+    // three faces of an ear crossed). Returns the cell size.
     double file_all_faces()
     {
+        if (all_faces_)
+            return all_faces_cell_;
         double sum = 0.0;
         std::size_t edges = 0;
         for (const auto e : mesh_.edges())
@@ -398,31 +397,38 @@ private:
                 sum += mesh_.calc_edge_length(e);
                 ++edges;
             }
-        const double cell = edges > 0 && sum > 0.0 ? 2.0 * sum / static_cast<double>(edges) : 1.0;
-        all_faces_.emplace(cell);
+        all_faces_cell_ = edges > 0 && sum > 0.0 ? 2.0 * sum / static_cast<double>(edges) : 1.0;
+        all_faces_.emplace(all_faces_cell_);
         for (const auto f : mesh_.faces())
-            all_faces_->insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
-        return cell;
+            file_face(f);
+        return all_faces_cell_;
+    }
+
+    // Files a face in all_faces_ where it is now.
+    void file_face(Mesh::FaceHandle f) { all_faces_->insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f))); }
+
+    // Whether face f crosses a face filed in all_faces_ that is not deleted nor `skip`ped.
+    template <typename Skip>
+    bool crosses_a_filed_face(Mesh::FaceHandle f, const Skip& skip) const
+    {
+        const BoundingBox box = triangle_box(face_corners(mesh_, f));
+        return all_faces_->any_candidate(box, [&](std::uint32_t id) {
+            const Mesh::FaceHandle g(static_cast<int>(id));
+            return !mesh_.status(g).deleted() && !skip(g) && box.meets(triangle_box(face_corners(mesh_, g))) &&
+                   faces_intersect(mesh_, f, g);
+        });
     }
 
     // Whether a new face crosses a face of all_faces_ (none filed: false). The new faces are marked in
-    // face_stamp_ by crosses_surroundings, which runs first.
+    // face_stamp_ by crosses_surroundings, which runs first: they are tested against each other by
+    // construction, and the faces it tested are skipped too.
     bool crosses_anything(const std::vector<Mesh::FaceHandle>& added)
     {
         if (!all_faces_)
             return false;
-        for (const auto f : added) {
-            const BoundingBox box = triangle_box(face_corners(mesh_, f));
-            const bool hit = all_faces_->any_candidate(box, [&](std::uint32_t id) {
-                const Mesh::FaceHandle g(static_cast<int>(id));
-                if (mesh_.status(g).deleted() || face_stamp_[id] == stamp_)
-                    return false; // gone, or one of the new faces (tested against each other by construction)
-                return box.meets(triangle_box(face_corners(mesh_, g))) && faces_intersect(mesh_, f, g);
-            });
-            if (hit)
-                return true;
-        }
-        return false;
+        return std::any_of(added.begin(), added.end(), [&](Mesh::FaceHandle f) {
+            return crosses_a_filed_face(f, [&](Mesh::FaceHandle g) { return face_stamp_[static_cast<std::size_t>(g.idx())] == stamp_; });
+        });
     }
 
     // Whether the node has a vertex in the mesh (v:cluster = node).
@@ -1044,7 +1050,7 @@ private:
                 fans_[tile_[f]].push_back(f);
             touched_faces_.push_back(f);
             if (all_faces_)
-                all_faces_->insert(static_cast<std::uint32_t>(f.idx()), triangle_box(face_corners(mesh_, f)));
+                file_face(f);
         }
         touched_vertices_.insert(touched_vertices_.end(), corner.begin(), corner.end());
         created_.insert(created_.end(), corner.begin() + static_cast<std::ptrdiff_t>(outline.size()), corner.end());
@@ -1270,7 +1276,8 @@ private:
     std::vector<std::uint32_t> face_stamp_; // per face: the crossing test's call that last saw it
     std::vector<std::uint32_t> vertex_stamp_; // per vertex: the same, for the vertices whose faces were taken
     std::uint32_t stamp_ = 0;
-    std::optional<BoxGrid> all_faces_; // every face, filed once orphans are to be adopted (file_all_faces)
+    std::optional<BoxGrid> all_faces_; // every face, filed when first needed (file_all_faces)
+    double all_faces_cell_ = 0.0;      // its cell size
     std::vector<Mesh::VertexHandle> created_; // vertices added (refit)
 };
 
@@ -1443,8 +1450,6 @@ LocalRefineStats refine_in_place(const Hierarchy& h, MeshResult& result, const C
             changing.push_back(result.cut[k]);
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
-    if (options.refit && options.fit && options.no_crossings)
-        refiner.test_against_all_faces();
     Cut meshed, fresh;
     meshed.reserve(finer.size());
     for (std::size_t k = 0; k < result.cut.size(); ++k) {
@@ -1486,8 +1491,6 @@ LocalRefineStats coarsen_in_place(const Hierarchy& h, MeshResult& result, const 
             changing.insert(changing.end(), runs[k].begin(), runs[k].end());
     LocalRefineStats stats;
     LocalRefiner refiner(h, result, options, changing);
-    if (options.refit && options.fit && options.no_crossings)
-        refiner.test_against_all_faces();
     Cut meshed, fresh;
     meshed.reserve(result.cut.size());
     for (std::size_t k = 0; k < coarser.size(); ++k) {
