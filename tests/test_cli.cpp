@@ -1655,6 +1655,12 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
         EXPECT_EQ(index[l]["genus"].get<int>(), 0); // the bunny: open at its base, no handle at any level
         EXPECT_GE(index[l]["boundary_loops"].get<std::size_t>(), 1u);
         EXPECT_NE(r.out.find("level " + std::to_string(l) + ": tolerance"), std::string::npos) << r.out;
+        // Each level's pieces on the console too (QA round 50: in lods.json only).
+        const std::size_t pieces = index[l]["components"].get<std::size_t>();
+        EXPECT_NE(r.out.find(std::to_string(index[l]["boundary_loops"].get<std::size_t>()) + " boundary loops, " +
+                             std::to_string(pieces) + (pieces == 1 ? " component, genus " : " components, genus ")),
+                  std::string::npos)
+            << r.out;
         EXPECT_LT(index[l]["mesh_to_points_max"].get<double>(), 0.05); // no spike off the bunny
         if (l > 0) {
             EXPECT_LE(index[l]["mean_error"].get<double>(), index[l - 1]["mean_error"].get<double>());
