@@ -157,17 +157,29 @@ mode_t special_target(const std::filesystem::path& path)
     return st.st_mode;
 }
 
-// Opens the writing end of a special target without blocking: a pipe that no process reads would
-// block the write forever, and is refused instead. Returns the descriptor.
+// How long a pipe may go without a reader before it is refused: a reader started just before the
+// writer (`cat pipe > file & mrtile ... -o pipe`, a process substitution) may not have opened its end
+// yet. Refused at once, that race was lost on a loaded machine, and the reader then waited for ever
+// for a writer (the CLI test of a pipe hung until ctest's timeout).
+constexpr int kPipeReaderWaitMilliseconds = 2000;
+
+// Opens the writing end of a special target without blocking: a pipe that no process reads (for
+// kPipeReaderWaitMilliseconds) would block the write forever, and is refused instead. Returns the
+// descriptor.
 int open_without_blocking(const std::filesystem::path& path)
 {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) {
+    for (int waited = 0;; waited += 10) {
+        const int fd = ::open(path.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+        if (fd >= 0)
+            return fd;
         const int error = errno;
+        if (error == ENXIO && waited < kPipeReaderWaitMilliseconds) {
+            ::usleep(10000);
+            continue;
+        }
         throw IoError(path.string() + (error == ENXIO ? ": is a pipe that no process reads"
                                                       : ": cannot open for writing (" + std::string(std::strerror(error)) + ")"));
     }
-    return fd;
 }
 
 // An empty path names no file: the temporary was made as ".tmp.<pid>" in the working directory and

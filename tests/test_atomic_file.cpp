@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
 #include <fcntl.h>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include <string>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
@@ -197,6 +199,35 @@ TEST(AtomicFile, a_pipe_is_written_as_it_is)
     ASSERT_EQ(::stat(pipe.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode));
     EXPECT_EQ(entries(dir), 1u); // no temporary left
+}
+
+// A reader that opens the pipe a moment after the writer starts gets the text (a CLI test's
+// `cat pipe &` lost that race on a loaded machine: refused at once, and cat waited for ever).
+TEST(AtomicFile, a_pipe_read_a_moment_later_is_written)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    const fs::path pipe = dir / "late.json";
+    ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+    std::string received;
+    std::thread reader([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        const int fd = ::open(pipe.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC); // never blocks the join
+        if (fd < 0)
+            return;
+        char buffer[64];
+        // Until the text is in or 5 s passed: before the writer opens, a read finds no data.
+        for (int polls = 0; received.size() < 16 && polls < 500; ++polls) {
+            const ssize_t n = ::read(fd, buffer, sizeof buffer);
+            if (n > 0)
+                received.append(buffer, static_cast<std::size_t>(n));
+            else
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        ::close(fd);
+    });
+    EXPECT_NO_THROW(write_file_atomically(pipe, "through the pipe"));
+    reader.join();
+    EXPECT_EQ(received, "through the pipe");
 }
 
 // A process stopped by SIGTERM while it holds a temporary file and a half-written temporary
