@@ -2537,8 +2537,8 @@ PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOp
             if (options.skip_missing_scans)
                 continue;
             throw IoError(name + ": line " + std::to_string(scan.line) + ": " + scan.path.string() +
-                          ": no such file (to read the scans that exist, set skip_missing_scans; CLI: "
-                          "--skip-missing-scans)");
+                          ": no such file (to read the scans that exist: --skip-missing-scans, or "
+                          "ReadOptions::skip_missing_scans through the API)");
         }
         // A scan's error names the list and its line too: the list is what the user gave.
         const std::string where = name + ": line " + std::to_string(scan.line) + ": ";

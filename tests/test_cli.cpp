@@ -542,6 +542,13 @@ TEST(Cli, far_points_left_out_are_noted)
     EXPECT_EQ(j["far_points"].get<std::size_t>(), 2u);
     EXPECT_NEAR(j["diagonal"].get<double>(), 2000.0, 1.0);
     EXPECT_LT(j["mesh_diagonal"].get<double>(), 4.0);
+    // One stray given five times is one distinct point, and one point takes the singular (QA round 50:
+    // 5,000 "no return" points at the origin were "1 input points").
+    const fs::path one = dir / "one.xyz";
+    write_text(one, text + "1000 0 0\n1000 0 0\n1000 0 0\n1000 0 0\n1000 0 0\n");
+    r = mrtile("reconstruct " + one.string() + " -o " + (dir / "o.ply").string(), dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("note: 1 distinct input point lies far from the mesh"), std::string::npos) << r.out;
     // A blob of 20 points at the sphere's centre: far from the mesh, but inside its extent, so no stray
     // that widens the diagonal.
     std::string blob;
@@ -1477,7 +1484,8 @@ TEST(Cli, stanford_scan_list)
     EXPECT_EQ(missing.code, 1);
     EXPECT_NE(missing.err.find("bun.conf: line 4: "), std::string::npos) << missing.err;
     EXPECT_NE(missing.err.find("bun090.ply: no such file"), std::string::npos) << missing.err;
-    EXPECT_NE(missing.err.find("--skip-missing-scans"), std::string::npos) << missing.err;
+    // The CLI's flag comes first: the library's field name is for API users (QA round 50).
+    EXPECT_NE(missing.err.find("no such file (to read the scans that exist: --skip-missing-scans"), std::string::npos) << missing.err;
     EXPECT_FALSE(fs::exists(dir / "m.ply"));
     const Result r = mrtile("reconstruct " + conf + " --skip-missing-scans -o " + (dir / "m.ply").string() +
                                 " --stats-json " + (dir / "m.json").string(),
