@@ -154,9 +154,12 @@ public:
 private:
     std::array<std::int64_t, 3> cell(const Vec3& p) const
     {
-        return {static_cast<std::int64_t>(std::floor((p.x - origin_.x) / reach_)),
-                static_cast<std::int64_t>(std::floor((p.y - origin_.y) / reach_)),
-                static_cast<std::int64_t>(std::floor((p.z - origin_.z) / reach_))};
+        // Clamped before the cast: a reach of 1e-300 made cell numbers past the int64 range (undefined;
+        // QA round 51). Keys keep 21 bits of each anyway.
+        const auto index = [&](double offset) {
+            return static_cast<std::int64_t>(std::clamp(std::floor(offset / reach_), -0x1p52, 0x1p52));
+        };
+        return {index(p.x - origin_.x), index(p.y - origin_.y), index(p.z - origin_.z)};
     }
     static std::uint64_t key(const std::array<std::int64_t, 3>& c)
     {
@@ -693,6 +696,9 @@ bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh
 
 double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::FaceHandle>& faces, double reach)
 {
+    for (const Mesh::FaceHandle f : faces)
+        if (!f.is_valid() || f.idx() >= static_cast<int>(mesh.n_faces()) || (mesh.has_face_status() && mesh.status(f).deleted()))
+            throw InvalidInput("area_off_the_sample: face handle " + std::to_string(f.idx()) + " is no face of the mesh");
     if (!(reach > 0.0) || !std::isfinite(reach) || faces.empty())
         return 0.0;
     std::vector<std::array<Vec3, 3>> triangles;

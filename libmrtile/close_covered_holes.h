@@ -84,7 +84,7 @@ bool is_sample_hole(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh
 //! spanning a hole of the sample have some; faces over sampled surface none (how mesh_cut's crack
 //! rounds tell a hole's rim from a crack). 0 for a `reach` that is not positive and finite.
 double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const BoundingBox& box, double reach);
-//! The same for the given faces.
+//! The same for the given faces. \throw InvalidInput if a handle is no live face of `mesh`.
 double area_off_the_sample(const Mesh& mesh, const Hierarchy& h, const std::vector<Mesh::FaceHandle>& faces, double reach);
 
 } // namespace mrt

@@ -4,11 +4,13 @@
 // quality measures and the fit already trust (CGAL AABB tree, deterministic on any thread count).
 #include "libmrtile/color_vertices.h"
 
+#include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace mrt {
@@ -32,6 +34,10 @@ std::array<double, 3> barycentric(const Vec3& q, const Vec3& a, const Vec3& b, c
 
 std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptions& options)
 {
+    // One colour per point or none: fewer were read past their end (QA round 51: 10 colours, 4,000 points).
+    if (cloud.has_colors() && cloud.colors.size() != cloud.positions.size())
+        throw InvalidInput("color_vertices: the cloud has " + std::to_string(cloud.colors.size()) + " colours for " +
+                           std::to_string(cloud.positions.size()) + " points (one per point, or none)");
     if (!options.enabled || !cloud.has_colors() || mesh.n_faces() == 0 || cloud.empty())
         return 0;
     const std::size_t n = mesh.n_vertices();

@@ -36,6 +36,7 @@ struct ColorOptions
 //! requests the mesh's vertex colour property. The mesh must be in the cloud's coordinates (positions
 //! relative to its origin, as mesh_cut makes them). Deterministic. Returns the number of points used;
 //! 0 (and the mesh left as it is) when the cloud has no colours, the mesh no face, or !options.enabled.
+//! \throw InvalidInput if the cloud has colours but not one per point.
 std::size_t color_vertices(Mesh& mesh, const PointCloud& cloud, const ColorOptions& options = {});
 
 } // namespace mrt

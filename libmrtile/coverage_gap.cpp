@@ -615,11 +615,12 @@ std::size_t coverage_stride(std::size_t count, const CoverageOptions& options)
     return options.max_points > 0 && count > options.max_points ? (count + options.max_points - 1) / options.max_points : 1;
 }
 
-double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, const CoverageOptions& options,
-                    const std::vector<Vec3>& fill)
+namespace {
+
+// A NaN point, axis or option made the grid or the hole test NaN, and the gap came out 0 (no hole)
+// without a word; set_coverage_gaps clamped a NaN sample_fraction (QA round 51).
+void check_coverage_options(const CoverageOptions& options)
 {
-    // A NaN point, axis or option made the grid or the hole test NaN, and the gap came out 0 (no hole)
-    // without a word.
     if (!(options.points_per_cell > 0.0) || !std::isfinite(options.points_per_cell) || !(options.min_radius_spacings >= 0.0) ||
         !std::isfinite(options.min_radius_spacings) || !(options.min_missing_points >= 0.0) ||
         !std::isfinite(options.min_missing_points) || !(options.sample_fraction >= 0.0 && options.sample_fraction <= 1.0) ||
@@ -627,6 +628,14 @@ double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const V
         !(options.min_sample_radius_spacings >= 0.0) || !std::isfinite(options.min_sample_radius_spacings))
         throw InvalidInput("CoverageOptions: points_per_cell must be finite and > 0, sample_fraction in [0, 1], the other "
                            "fields finite and >= 0");
+}
+
+} // namespace
+
+double coverage_gap(const std::vector<Vec3>& points, const Vec3& axis_u, const Vec3& axis_v, const CoverageOptions& options,
+                    const std::vector<Vec3>& fill)
+{
+    check_coverage_options(options);
     if (!is_finite(axis_u) || !is_finite(axis_v))
         throw InvalidInput("coverage_gap: the axes must be finite");
     for (const std::vector<Vec3>* set : {&points, &fill})
@@ -716,6 +725,7 @@ double children_separation(const Hierarchy& h, const Node& n, const CoverageOpti
 
 void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions& options)
 {
+    check_coverage_options(options);
     const std::size_t count = h.nodes.size();
     std::vector<double> gap(count, 0.0);
     run_parallel_ranges(count, 256, threads, [&](std::size_t begin, std::size_t end) {

@@ -364,10 +364,13 @@ bool in_view(const Node& node, const Camera& camera)
 
 Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
 {
+    // Finite too: an infinite viewport height refined every node to the leaves, an infinite pixel error
+    // kept the root alone (QA round 51).
     if (!(camera.fov_y_degrees > 0 && camera.fov_y_degrees < 180) || !(camera.viewport_height > 0) ||
-        !(camera.max_pixel_error > 0) || !is_finite(camera.position) || !is_finite(camera.direction) ||
-        !(camera.aspect > 0) || !std::isfinite(camera.aspect) || !(camera.out_of_view_factor >= 1))
-        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive viewport height, pixel error and aspect, "
+        !std::isfinite(camera.viewport_height) || !(camera.max_pixel_error > 0) || !std::isfinite(camera.max_pixel_error) ||
+        !is_finite(camera.position) || !is_finite(camera.direction) || !(camera.aspect > 0) || !std::isfinite(camera.aspect) ||
+        !(camera.out_of_view_factor >= 1))
+        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive, finite viewport height, pixel error and aspect, "
                            "an out-of-view factor of at least 1, and a finite position and direction");
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];

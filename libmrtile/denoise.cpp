@@ -103,6 +103,9 @@ double denoise_points(std::vector<Vec3>& positions, const DenoiseOptions& option
     if (options.neighbours < 6)
         throw InvalidInput("DenoiseOptions: neighbours must be at least 6 (a quadric has 6 coefficients), got " +
                            std::to_string(options.neighbours));
+    // NaN compared false everywhere and kept every isolated point (QA round 51).
+    if (!(options.isolated_ratio >= 0.0) || !std::isfinite(options.isolated_ratio))
+        throw InvalidInput("DenoiseOptions: isolated_ratio must be finite and >= 0 (0: every point moves)");
     const std::size_t n = positions.size();
     for (std::size_t i = 0; i < n; ++i)
         if (!is_finite(positions[i]))

@@ -504,7 +504,7 @@ std::size_t revert_intersecting(Mesh& mesh, const std::vector<Mesh::Point>& star
 
 } // namespace
 
-FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options)
+void check_fit_options(const FitOptions& options)
 {
     // max_flip_angle_degrees too: a NaN or negative limit was taken without a word (NaN refused no cap).
     if (options.rounds < 0 || options.rounds > kMaxFitRounds || !(options.damping > 0.0) || !(options.max_move >= 0.0) || !std::isfinite(options.damping) ||
@@ -512,6 +512,13 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         !(options.max_flip_angle_degrees >= 0.0 && options.max_flip_angle_degrees <= 180.0))
         throw InvalidInput("fit_vertices: rounds must be in [0, " + std::to_string(kMaxFitRounds) + "], damping > 0, max_move >= 0 (finite), "
                            "max_flip_angle_degrees in [0, 180], and a vertical fit needs a non-zero axis");
+    // The relaxation runs inside every round: checked here, not only once a round relaxes.
+    check_relax_options(options.relax);
+}
+
+FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options)
+{
+    check_fit_options(options);
     const auto start = std::chrono::steady_clock::now();
     FitStats stats;
     if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)

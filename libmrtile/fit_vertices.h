@@ -95,6 +95,10 @@ struct FitStats
     std::vector<std::pair<int, int>> intersecting_pairs;
 };
 
+//! \throw InvalidInput if an option is out of range, the relaxation's included (what fit_vertices checks
+//! first).
+void check_fit_options(const FitOptions& options);
+
 //! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates
 //! the face and vertex normals. A mesh without faces, or no points, is left unchanged.
 //! \throw InvalidInput if an option is out of range or a point is not finite.

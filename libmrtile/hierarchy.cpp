@@ -370,7 +370,8 @@ void derive_noise_floor(Hierarchy& h)
 
 double typical_move(const Hierarchy& h, std::size_t begin, std::size_t count)
 {
-    if (count == 0 || begin + count > h.denoise_moves.size())
+    // Compared without the sum, which a count of SIZE_MAX wrapped round (QA round 51).
+    if (count == 0 || begin > h.denoise_moves.size() || count > h.denoise_moves.size() - begin)
         return 0.0;
     std::vector<float> moves(h.denoise_moves.begin() + static_cast<std::ptrdiff_t>(begin),
                              h.denoise_moves.begin() + static_cast<std::ptrdiff_t>(begin + count));

@@ -499,6 +499,10 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     check_lod_options(h, o);
     if (levels.empty())
         throw InvalidInput("lods: no levels");
+    // The caller vouches that the levels are h's, but a cut naming no node of h was read out of bounds
+    // (QA round 51); the check costs nothing next to the tiling.
+    for (std::size_t k = 0; k < levels.size(); ++k)
+        check_cut(h, levels[k].cut, "lods: level " + std::to_string(k));
     LodSet set;
     set.levels = std::move(levels);
     if (!o.tileset)

@@ -529,6 +529,9 @@ bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
 // touching the other face; a shared edge, the two faces folded onto each other (coplanar, same side).
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
 {
+    for (const Mesh::FaceHandle h : {f, g})
+        if (!h.is_valid() || h.idx() >= static_cast<int>(mesh.n_faces()))
+            throw InvalidInput("faces_intersect: face handle " + std::to_string(h.idx()) + " is no face of the mesh");
     return corners_intersect(mesh, face_vertices(mesh, f), face_vertices(mesh, g));
 }
 

@@ -603,6 +603,14 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
         throw InvalidInput("save_model: the hierarchy's build info has " + bad);
     if (h.cloud.viewpoint && !plausible_viewpoint(*h.cloud.viewpoint))
         throw InvalidInput("save_model: the cloud's viewpoint is not finite or too far out to measure from");
+    // And what load_model checks of the tree, the node statistics and input_index (O(points + nodes)): a
+    // hierarchy changed in memory was written over a good file, which then did not load (QA round 51).
+    const std::string none, who = "save_model: the hierarchy";
+    try {
+        check_structure(h, Reader(none, who));
+    } catch (const IoError& e) {
+        throw InvalidInput(std::string(e.what()) + " (it would not load)");
+    }
     std::string out;
     out.reserve(kHeaderSize + n * (24 + 4 + (h.cloud.has_colors() ? 4 : 0)) + h.nodes.size() * kNodeSize + kTrailerSize);
     Writer w(out);
@@ -675,8 +683,19 @@ std::string serialize_model(const Hierarchy& h, const SaveOptions& options)
     if (denoise_move)
         for (const float m : h.denoise_moves)
             w.f32(m);
-    if (levels)
+    if (levels) {
+        const std::size_t levels_at = out.size();
         write_levels(w, out, *options.levels);
+        // Read back as load_model_with_levels reads them: levels of another hierarchy, a cut naming no
+        // node or a non-finite error were stored and refused only on the next load (QA round 51).
+        Reader back(out, who);
+        back.skip(levels_at + 8); // past the section's size
+        try {
+            read_levels(back, out.size(), h);
+        } catch (const IoError& e) {
+            throw InvalidInput(std::string(e.what()) + " (they would not load)");
+        }
+    }
     const std::uint64_t payload = out.size() - kHeaderSize;
     w.patch_u64(payload_size_at, payload);
     w.u32(crc(out, out.size()));

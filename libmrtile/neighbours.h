@@ -20,6 +20,8 @@ class NearestNeighbours
 public:
     //! Builds the search structure over `positions` (finite), which must outlive this object.
     explicit NearestNeighbours(const std::vector<Vec3>& positions);
+    //! The positions are kept by reference: a temporary would be gone before the first query.
+    explicit NearestNeighbours(std::vector<Vec3>&& positions) = delete;
     ~NearestNeighbours();
     NearestNeighbours(const NearestNeighbours&) = delete;
     NearestNeighbours& operator=(const NearestNeighbours&) = delete;

@@ -821,6 +821,23 @@ void refine_crossings(const Hierarchy& h, const MeshOptions& options, MeshResult
 
 } // namespace
 
+void check_mesh_options(const MeshOptions& options)
+{
+    for (const int rounds : {options.small_object_rounds, options.gap_rounds, options.dropped_rounds, options.piece_rounds,
+                             options.crack_rounds, options.crossing_rounds})
+        if (rounds < 0 || rounds > kMaxRefineRounds)
+            throw InvalidInput("MeshOptions: small_object_rounds, gap_rounds, dropped_rounds, piece_rounds, crack_rounds and crossing_rounds must be in [0, " +
+                               std::to_string(kMaxRefineRounds) + "]");
+    // Before any work: mesh_cut untangles only when max_rounds > 0 and the mesh crosses itself, so bad
+    // untangling options were otherwise taken without a word; the fit and slivers' options were checked
+    // only once the surface was built.
+    check_untangle_options(options.untangle);
+    check_surface_options(options.surface);
+    check_tile_options(options.tiles);
+    check_fit_options(options.fit);
+    check_sliver_options(options.slivers);
+}
+
 MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& options)
 {
     // A default-constructed hierarchy is a partition by every empty cut, and build_surface then spoke of
@@ -836,15 +853,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     std::sort(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) {
         return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
     });
-    for (const int rounds : {options.small_object_rounds, options.gap_rounds, options.dropped_rounds, options.piece_rounds,
-                             options.crack_rounds, options.crossing_rounds})
-        if (rounds < 0 || rounds > kMaxRefineRounds)
-            throw InvalidInput("MeshOptions: small_object_rounds, gap_rounds, dropped_rounds, piece_rounds, crack_rounds and crossing_rounds must be in [0, " +
-                               std::to_string(kMaxRefineRounds) + "]");
-    // Before any work: mesh_cut untangles only when max_rounds > 0 and the mesh crosses itself, so bad
-    // untangling options were otherwise taken without a word.
-    check_untangle_options(options.untangle);
-    check_surface_options(options.surface);
+    check_mesh_options(options);
     const auto start = std::chrono::steady_clock::now();
     MeshResult result;
     result.cut = cut;

@@ -129,7 +129,13 @@ struct MeshResult
     double seconds = 0.0; //!< tiles + surface + slivers + fit (with its relaxation) + colours
 };
 
-//! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points.
+//! \brief What mesh_cut checks of its options before any work: the rounds, and the options of the tiles,
+//! the surface, the fit (its relaxation too), the slivers' removal and the untangling. \throw InvalidInput
+//! naming the first option out of range.
+void check_mesh_options(const MeshOptions& options);
+
+//! Tiles the cut and meshes it. \throw InvalidInput if the cut is not a partition of the points, or as
+//! check_mesh_options.
 MeshResult mesh_cut(const Hierarchy& h, const Cut& cut, const MeshOptions& options = {});
 
 struct TriangleCountResult

@@ -1292,6 +1292,14 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     if (!(options.min_separation >= 0.0) || !std::isfinite(options.min_separation))
         throw InvalidInput("LocalRefineOptions::min_separation must be a finite number >= 0");
     check_tile_options(options.tiles);
+    // The options of a step meshed afresh, checked before the first step changes anything: a bad one
+    // was found only when a step was meshed afresh, after the in-place step had changed `result` (QA
+    // round 51: 335 -> 152 tiles), and its message named SurfaceOptions.
+    try {
+        check_mesh_options(options.remesh);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string(name) + ": LocalRefineOptions::remesh: " + e.what());
+    }
     if (!(options.max_kept_share >= 0.0) || !std::isfinite(options.max_kept_share))
         throw InvalidInput("LocalRefineOptions::max_kept_share must be a finite number >= 0 (1 or more: never mesh afresh)");
     if (!(options.max_step_ratio >= 1.0)) // infinity: never
@@ -1315,14 +1323,26 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     std::vector<char> in_cut(h.nodes.size(), 0);
     for (const std::int32_t node : result.cut)
         in_cut[static_cast<std::size_t>(node)] = 1;
-    OpenMesh::FPropHandleT<int> tile;
-    result.mesh.get_property_handle(tile, kFaceTile);
-    for (const auto f : result.mesh.faces()) {
-        const int node = result.mesh.property(tile, f);
+    const auto check_tile = [&](const char* element, int index, int node) {
         if (node >= 0 && (static_cast<std::size_t>(node) >= in_cut.size() || !in_cut[static_cast<std::size_t>(node)]))
-            throw InvalidInput(std::string(name) + ": face " + std::to_string(f.idx()) + " of result.mesh names tile " +
+            throw InvalidInput(std::string(name) + ": " + element + " " + std::to_string(index) + " of result.mesh names tile " +
                                std::to_string(node) + ", which is not a node of result.cut: the mesh and its cut do not "
                                "belong together (pass the MeshResult of mesh_cut or of an earlier update unchanged)");
+    };
+    OpenMesh::FPropHandleT<int> tile;
+    result.mesh.get_property_handle(tile, kFaceTile);
+    for (const auto f : result.mesh.faces())
+        check_tile("face", f.idx(), result.mesh.property(tile, f));
+    // Every vertex names its tile's node too (or none), and the steps index nodes by it: a vertex whose
+    // v:cluster lay beyond the nodes was read out of bounds when a step adopted an orphan tile (QA round
+    // 51). And a vertex that is no point stops the step here rather than in the measurements after it.
+    OpenMesh::VPropHandleT<int> cluster;
+    result.mesh.get_property_handle(cluster, kVertexCluster);
+    for (const auto v : result.mesh.vertices()) {
+        check_tile("vertex", v.idx(), result.mesh.property(cluster, v));
+        const Mesh::Point& p = result.mesh.point(v);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            throw InvalidInput(std::string(name) + ": vertex " + std::to_string(v.idx()) + " of result.mesh has a NaN or infinite coordinate");
     }
 }
 

@@ -26,14 +26,20 @@ Vec3 area_vector(const Mesh& mesh, Mesh::FaceHandle f, Mesh::VertexHandle moved,
 
 } // namespace
 
-RelaxStats relax_vertices(Mesh& mesh, const RelaxOptions& options)
+void check_relax_options(const RelaxOptions& options)
 {
-    if (options.iterations < 0 || !(options.step > 0.0 && options.step <= 1.0) ||
+    if (options.iterations < 0 || options.iterations > kMaxRelaxIterations || !(options.step > 0.0 && options.step <= 1.0) ||
         !(options.crease_degrees >= 0.0 && options.crease_degrees <= 180.0) ||
         !(options.max_turn_degrees > 0.0 && options.max_turn_degrees <= 180.0) ||
         (options.vertical && !(squared_norm(options.axis) > 0.0)))
-        throw InvalidInput("relax_vertices: iterations must be >= 0, step in (0, 1], crease_degrees in [0, 180], "
-                           "max_turn_degrees in (0, 180], and a vertical relaxation needs a non-zero axis");
+        throw InvalidInput("relax_vertices: iterations must be in [0, " + std::to_string(kMaxRelaxIterations) +
+                           "], step in (0, 1], crease_degrees in [0, 180], max_turn_degrees in (0, 180], and a vertical "
+                           "relaxation needs a non-zero axis");
+}
+
+RelaxStats relax_vertices(Mesh& mesh, const RelaxOptions& options)
+{
+    check_relax_options(options);
     RelaxStats stats;
     const double crease_cos = std::cos(radians(options.crease_degrees));
     const double turn_cos = std::cos(radians(options.max_turn_degrees));

@@ -28,10 +28,15 @@
 
 namespace mrt {
 
+//! Largest RelaxOptions::iterations: each sweep costs about a fit round, and the fit runs the sweeps
+//! before each of its rounds (a million took 703 s on a 940-face torus: QA round 51).
+inline constexpr int kMaxRelaxIterations = 100;
+
 struct RelaxOptions
 {
-    //! Sweeps over the vertices (0 = off). The fit runs one before each of its rounds (FitOptions::relax):
-    //! relaxing more between two fits rounds the mesh off where the points are too few to pull it back.
+    //! Sweeps over the vertices (0 = off; at most kMaxRelaxIterations). The fit runs one before each of
+    //! its rounds (FitOptions::relax): relaxing more between two fits rounds the mesh off where the
+    //! points are too few to pull it back.
     int iterations = 1;
     //! Fraction of the way to the projected centroid moved per sweep (0..1].
     double step = 0.5;
@@ -51,6 +56,9 @@ struct RelaxStats
     std::size_t creases = 0;  //!< vertices left on creases (last sweep)
     std::size_t refused = 0;  //!< moves refused because a face would turn too far (summed)
 };
+
+//! \throw InvalidInput if an option is out of range (what relax_vertices checks first).
+void check_relax_options(const RelaxOptions& options);
 
 //! \brief Slides the vertices of `mesh` within the surface (see the file comment). Updates face and
 //! vertex normals. \throw InvalidInput if an option is out of range.

@@ -246,7 +246,7 @@ std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees)
     return caps;
 }
 
-SliverStats remove_slivers(Mesh& mesh, const SliverOptions& options)
+void check_sliver_options(const SliverOptions& options)
 {
     if (!(options.cap_angle_degrees > 90.0 && options.cap_angle_degrees <= 180.0) ||
         !(options.needle_ratio >= 0.0 && options.needle_ratio < 1.0) ||
@@ -255,6 +255,11 @@ SliverStats remove_slivers(Mesh& mesh, const SliverOptions& options)
         throw InvalidInput("remove_slivers: cap_angle_degrees must be in (90, 180], needle_ratio in [0, 1), "
                            "max_turn_degrees in [0, 90], max_flip_height >= 0 (finite), passes >= 0, and a vertical cleanup needs a "
                            "non-zero axis");
+}
+
+SliverStats remove_slivers(Mesh& mesh, const SliverOptions& options)
+{
+    check_sliver_options(options);
     return SliverRemover(mesh, options).run();
 }
 

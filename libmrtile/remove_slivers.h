@@ -61,6 +61,9 @@ struct SliverStats
 //! Faces with an angle above `cap_angle_degrees` (the cleanup's measure, for quality reports).
 std::size_t count_caps(const Mesh& mesh, double cap_angle_degrees = 150.0);
 
+//! \throw InvalidInput if an option is out of range (what remove_slivers checks first).
+void check_sliver_options(const SliverOptions& options);
+
 //! \brief Flips and collapses away the caps and needles of `mesh` (see the file comment). Deterministic.
 //! Deleted elements are garbage-collected, so handles taken before the call are invalid afterwards;
 //! the mesh properties (mesh.h) follow their elements. Updates face and vertex normals.

@@ -244,15 +244,40 @@ Mesh build_surface(const Hierarchy& h, const std::vector<Tile>& tiles, const Sur
     return mesh;
 }
 
+namespace {
+
+// Tiles built by a caller index the hierarchy (node, boundary points; when `h` is given) and each other
+// (neighbours): an index out of range was read out of bounds (QA round 51: a neighbour 99999).
+void check_tiles(const Hierarchy* h, const std::vector<Tile>& tiles, const char* function)
+{
+    for (const Tile& t : tiles) {
+        if (h && (t.node < 0 || static_cast<std::size_t>(t.node) >= h->nodes.size()))
+            throw InvalidInput(std::string(function) + ": tile of node " + std::to_string(t.node) + " is not in the hierarchy");
+        if (h)
+            for (const std::uint32_t p : t.boundary)
+                if (p >= h->cloud.positions.size())
+                    throw InvalidInput(std::string(function) + ": tile of node " + std::to_string(t.node) + " names point " +
+                                       std::to_string(p) + " beyond the cloud");
+        for (const std::uint32_t n : t.neighbours)
+            if (n >= tiles.size())
+                throw InvalidInput(std::string(function) + ": tile of node " + std::to_string(t.node) + " names neighbour " +
+                                   std::to_string(n) + " beyond the " + std::to_string(tiles.size()) + " tiles");
+    }
+}
+
+} // namespace
+
 std::vector<bool> surrounded_tiles(const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
     check_surface_options(options);
+    check_tiles(nullptr, tiles, "surrounded_tiles");
     return interior_tiles(tiles, options.interior_gap_degrees);
 }
 
 HeightFieldChoice choose_height_field(const Hierarchy& h, const std::vector<Tile>& tiles, const SurfaceOptions& options)
 {
     check_surface_options(options);
+    check_tiles(&h, tiles, "choose_height_field");
     const Projection p = choose_projection(h, tiles, options);
     HeightFieldChoice choice;
     choice.used = p.used;
@@ -316,16 +341,10 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
                            scale + "): they span no surface to mesh (objects farther apart than a million times "
                            "their size are meshed one at a time)");
     }
+    check_tiles(&h, given, "build_surface");
     std::size_t fan_tiles = 0;
-    for (const Tile& t : given) {
-        if (t.node < 0 || static_cast<std::size_t>(t.node) >= h.nodes.size())
-            throw InvalidInput("build_surface: tile of node " + std::to_string(t.node) + " is not in the hierarchy");
-        for (std::uint32_t p : t.boundary)
-            if (p >= h.cloud.positions.size())
-                throw InvalidInput("build_surface: tile of node " + std::to_string(t.node) + " names point " +
-                                   std::to_string(p) + " beyond the cloud");
+    for (const Tile& t : given)
         fan_tiles += t.has_fan() ? 1 : 0;
-    }
     if (fan_tiles == 0)
         throw InvalidInput("build_surface: no tile has three non-collinear points; choose a coarser cut");
 
