@@ -1031,40 +1031,6 @@ void drop_seen_through_candidates(const Hierarchy& h, const Layout& layout, cons
     });
 }
 
-// A loop at the sample's border (not every tile on it interior) up to kBorderGapGrace times the perimeter
-// limit is still a gap between tiles when the points cover its patch: every spot of it within
-// kBorderGapReach spacings of a point. A uniform random sample leaves a spot that far from every point
-// with probability e^(-4 pi), about 3.5e-6, per spot; a hole of the sample, even a narrow one, has an
-// empty middle. A sphere with three holes cut off, meshed at its leaves, kept an 8-edge gap beside one
-// hole's rim, 7% over the limit, as a fourth loop (QA round 49; 4 of 8 seeds of 50k points).
-// Only on smooth surface: where the surface turns sharply along the loop (its vertices' normals more
-// than kBorderGapTurn degrees from their mean) the loop can be a slit along a sharp edge, and filling
-// parts of it split the slit into more loops and pieces (a 20-degree wedge's tip, at its leaves: 2 loops,
-// 1 piece -> 4 loops, 3 pieces).
-constexpr double kBorderGapGrace = 1.5;
-constexpr double kBorderGapReach = 2.0;
-constexpr double kBorderGapTurn = 60.0;
-
-// Whether the surface around a loop is smooth: the normal at each of its vertices (the sum of its
-// faces' unit normals) within max_degrees of their mean.
-bool smooth_around(const Surface& s, const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& loop, double max_degrees)
-{
-    std::vector<Vec3> normals;
-    Vec3 mean{};
-    for (const std::uint32_t v : loop) {
-        Vec3 n{};
-        for (const std::uint32_t f : s.faces_at(v)) {
-            const Tri& t = s.faces()[f];
-            n += normalized(triangle_cross(positions[t[0]], positions[t[1]], positions[t[2]]));
-        }
-        normals.push_back(normalized(n));
-        mean += normals.back();
-    }
-    mean = normalized(mean);
-    const double min_cos = std::cos(max_degrees * M_PI / 180.0);
-    return std::all_of(normals.begin(), normals.end(), [&](const Vec3& n) { return dot(n, mean) >= min_cos; });
-}
-
 // Fills the holes that are gaps between tiles (see SurfaceOptions::hole_factor, interior_gap_degrees,
 // max_gap_width), or in FillMode::Close every hole up to SurfaceOptions::close_holes edges, widening those
 // that cannot be triangulated as they are. FillMode::BeforeHandles: the front
@@ -1120,11 +1086,9 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
             loop_tiles.erase(std::unique(loop_tiles.begin(), loop_tiles.end()), loop_tiles.end());
             // A widened hole was small before we opened it: it may be up to three times as large.
             const double limit = options.hole_factor * largest_tile * (was_widened ? 3.0 : 1.0);
-            // A hole among interior tiles is a gap whatever its size; elsewhere only small holes are, or
-            // (after the front) ones a little larger that the points cover (kBorderGapGrace).
-            const bool large = perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges));
-            const bool border_gap = large && !before_handles && perimeter <= kBorderGapGrace * limit && spacing > 0.0;
-            if (!closing && (loop_tiles.size() < 2 || (large && !border_gap)))
+            // A hole among interior tiles is a gap whatever its size; elsewhere only small holes are.
+            if (!closing && (loop_tiles.size() < 2 ||
+                             (perimeter > limit && (!surrounded || (before_handles && n >= kMinHandleLoopEdges)))))
                 continue;
             std::vector<Tri> around;
             if (cache)
@@ -1149,9 +1113,6 @@ FillResult fill_holes(const Hierarchy& h, Surface& s, const Layout& layout, cons
                     known->sparse_cover = covered ? 1 : 0;
                 return covered;
             };
-            if (!closing && border_gap &&
-                (!smooth_around(s, positions, loop, kBorderGapTurn) || !points_cover_hole(h, positions, patch, kBorderGapReach * spacing)))
-                continue;
             // Every point lies in some tile, so a hole holds no points: a gap between tiles is about a
             // point spacing wide, and a hole much wider than that (mean width 2 area / perimeter) is a
             // hole in the sample itself (the bunny's base), which stays open.

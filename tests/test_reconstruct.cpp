@@ -2218,26 +2218,5 @@ TEST(Reconstruct, triangle_count_in_pieces_takes_a_smaller_budget)
     EXPECT_TRUE(found_pieces);
 }
 
-
-// A sphere of uniformly random points with three caps cut off, meshed at its leaves: gaps between tiles
-// beside a hole's rim, a little over the perimeter limit for loops at the sample's border, were left
-// open as extra loops (QA round 49: 4 loops; seeds 1 and 2 here, 4 before kBorderGapGrace). The
-// points cover such a gap; the holes themselves stay open: exactly three loops, one piece.
-TEST(Reconstruct, gaps_beside_a_holes_rim_are_filled_and_the_holes_kept)
-{
-    for (const std::uint32_t seed : {1u, 2u}) {
-        PointCloud cloud;
-        for (const Vec3& p : shapes::sphere(50000, 1.0, seed).positions)
-            if (p.z < 0.8 && p.x < 0.85 && p.y > -0.7)
-                cloud.positions.push_back(p);
-        const Hierarchy h = build_hierarchy(cloud);
-        const MeshResult r = mesh_cut(h, cut_by_tolerance(h, 0.0));
-        const TopologyStats t = topology_stats(r.mesh);
-        EXPECT_EQ(t.boundary_loops, 3u) << "seed " << seed;
-        EXPECT_EQ(t.components, 1u) << "seed " << seed;
-        EXPECT_EQ(t.nonmanifold_edges + t.nonmanifold_vertices, 0u) << "seed " << seed;
-    }
-}
-
 } // namespace
 } // namespace mrt
