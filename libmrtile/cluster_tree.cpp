@@ -783,23 +783,19 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
     // Far from their origin, doubles keep too few of the points' digits (QA round 51: a 2-unit sphere
     // at 1e12 built 54 finest tiles instead of 169, at 1e15 one tile), and the hierarchy is relative to
     // the origin anyway: such a cloud is refused, not built coarse. At a billion times their extent a
-    // double's step is 2e-7 of it, a thousandth of the finest default tolerance. Non-finite points are
-    // left to validate.
+    // double's step is 2.2e-7 of it, a five-hundredth of the finest default tolerance. Non-finite points
+    // are left to validate.
     {
-        BoundingBox box{cloud.positions.empty() ? Vec3{} : cloud.positions.front(), cloud.positions.empty() ? Vec3{} : cloud.positions.front()};
-        double farthest = 0.0;
-        for (const Vec3& p : cloud.positions) {
-            box.min = min(box.min, p);
-            box.max = max(box.max, p);
-            farthest = std::max({farthest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-        }
+        const BoundingBox box = bounding_box(cloud.positions);
+        const double farthest = std::max({std::abs(box.min.x), std::abs(box.min.y), std::abs(box.min.z), std::abs(box.max.x),
+                                          std::abs(box.max.y), std::abs(box.max.z)});
         const double extent = box.diagonal();
         if (std::isfinite(farthest) && std::isfinite(extent) && extent > 0.0 && farthest > 1e9 * extent) {
             char text[160];
             std::snprintf(text, sizeof text, "build_hierarchy: the points lie %.3g from their origin, %.3g times their extent", farthest,
                           farthest / extent);
-            throw InvalidInput(std::string(text) + ": doubles keep too few of their digits there; make the positions relative to a "
-                               "point near them and put that point in PointCloud::origin (the readers do)");
+            throw InvalidInput(std::string(text) + ": doubles keep too few of their digits there; call recenter(cloud) "
+                               "(point_cloud.h) first, as the readers do");
         }
     }
     // The points to denoise, without duplicates (a point repeated is its own nearest neighbours), and

@@ -297,15 +297,18 @@ void mesh_level(const Hierarchy& h, LodLevel& level, const MeshOptions& options)
 // 0.0077, and `lods` stopped at one level, since the error did not fall). So level 0 becomes the
 // tolerance cut at the best-N cut's tolerance: every node of it lies at or above a node of the best-N
 // cut (that node meets the tolerance), so it has at most as many tiles and the levels nest.
-// Level 0's faces at most: three quarters of its triangles (room for skirts in a tileset's root).
-std::size_t first_level_budget(const LodSetOptions& o)
+// Level 0's triangles (LodSetOptions::first_level_triangles, or else a tile's).
+std::size_t level_zero_triangles(const LodSetOptions& o)
 {
-    return (o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles) * 3 / 4;
+    return o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
 }
+
+// Level 0's faces at most: three quarters of its triangles (room for skirts in a tileset's root).
+std::size_t first_level_budget(const LodSetOptions& o) { return level_zero_triangles(o) * 3 / 4; }
 
 LodLevel first_level(const Hierarchy& h, const LodSetOptions& o, const Cut& finest)
 {
-    const std::size_t triangles = o.first_level_triangles > 0 ? o.first_level_triangles : o.max_tile_triangles;
+    const std::size_t triangles = level_zero_triangles(o);
     const auto budget = static_cast<double>(first_level_budget(o));
     std::size_t tiles = std::max<std::size_t>(1, triangles / 32);
     LodLevel level;
