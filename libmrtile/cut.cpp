@@ -331,7 +331,9 @@ Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, d
     return out;
 }
 
-double screen_space_error(const Node& node, const Camera& camera)
+namespace {
+
+double screen_space_error_of(const Node& node, const Camera& camera)
 {
     const double distance = distance_to_box(camera.position, node.box);
     if (distance <= 0)
@@ -340,7 +342,7 @@ double screen_space_error(const Node& node, const Camera& camera)
     return node_error(node) * camera.viewport_height / (distance * 2.0 * std::tan(half_fov));
 }
 
-bool in_view(const Node& node, const Camera& camera)
+bool in_view_of(const Node& node, const Camera& camera)
 {
     // The direction may have any length (Camera::direction): one whose norm would overflow (1e300 made
     // every node out of view) or underflow to 0 (1e-300 looked all around) is scaled first.
@@ -362,31 +364,58 @@ bool in_view(const Node& node, const Camera& camera)
     return off_axis - std::asin(radius / far) <= half_cone;
 }
 
-Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
+bool asks_finer(const Node& node, const Camera& camera)
+{
+    const double error = screen_space_error_of(node, camera);
+    return error > camera.max_pixel_error && (error > camera.max_pixel_error * camera.out_of_view_factor || in_view_of(node, camera));
+}
+
+} // namespace
+
+void check_camera(const Camera& camera)
 {
     // Finite too: an infinite viewport height refined every node to the leaves, an infinite pixel error
-    // kept the root alone (QA round 51).
+    // kept the root alone (QA round 51). The per-node functions check too (a NaN field of view made
+    // every error NaN, so no node was ever refined and nothing said why: QA round 51).
     if (!(camera.fov_y_degrees > 0 && camera.fov_y_degrees < 180) || !(camera.viewport_height > 0) ||
         !std::isfinite(camera.viewport_height) || !(camera.max_pixel_error > 0) || !std::isfinite(camera.max_pixel_error) ||
         !is_finite(camera.position) || !is_finite(camera.direction) || !(camera.aspect > 0) || !std::isfinite(camera.aspect) ||
         !(camera.out_of_view_factor >= 1))
-        throw InvalidInput("cut: camera needs 0 < fov < 180 degrees, a positive, finite viewport height, pixel error and aspect, "
+        throw InvalidInput("camera: needs 0 < fov < 180 degrees, a positive, finite viewport height, pixel error and aspect, "
                            "an out-of-view factor of at least 1, and a finite position and direction");
+}
+
+double screen_space_error(const Node& node, const Camera& camera)
+{
+    check_camera(camera);
+    return screen_space_error_of(node, camera);
+}
+
+bool in_view(const Node& node, const Camera& camera)
+{
+    check_camera(camera);
+    return in_view_of(node, camera);
+}
+
+Cut cut_for_camera(const Hierarchy& h, const Camera& camera)
+{
+    check_camera(camera);
     return cut_by_predicate(h, [&](const Hierarchy& hh, std::int32_t id) {
         const Node& n = hh.nodes[static_cast<std::size_t>(id)];
-        return camera_asks_finer(n, camera) && rougher_than(hh, n, 0.0);
+        return asks_finer(n, camera) && rougher_than(hh, n, 0.0);
     });
 }
 
 bool camera_asks_finer(const Node& node, const Camera& camera)
 {
-    const double error = screen_space_error(node, camera);
-    return error > camera.max_pixel_error && (error > camera.max_pixel_error * camera.out_of_view_factor || in_view(node, camera));
+    check_camera(camera);
+    return asks_finer(node, camera);
 }
 
 double cut_plane_error(const Hierarchy& h, const Cut& cut)
 {
-    check_node_ids(h, cut);
+    // A frontier, not any nodes: a node and its child both counted their points twice (QA round 51).
+    check_cut(h, cut, "cut_plane_error");
     double sum = 0.0;
     for (std::int32_t id : cut)
         sum += h.nodes[static_cast<std::size_t>(id)].frame.values[0];

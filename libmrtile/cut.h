@@ -128,6 +128,11 @@ struct Camera
     double aspect = 16.0 / 9.0;
 };
 
+//! Throws InvalidInput unless 0 < fov_y_degrees < 180, viewport_height, max_pixel_error and aspect
+//! are positive and finite, out_of_view_factor ≥ 1 and position and direction are finite. Every
+//! function below that takes a camera calls it.
+void check_camera(const Camera& camera);
+
 //! A node's geometric error in model units: the largest distance of its points to its tile plane,
 //! or its coverage gap if larger.
 double node_error(const Node& node);
@@ -149,7 +154,7 @@ Cut cut_for_camera(const Hierarchy& h, const Camera& camera);
 //! out_of_view_factor out of it.
 bool camera_asks_finer(const Node& node, const Camera& camera);
 
-//! Σ λ_min over the cut: the total squared distance of the points to their tile planes.
+//! Σ λ_min over the cut (a frontier: check_cut): the total squared distance of the points to their tile planes.
 double cut_plane_error(const Hierarchy& h, const Cut& cut);
 
 //! True when the nodes of `cut` partition the points (each point in exactly one node).

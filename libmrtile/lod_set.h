@@ -48,7 +48,10 @@ struct LodSetOptions
     //! The most levels `levels = 0` makes (each halves the tolerance: 2^-16 of level 0's is below any
     //! scan's noise); an explicit `levels` may ask for more.
     std::size_t max_levels = 16;
-    //! Explicit scale-free tolerances, coarse to fine (overrides levels).
+    //! Explicit scale-free tolerances, coarse to fine (overrides levels). With either, a level whose
+    //! cut is no finer than the one before is left out (below the build's tolerance every cut is the
+    //! leaves): the result's `levels.size()` can be less than asked, and a caller that promised a
+    //! number of levels compares it (the CLI prints a note).
     std::vector<double> tolerances;
     //! Build the 3D Tiles tile tree (false: levels only, for `mrtile lods`).
     bool tileset = true;

@@ -16,8 +16,8 @@ PointCloud plane_grid(int n);
 PointCloud sphere(std::size_t count, double radius = 1.0, std::uint32_t seed = 1);
 //! Uniform (by area) samples on a torus with major radius R and minor radius r, axis z.
 PointCloud torus(std::size_t count, double R = 1.0, double r = 0.35, std::uint32_t seed = 2);
-//! Uniform samples on the surface of a plate with three round through-holes (genus 3), about 208 wide
-//! like the paper's "3Holes" data set.
+//! Uniform samples on the surface of a plate with three round through-holes (genus 3), 200 x 80 x
+//! 20, like the paper's "3Holes" data set.
 PointCloud three_holes(std::size_t count, std::uint32_t seed = 3);
 //! Random samples of the height field z = 0.1 sin(2πx) cos(2πy) on [0,1]^2.
 PointCloud smooth_height_field(std::size_t count, std::uint32_t seed = 4);

@@ -245,6 +245,17 @@ TEST(Cut, camera_refines_only_what_is_in_view)
     Camera bad = looking;
     bad.aspect = 0.0;
     EXPECT_THROW(cut_for_camera(h, bad), InvalidInput);
+    // The per-node functions check the camera too (QA round 51: a NaN field of view gave NaN errors,
+    // which refine nothing, without a word).
+    const Node& root = h.nodes[0];
+    Camera nan_fov = looking;
+    nan_fov.fov_y_degrees = std::nan("");
+    EXPECT_THROW(screen_space_error(root, nan_fov), InvalidInput);
+    EXPECT_THROW(in_view(root, bad), InvalidInput);
+    EXPECT_THROW(camera_asks_finer(root, nan_fov), InvalidInput);
+    EXPECT_THROW(check_camera(nan_fov), InvalidInput);
+    EXPECT_NO_THROW(check_camera(looking));
+    EXPECT_TRUE(std::isfinite(screen_space_error(root, facing)));
 }
 
 // The general predicate form: refine exactly the nodes above depth 4.
@@ -259,6 +270,9 @@ TEST(Cut, bad_node_ids_and_regions_are_refused)
     inside.radius = 0.5;
     inside.tolerance = 0.001;
     EXPECT_THROW(cut_plane_error(h, bad), InvalidInput);
+    // Nodes that are no frontier (the root beside its child) counted points twice.
+    EXPECT_THROW(cut_plane_error(h, Cut{0, h.nodes[0].left}), InvalidInput);
+    EXPECT_NO_THROW(cut_plane_error(h, cut_by_tolerance(h, 0.01)));
     EXPECT_THROW(coarsen_cut(h, bad, inside, 0.01), InvalidInput);
     EXPECT_THROW(refine_cut(h, bad, 0.01, {inside}), InvalidInput);
     EXPECT_THROW(check_node_ids(h, Cut{static_cast<std::int32_t>(h.nodes.size())}), InvalidInput);

@@ -1010,14 +1010,14 @@ struct ExportArgs
                                ->check(kNonEmpty); // '' read as 0 (QA round 34)
         }
         lod_options.push_back(cmd->add_option("--max-tile-triangles", max_tile_triangles,
-                                              lods_command ? "level 0's budget: three quarters of this many triangles "
-                                                             "(at most 4096)"
+                                              lods_command ? "level 0's budget: three quarters of min(this, 4096) "
+                                                             "triangles (at most 3072)"
                                                            : "largest number of triangles in one 3D Tiles tile")
                                   ->check(integer_check(64, 1ull << 31))
                                   ->capture_default_str());
         auto* l = cmd->add_option("--levels", levels,
                                   lods_command ? "number of levels of detail: level 0 (the best cut of at most three quarters "
-                                                 "of --max-tile-triangles, at most 4096), then the tolerance halved per level "
+                                                 "of --max-tile-triangles or of 4096, whichever is fewer), then the tolerance halved per level "
                                                  "(default: down to the hierarchy's leaves)"
                                                : "number of levels of detail: level 0 (the best cut whose mesh fits one tile, "
                                                  "three quarters of --max-tile-triangles), then the tolerance halved per level; "

@@ -40,8 +40,15 @@ int main(int argc, char** argv)
     const mrt::LocalRefineStats merged = mrt::coarsen_mesh(h, coarse, mrt::coarsen_cut(h, coarse.cut, focus, 0.002));
     std::printf("coarsened %zu groups back (%zu kept), %zu faces\n", merged.coarsened, merged.kept,
                 static_cast<std::size_t>(coarse.mesh.n_faces()));
+    // Any new cut (a camera that moved): coarsened where it is coarser, then refined where it is finer.
+    mrt::Camera camera; // fov 60 degrees, 1080 px, 16 px error
+    camera.position = mrt::Vec3{3, 0, 1} - h.cloud.origin;
+    camera.direction = mrt::Vec3{-3, 0, -1};
+    const mrt::LocalRefineStats moved = mrt::update_mesh(h, coarse, mrt::cut_for_camera(h, camera));
+    std::printf("camera: %zu refined, %zu coarsened (%zu kept, remeshed %d), %zu faces\n", moved.refined, moved.coarsened,
+                moved.kept, static_cast<int>(moved.remeshed), static_cast<std::size_t>(coarse.mesh.n_faces()));
     return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0 &&
-                   merged.refused == 0
+                   merged.refused == 0 && moved.refused == 0 && !moved.remeshed
                ? 0
                : 1;
 }
