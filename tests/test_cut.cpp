@@ -497,6 +497,50 @@ TEST(Cut, scan_lines_far_apart_are_not_cut_into_single_lines)
     EXPECT_TRUE(self_intersecting_faces(r.mesh).empty());
 }
 
+// Profiles 15 times farther apart than their points, with range noise of a quarter spacing (a laser
+// line scanner: each profile lies exactly in its laser plane), and a cylinder scanned in rings 19:1
+// (QA round 54). A stretch of one profile has no normal of its own, yet two neighbouring stretches
+// were taken for the two sides of a thin part facing each other across the strip between them, a hole
+// of 4 spacings: every cut refined to pairs of stretches and the surface came out in pieces with
+// holes (the terrain: 717 tiles, 2 pieces, 29 loops at 0.002; the cylinder: 58 loops).
+TEST(Cut, neighbouring_scan_lines_are_no_hole)
+{
+    std::mt19937 rng(54); // raw output only: the same everywhere (its distributions are not)
+    auto uniform = [&] { return (static_cast<double>(rng()) + 0.5) / 4294967296.0; };
+    auto gauss = [&] { return std::sqrt(-2.0 * std::log(uniform())) * std::cos(2.0 * M_PI * uniform()); };
+    PointCloud terrain;
+    const int lines = 40, per_line = 600;
+    const double along = 1.0 / per_line;
+    for (int j = 0; j < lines; ++j)
+        for (int i = 0; i < per_line; ++i) {
+            const double x = (i + 0.3 * uniform()) * along, y = (j + 0.5) / lines;
+            const double z = 0.08 * std::sin(3 * x + 1) * std::cos(4 * y) + 0.03 * std::sin(9 * x * y);
+            terrain.positions.push_back({x, y, z + 0.24 * along * gauss()});
+        }
+    const Hierarchy h = build_hierarchy(terrain);
+    for (double tol : {0.002, 0.001}) {
+        const Cut cut = cut_by_tolerance(h, tol);
+        EXPECT_LT(cut.size(), 200u) << tol;
+        const TopologyStats t = topology_stats(mesh_cut(h, cut).mesh);
+        EXPECT_EQ(t.components, 1u) << tol;
+        EXPECT_EQ(t.boundary_loops, 1u) << tol;
+    }
+    PointCloud rings;
+    const int ring_count = 53, per_ring = 1880; // 1 mm along a ring of radius 0.3, rings 19 mm apart
+    for (int j = 0; j < ring_count; ++j)
+        for (int i = 0; i < per_ring; ++i) {
+            const double a = 2.0 * M_PI * i / per_ring;
+            rings.positions.push_back({0.3 * std::cos(a), 0.3 * std::sin(a), (j + 0.5) / ring_count});
+        }
+    const Hierarchy cylinder = build_hierarchy(rings);
+    for (double tol : {0.005, 0.002}) {
+        const TopologyStats t = topology_stats(mesh_cut(cylinder, cut_by_tolerance(cylinder, tol)).mesh);
+        EXPECT_EQ(t.components, 1u) << tol;
+        EXPECT_EQ(t.boundary_loops, 2u) << tol; // its open ends
+        EXPECT_EQ(t.genus, 0) << tol;
+    }
+}
+
 // A bent thin pipe (QA round 48): each straight arm, as a whole, is as long and thin as a stretch of a
 // scan line, and the line rule stopped every tolerance cut at the root, one flat tile over the empty
 // space between the arms (mesh to points: 0.29 of the diagonal), even at tolerance 0. Its points go
