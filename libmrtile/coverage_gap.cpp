@@ -687,13 +687,6 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
     return coverage_gap(points, u, v, sampled, fill);
 }
 
-// Two children whose boxes lie apart: the node's tile would span the space between them. Counted
-// when wider than a quarter of the node's box diagonal (so that a node split across a little empty
-// space is not) and than twice min_radius_spacings (two objects far apart in one cloud; two scan lines
-// of one surface side by side stay under it) — or, where the children face each other across the
-// space, than min_radius_spacings, the width of a hole the surface keeps open: the two sides of a thin
-// plate, where a narrow strip of both is flat in the plane across the plate and coarse cuts kept it as
-// a wall inside it (a plate 6.6 spacings thick at tolerance 0.01: 66 loops in 11 pieces, now 15 in one).
 // Whether a node spreads across as well as along, so that its least-spread direction is a surface's
 // normal: its points spread across (the second axis) at least one of their spacings (node_spacing),
 // which a patch 4 rows wide and more does. A stretch of a scan line (or a strip 2-3 rows wide) has no
@@ -708,6 +701,13 @@ bool has_normal(const Node& n)
     return n.frame.values[1] > 0.0 && count > 0.0 && std::sqrt(n.frame.values[1] / count) >= node_spacing(n);
 }
 
+// Two children whose boxes lie apart: the node's tile would span the space between them. Counted
+// when wider than a quarter of the node's box diagonal (so that a node split across a little empty
+// space is not) and than twice min_radius_spacings (two objects far apart in one cloud; two scan lines
+// of one surface side by side stay under it) — or, where the children face each other across the
+// space, than min_radius_spacings, the width of a hole the surface keeps open: the two sides of a thin
+// plate, where a narrow strip of both is flat in the plane across the plate and coarse cuts kept it as
+// a wall inside it (a plate 6.6 spacings thick at tolerance 0.01: 66 loops in 11 pieces, now 15 in one).
 double children_separation(const Hierarchy& h, const Node& n, const CoverageOptions& options)
 {
     constexpr double kMinShare = 0.25;
