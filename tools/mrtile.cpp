@@ -775,7 +775,8 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     if (j.contains("sharp_loops") && j["sharp_loops"].is_number() && j["sharp_loops"].get<std::size_t>() > 0)
         std::printf("note: %zu of the %zu boundary loops run along sharp edges of the mesh (its faces on their two "
                     "sides turn more than %.0f degrees): a closed solid's edges of about 70 degrees or less are often "
-                    "left open (README: Known limits), and another tolerance may close them\n",
+                    "left open (README: Known limits), and another tolerance may close them; in a scan of an open "
+                    "scene such a loop can also be where a view simply ends\n",
                     j["sharp_loops"].get<std::size_t>(), j["boundary_loops"].get<std::size_t>(), kSharpLoopDegrees);
 }
 
