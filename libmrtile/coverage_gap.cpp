@@ -687,18 +687,27 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
     return coverage_gap(points, u, v, sampled, fill);
 }
 
-// Whether a node spreads across as well as along, so that its least-spread direction is a surface's
-// normal: its points spread across (the second axis) at least one of their spacings (node_spacing),
-// which a patch 4 rows wide and more does. A stretch of a scan line (or a strip 2-3 rows wide) has no
-// normal of its own: its least-spread direction is the noise's, or exact zero across a straight
-// profile, and two neighbouring lines seemed to face each other across the empty strip between them.
-// Lines 15 of their spacings apart were then holes of 4 spacings: every cut refined to pairs of line
-// stretches, which the surface joins in pieces (QA round 54: a terrain of profiles 15:1 with range
-// noise of 0.24 spacings, 9 pieces and 127 loops; a cylinder scanned in rings 19:1, 58 loops).
+// Whether a node's least-spread direction is a surface's normal: it is not a line. A stretch of a scan
+// line has no normal of its own (its least-spread direction is the noise's, or exactly zero across a
+// straight profile), and two neighbouring stretches seemed to face each other across the empty strip
+// between them: lines 15 of their spacings apart were holes of 4 spacings, every cut refined to pairs
+// of stretches, and the surface came out in pieces (QA round 54: profiles 15:1 with range noise of
+// 0.24 spacings, 9 pieces and 127 loops; a cylinder scanned in rings 19:1, 58 loops). A line spreads
+// across less than half its spacing along it (noise under half a spacing); a strip two rows wide
+// spreads as much as its spacing along it (two points per row step), and has the normal of its side:
+// the narrow strips of a thin plate's two sides, which the rule below is for, still face each other
+// (taking 2-3-row strips for lines too joined coarse cuts of uniform thin parts: a mug with 4-spacing
+// walls at 0.01 went 1 -> 3 pieces, 46 -> 735 crossing pairs).
 bool has_normal(const Node& n)
 {
+    constexpr double kLineWidthSpacings = 0.5;
     const double count = static_cast<double>(n.count());
-    return n.frame.values[1] > 0.0 && count > 0.0 && std::sqrt(n.frame.values[1] / count) >= node_spacing(n);
+    if (!(n.frame.values[1] > 0.0) || !(count > 0.0))
+        return false;
+    // Scatter-matrix eigenvalues: variances times count; points spread evenly along a segment of
+    // length L have variance L^2 / 12, so their spacing along it is L / count.
+    const double along_spacing = std::sqrt(12.0 * n.frame.values[2] / count) / count;
+    return std::sqrt(n.frame.values[1] / count) > kLineWidthSpacings * along_spacing;
 }
 
 // Two children whose boxes lie apart: the node's tile would span the space between them. Counted
