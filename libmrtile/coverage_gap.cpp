@@ -701,13 +701,10 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
 bool has_normal(const Node& n)
 {
     constexpr double kLineWidthSpacings = 0.5;
-    const double count = static_cast<double>(n.count());
-    if (!(n.frame.values[1] > 0.0) || !(count > 0.0))
+    if (!(n.frame.values[1] > 0.0) || n.count() == 0)
         return false;
-    // Scatter-matrix eigenvalues: variances times count; points spread evenly along a segment of
-    // length L have variance L^2 / 12, so their spacing along it is L / count.
-    const double along_spacing = std::sqrt(12.0 * n.frame.values[2] / count) / count;
-    return std::sqrt(n.frame.values[1] / count) > kLineWidthSpacings * along_spacing;
+    const LineSpread spread = line_spread(n);
+    return spread.across > kLineWidthSpacings * spread.spacing_along;
 }
 
 // Two children whose boxes lie apart: the node's tile would span the space between them. Counted

@@ -39,12 +39,8 @@ bool is_line(const Node& n)
 {
     if (n.count() < 8 || !(n.frame.values[1] <= n.frame.values[2] / 900.0))
         return false;
-    const auto count = static_cast<double>(n.count());
-    // frame.values are of the scatter matrix (sums over the points): a variance is value / count, and
-    // points spread evenly along a segment of length L have variance L² / 12.
-    const double length = std::sqrt(12.0 * n.frame.values[2] / count);
-    const double across = std::sqrt(n.frame.values[1] / count);
-    return across <= kLineWidthSpacings * length / count;
+    const LineSpread spread = line_spread(n);
+    return spread.across <= kLineWidthSpacings * spread.spacing_along;
 }
 
 // The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above

@@ -35,6 +35,16 @@ double node_spacing(const Node& n)
     return std::sqrt(area / count);
 }
 
+LineSpread line_spread(const Node& n)
+{
+    const double count = static_cast<double>(n.count());
+    if (!(count > 0.0))
+        return {};
+    // frame.values are of the scatter matrix (sums over the points): a variance is value / count.
+    const double length = std::sqrt(12.0 * n.frame.values[2] / count);
+    return {std::sqrt(n.frame.values[1] / count), length / count};
+}
+
 double Hierarchy::flatness(const Node& node, double largest_side) const
 {
     if (info.criterion == Criterion::Tau)

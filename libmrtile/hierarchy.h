@@ -78,6 +78,18 @@ inline bool gap_dominates(const Node& n) { return n.coverage_gap > n.max_plane_d
 //! node). Unlike a tile's hull area over its node's points, it does not depend on the cut around it.
 double node_spacing(const Node& n);
 
+//! How a node's points spread across the line of their largest axis (RMS along the second axis) and
+//! how far apart they lie along it, taken as spread evenly over a segment (variance L² / 12, so the
+//! spacing is L / count); model units, both 0 for an empty node. The line tests compare the two: a
+//! stretch of a scan line spreads across under its spacing along it (cut.cpp's is_line, the coverage
+//! gap's facing rule).
+struct LineSpread
+{
+    double across = 0.0;
+    double spacing_along = 0.0;
+};
+LineSpread line_spread(const Node& n);
+
 struct BuildInfo
 {
     Criterion criterion = Criterion::Tolerance;

@@ -1340,8 +1340,7 @@ void check_update(const Hierarchy& h, const MeshResult& result, const Cut& cut, 
     result.mesh.get_property_handle(cluster, kVertexCluster);
     for (const auto v : result.mesh.vertices()) {
         check_tile("vertex", v.idx(), result.mesh.property(cluster, v));
-        const Mesh::Point& p = result.mesh.point(v);
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+        if (!is_finite(to_vec3(result.mesh.point(v))))
             throw InvalidInput(std::string(name) + ": vertex " + std::to_string(v.idx()) + " of result.mesh has a NaN or infinite coordinate");
     }
 }
