@@ -81,11 +81,12 @@ struct MeshOptions
     int piece_rounds = 3;
     //! The same for a surface in 3D in one piece whose loops run along tiles their neighbours surround:
     //! cracks where coarse tiles straddle an acute edge of a closed solid (a tetrahedron at tolerance
-    //! 0.01: 8-10 slits along its edges; 3 rounds: 8 -> 1). Loops the caps from the points close (on a
+    //! 0.01: 8-10 slits along its edges; 3 rounds: 8 -> 0). Loops the caps from the points close (on a
     //! copy of the surface) are left to them. A crack lies over sampled surface, so a
     //! loop whose faces at its corners span a hole of the sample (spots 6 spacings from every point)
     //! is a hole's rim and left; a round is kept only with fewer loops, no more pieces, no higher
-    //! genus, no more fans left out, no more crossing pairs, no more of the mesh over the loops' tiles
+    //! genus, no more fans left out, at most 5% more crossing pairs in the surface (their count moves
+    //! by a few percent with any change of the cut), no more of the mesh over the loops' tiles
     //! farther than 3 spacings from the points (else it is tried once more without the loops that
     //! did so) nor among the faces it changed anywhere, and no point of a regular sample farther from
     //! the mesh by a spacing. 0 = never.

@@ -119,9 +119,12 @@ const double kMinGapFaceCos = std::cos(radians(75.0));
 // two rim points: the strip of gap faces between two tiles is about one point spacing wide and costs two
 // faces per rim point while it carries almost no shape, so its rim points are merged pairwise (the
 // shortest such edge first) and neighbouring fans meet directly.
-// Whether collapsing the border point v into w keeps the border within `slack` of v: the border path
-// p, v, q becomes p, w, q (p, q when w is one of them), and v must lie within slack of it (a split point,
-// slack 0, on the straight segment: within a billionth of its length).
+// Whether collapsing the border point v into w keeps the border within `slack` of where it was: the
+// border path p, v, q becomes p, w, q (p, q when w is one of them), and each path must lie within slack
+// of the other. Both ways: v can lie on the new path while w is far from the old one (a rim point next to
+// p collapsed across a strip into a point well inside: the new border p, w, q passes by v but cuts a
+// corner off the sample, QA round 54's trimmed last ring of a cylinder). A split point (slack 0) lies on
+// the straight segment: within a billionth of its length.
 bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHandle w, double slack)
 {
     const Mesh::HalfedgeHandle out = mesh.halfedge_handle(v); // a border halfedge for a border vertex
@@ -136,8 +139,14 @@ bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHand
         const double t = len2 > 0.0 ? std::clamp(dot(x - a, d) / len2, 0.0, 1.0) : 0.0;
         return distance(x, a + d * t);
     };
+    const auto old_path_distance = [&](const Vec3& x) { return std::min(segment_distance(x, p, at), segment_distance(x, at, q)); };
     const bool along = w == next || w == previous;
-    const double deviation = along ? segment_distance(at, p, q) : std::min(segment_distance(at, p, m), segment_distance(at, m, q));
+    double deviation = 0.0;
+    if (along)
+        deviation = segment_distance(at, p, q); // the old path's farthest point from p, q is v
+    else // the vertices and the midpoints of each path against the other
+        deviation = std::max({std::min(segment_distance(at, p, m), segment_distance(at, m, q)), old_path_distance(m),
+                              old_path_distance((p + m) * 0.5), old_path_distance((m + q) * 0.5)});
     return deviation <= std::max(slack, 1e-9 * (distance(at, p) + distance(at, q)));
 }
 

@@ -323,36 +323,13 @@ TEST(CloseCoveredHoles, options_and_properties_are_checked)
 namespace mrt {
 namespace {
 
-// A star prism (5 points, inner radius 0.45, height 0.5) of unit outer radius, its sides quads split in
-// two, top and bottom fans from the centre: outward triangles.
-void star_prism(std::vector<Vec3>& v, std::vector<std::array<std::uint32_t, 3>>& t)
+// In mesh_cut: a sampled tetrahedron (its 71-degree edges are acute; 200k points, seed 6, tolerance
+// 0.005) keeps a loop along an edge without the pass, none with it: the loop's rim is taken out and
+// capped from the points. (Until session 46 a star prism's 36-degree edge, seed 5 of six tried, was
+// this case; the surface now keeps borders where they were and no star prism seed leaves such a loop.)
+TEST(CloseCoveredHoles, mesh_cut_closes_a_loop_along_a_tetrahedrons_acute_edge)
 {
-    constexpr int kPoints = 5, kCorners = 2 * kPoints;
-    constexpr double kInner = 0.45, kHeight = 0.5;
-    v = {{0, 0, 0}, {0, 0, kHeight}};
-    for (const double z : {0.0, kHeight})
-        for (int i = 0; i < kCorners; ++i) {
-            const double r = i % 2 == 0 ? 1.0 : kInner, a = M_PI * i / kPoints + M_PI / 2;
-            v.push_back({r * std::cos(a), r * std::sin(a), z});
-        }
-    for (std::uint32_t i = 0; i < kCorners; ++i) {
-        const std::uint32_t b0 = 2 + i, b1 = 2 + (i + 1) % kCorners, t0 = b0 + kCorners, t1 = b1 + kCorners;
-        t.push_back({0, b1, b0});
-        t.push_back({1, t0, t1});
-        t.push_back({b0, b1, t1});
-        t.push_back({b0, t1, t0});
-    }
-}
-
-// In mesh_cut: a uniform sample of a star prism (its 36-degree points are acute edges; seed 5 of the
-// six tried, 150k points, tolerance 0.005) keeps two loops along them without the pass, one with it:
-// the other's rim is taken out and capped from the points, with fewer crossing pairs left.
-TEST(CloseCoveredHoles, mesh_cut_closes_a_loop_along_a_star_prisms_acute_edge)
-{
-    std::vector<Vec3> v;
-    std::vector<std::array<std::uint32_t, 3>> t;
-    star_prism(v, t);
-    const Hierarchy h = build_hierarchy(shapes::mesh_surface(v, t, 150000, 5));
+    const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(200000, 6));
     const Cut cut = cut_by_tolerance(h, 0.005);
     MeshOptions on, off; // the caps alone: no crack rounds, which mend such loops before them
     on.crack_rounds = 0;
@@ -370,8 +347,8 @@ TEST(CloseCoveredHoles, mesh_cut_closes_a_loop_along_a_star_prisms_acute_edge)
     EXPECT_TRUE(b.consistently_oriented);
     EXPECT_LE(self_intersecting_faces(with.mesh).size(), self_intersecting_faces(without.mesh).size());
     // No cap reaches off the sample: the mesh's farthest spot from the points stays where it was, within
-    // the fit's play (0.0144 of the diagonal against 0.0133; a cap over a hole of the sample would add
-    // a spot several spacings, 0.02 and more, away).
+    // the fit's play (a cap over a hole of the sample would add a spot several spacings, 0.02 of the
+    // diagonal and more, away).
     EXPECT_LE(mesh_to_point_distance(with.mesh, h.cloud.positions).max, 1.1 * mesh_to_point_distance(without.mesh, h.cloud.positions).max);
 }
 

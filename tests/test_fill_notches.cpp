@@ -134,21 +134,23 @@ TEST(FillNotches, bad_options_and_meshes_are_refused)
     EXPECT_EQ(mesh.n_faces(), 3u);
 }
 
-// A smooth terrain's coarse cut (100k points, tolerance 0.01): a notch at the outline between two tiles
-// left points 2.3% of the diagonal from the mesh, as far as the roughest tile's own error, where the
-// tiles there are flat; filled, every point is within 1%.
-TEST(FillNotches, a_terrain_border_is_not_notched_at_a_coarse_cut)
+// A smooth terrain's cut (100k points, seed 5, tolerance 0.005): a notch at the outline between two
+// tiles left points 0.65% of the diagonal from the mesh, more than anywhere else; filled, 0.48%.
+// (Until session 46 the surface's rim collapses cut deeper notches into coarse cuts' outlines, 2.3%
+// of the diagonal at 0.01, which this pass filled too; the border is now kept where it was.)
+TEST(FillNotches, a_terrain_border_is_not_notched)
 {
-    const Hierarchy h = build_hierarchy(shapes::smooth_height_field(100000));
-    const Cut cut = cut_by_tolerance(h, 0.01);
+    const Hierarchy h = build_hierarchy(shapes::smooth_height_field(100000, 5));
+    const Cut cut = cut_by_tolerance(h, 0.005);
     MeshOptions off;
     off.notches.rounds = 0;
     const MeshResult before = mesh_cut(h, cut, off);
     const MeshResult after = mesh_cut(h, cut);
     EXPECT_EQ(before.notches, 0u);
     EXPECT_GE(after.notches, 1u);
-    EXPECT_GT(point_to_mesh_distance(h.cloud.positions, before.mesh).max, 0.02);
-    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, after.mesh).max, 0.01);
+    const double max_before = point_to_mesh_distance(h.cloud.positions, before.mesh).max;
+    EXPECT_GT(max_before, 0.006);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, after.mesh).max, 0.8 * max_before);
     const TopologyStats t = topology_stats(after.mesh);
     EXPECT_EQ(t.boundary_loops, 1u);
     EXPECT_EQ(t.genus, 0);

@@ -728,7 +728,9 @@ TEST(Reconstruct, long_cracks_over_sampled_surface_close)
     o.surface = fewer;
     o.crack_rounds = 0; // the crack and crossing rounds mend it too: the hole filling alone is tested
     o.crossing_rounds = 0;
-    EXPECT_GT(topology_stats(mesh_at_tolerance(arm, 0.015, o).result.mesh).boundary_loops, 0u); // the case still exercises it
+    // The case still exercises it: the cone at 0.005 has a hole over 300 edges (the arm's is gone since
+    // session 46, whose surface keeps borders where they were).
+    EXPECT_GT(topology_stats(mesh_at_tolerance(cone, 0.005, o).result.mesh).boundary_loops, 0u);
 }
 
 // The corners of the box [0, size.x] × [0, size.y] × [0, size.z], corner k at (k & 1, k & 2, k & 4), and
@@ -1109,8 +1111,9 @@ TEST(Reconstruct, a_slit_in_a_terrain_is_mended)
 // The same mending in 3D (session 37): a closed surface in one piece with loops whose tiles their
 // neighbours surround has cracks, not borders. A tetrahedron's 71-degree edges at a coarse cut (200k
 // points, tolerance 0.01, seed 3): its tiles straddle the edges and leave 8 slits along them; refined
-// there, 1 is left, genus 0, with fewer crossing pairs. A round is kept only with fewer loops, no more
-// pieces, no higher genus, no more fans left out and no more crossing pairs.
+// there, none is left (1 until session 46), genus 0, nearer the points. A round is kept only with
+// fewer loops, no more pieces, no higher genus, no more fans left out and at most 5% more crossing
+// pairs in the surface (83 after the untangling against 67 without the crack and crossing rounds).
 TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
 {
     const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(200000, 3));
@@ -1125,7 +1128,9 @@ TEST(Reconstruct, cracks_along_a_tetrahedrons_edges_are_mended)
     EXPECT_EQ(after.components, 1u);
     EXPECT_EQ(after.genus, 0);
     EXPECT_GT(mended.cut.size(), cut.size());
-    EXPECT_LT(self_intersecting_faces(mended.mesh).size(), self_intersecting_faces(cracked.mesh).size());
+    EXPECT_LT(mesh_to_point_distance(mended.mesh, h.cloud.positions).max, mesh_to_point_distance(cracked.mesh, h.cloud.positions).max);
+    EXPECT_LT(point_to_mesh_distance(h.cloud.positions, mended.mesh).max, point_to_mesh_distance(h.cloud.positions, cracked.mesh).max);
+    EXPECT_LT(self_intersecting_faces(mended.mesh).size(), mended.mesh.n_faces() / 50); // few: 1%
 }
 
 // Crossing rounds (session 39): at a coarse cut the tetrahedron's tiles straddle its 71-degree edges
