@@ -74,6 +74,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -119,13 +120,21 @@ const double kMinGapFaceCos = std::cos(radians(75.0));
 // two rim points: the strip of gap faces between two tiles is about one point spacing wide and costs two
 // faces per rim point while it carries almost no shape, so its rim points are merged pairwise (the
 // shortest such edge first) and neighbouring fans meet directly.
+// The border points collapsed away so far, per border edge (from, to: vertex indices, in the border's
+// direction): every later collapse that changes the edge keeps them within its slack too. Without it,
+// each collapse is judged against the border as the last one left it, and the moves add up: chords
+// that grow pass after pass across a hole of the sample (QA round 56: a sphere's cut cap covered 21%
+// -> 31%) or across the last ring of a ring-scanned cylinder.
+using BorderHistory = std::map<std::pair<int, int>, std::vector<Vec3>>;
+
 // Whether collapsing the border point v into w keeps the border within `slack` of where it was: the
-// border path p, v, q becomes p, w, q (p, q when w is one of them), and each path must lie within slack
-// of the other. Both ways: v can lie on the new path while w is far from the old one (a rim point next to
-// p collapsed across a strip into a point well inside: the new border p, w, q passes by v but cuts a
-// corner off the sample, QA round 54's trimmed last ring of a cylinder). A split point (slack 0) lies on
-// the straight segment: within a billionth of its length.
-bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHandle w, double slack)
+// border path p, v, q becomes p, w, q (p, q when w is one of them), and v, the border points collapsed
+// into p-v and v-q before (`history`), and the old path must lie within slack of the new one, and the
+// new one (w and its segments' midpoints) within slack of the old. Both ways: v can lie on the new path
+// while w is far from the old one (a rim point next to p collapsed across a strip into a point well
+// inside: the new border passes by v but cuts a corner off the sample, QA round 54's trimmed last ring
+// of a cylinder). A split point (slack 0) lies on the straight segment: within a billionth of its length.
+bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHandle w, double slack, const BorderHistory& history)
 {
     const Mesh::HalfedgeHandle out = mesh.halfedge_handle(v); // a border halfedge for a border vertex
     if (!mesh.is_boundary(out))
@@ -139,19 +148,55 @@ bool border_keeps_shape(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHand
         const double t = len2 > 0.0 ? std::clamp(dot(x - a, d) / len2, 0.0, 1.0) : 0.0;
         return distance(x, a + d * t);
     };
-    const auto old_path_distance = [&](const Vec3& x) { return std::min(segment_distance(x, p, at), segment_distance(x, at, q)); };
     const bool along = w == next || w == previous;
-    double deviation = 0.0;
+    const auto new_path_distance = [&](const Vec3& x) {
+        return along ? segment_distance(x, p, q) : std::min(segment_distance(x, p, m), segment_distance(x, m, q));
+    };
+    const double bound = std::max(slack, 1e-9 * (distance(at, p) + distance(at, q)));
+    if (new_path_distance(at) > bound)
+        return false;
+    for (const auto& edge : {std::make_pair(previous.idx(), v.idx()), std::make_pair(v.idx(), next.idx())})
+        if (const auto it = history.find(edge); it != history.end())
+            for (const Vec3& x : it->second)
+                if (new_path_distance(x) > bound)
+                    return false;
     if (along)
-        deviation = segment_distance(at, p, q); // the old path's farthest point from p, q is v
-    else // the vertices and the midpoints of each path against the other
-        deviation = std::max({std::min(segment_distance(at, p, m), segment_distance(at, m, q)), old_path_distance(m),
-                              old_path_distance((p + m) * 0.5), old_path_distance((m + q) * 0.5)});
-    return deviation <= std::max(slack, 1e-9 * (distance(at, p) + distance(at, q)));
+        return true; // the old path's farthest point from p, q is v
+    const auto old_path_distance = [&](const Vec3& x) { return std::min(segment_distance(x, p, at), segment_distance(x, at, q)); };
+    return std::max({old_path_distance(m), old_path_distance((p + m) * 0.5), old_path_distance((m + q) * 0.5)}) <= bound;
+}
+
+// Records the collapse of the border point v into w (before it is made): the new border edges keep v
+// and what the old ones kept.
+void remember_border_collapse(const Mesh& mesh, Mesh::VertexHandle v, Mesh::VertexHandle w, BorderHistory& history)
+{
+    const Mesh::HalfedgeHandle out = mesh.halfedge_handle(v);
+    const int next = mesh.to_vertex_handle(out).idx(), previous = mesh.from_vertex_handle(mesh.prev_halfedge_handle(out)).idx();
+    std::vector<Vec3> before, after;
+    if (const auto it = history.find({previous, v.idx()}); it != history.end()) {
+        before = std::move(it->second);
+        history.erase(it);
+    }
+    if (const auto it = history.find({v.idx(), next}); it != history.end()) {
+        after = std::move(it->second);
+        history.erase(it);
+    }
+    const Vec3 at = to_vec3(mesh.point(v));
+    if (w.idx() == next || w.idx() == previous) { // one edge, previous -> next
+        std::vector<Vec3>& kept = history[{previous, next}];
+        kept = std::move(before);
+        kept.push_back(at);
+        kept.insert(kept.end(), after.begin(), after.end());
+        return;
+    }
+    before.push_back(at); // v lies between both new edges' ends: each keeps it
+    after.push_back(at);
+    history[{previous, w.idx()}] = std::move(before);
+    history[{w.idx(), next}] = std::move(after);
 }
 
 std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, const std::vector<double>& border_slack,
-                                 const Projection& projection, bool across_strips = false)
+                                 const Projection& projection, BorderHistory& history, bool across_strips = false)
 {
     auto tile_of_face = OpenMesh::getProperty<OpenMesh::FaceHandle, int>(mesh, kFaceTile);
     const double min_cos = std::cos(radians(kMaxCollapseTurnDegrees));
@@ -227,12 +272,14 @@ std::size_t collapse_loop_points(Mesh& mesh, const std::vector<double>& slack, c
             // collapse keeps the surface where it was, and rim points collapsed into a window). The
             // border may move by its slack or by border_slack (about a point spacing of its tile: the
             // strip between a tile's hull and the sample's own border is that wide).
-            if (mesh.is_boundary(v) &&
-                !border_keeps_shape(mesh, v, w, std::max(std::isfinite(slack[i]) ? slack[i] : 0.0, border_slack[i])))
+            const bool on_border = mesh.is_boundary(v);
+            if (on_border && !border_keeps_shape(mesh, v, w, border_slack[i], history))
                 continue;
             // The link condition last: it is the costliest test and the shape tests fail more often.
             if (!mesh.is_collapse_ok(h))
                 continue;
+            if (on_border)
+                remember_border_collapse(mesh, v, w, history);
             if (std::isfinite(slack[i])) // a split point moves nothing: its neighbours stay free
                 for (const Mesh::VertexHandle x : mesh.vv_range(v))
                     touched[static_cast<std::size_t>(x.idx())] = true;
@@ -686,19 +733,20 @@ void build_surface(const Hierarchy& h, const std::vector<Tile>& given, Mesh& mes
         for (std::size_t i = 0; i < slack.size(); ++i)
             if (std::isinf(slack[i]))
                 std::swap(split_only[i], slack[i]);
-        st.collapsed_split_points = collapse_loop_points(mesh, split_only, border_slack, projection);
+        BorderHistory history;
+        st.collapsed_split_points = collapse_loop_points(mesh, split_only, border_slack, projection, history);
         // Three passes, halving the slack each time (a negative slack stays negative): a point removed in
         // one pass may be moved again by the later ones, so the surface moves from it by at most
         // 1.75 × collapse_tolerance × the RMS plane distance.
         for (int pass = 0; pass < 3; ++pass) {
-            st.collapsed_split_points += collapse_loop_points(mesh, slack, border_slack, projection);
+            st.collapsed_split_points += collapse_loop_points(mesh, slack, border_slack, projection, history);
             for (double& x : slack)
                 x *= 0.5;
         }
         // Then the strips between tiles, in the same halving passes (after the loops, so that the rim
         // points that carry no shape are gone and the strips' remaining pairs are the ones merged).
         for (int pass = 0; pass < 3 && options.strip_tolerance > 0.0; ++pass) {
-            st.collapsed_split_points += collapse_loop_points(mesh, strip_slack, border_slack, projection, true);
+            st.collapsed_split_points += collapse_loop_points(mesh, strip_slack, border_slack, projection, history, true);
             for (double& x : strip_slack)
                 x *= 0.5;
         }

@@ -323,14 +323,14 @@ TEST(CloseCoveredHoles, options_and_properties_are_checked)
 namespace mrt {
 namespace {
 
-// In mesh_cut: a sampled tetrahedron (its 71-degree edges are acute; 200k points, seed 6, tolerance
-// 0.005) keeps a loop along an edge without the pass, none with it: the loop's rim is taken out and
+// In mesh_cut: a sampled tetrahedron (its 71-degree edges are acute; 200k points, seed 5, tolerance
+// 0.01) keeps two loops along its edges without the pass, one with it: the other's rim is taken out and
 // capped from the points. (Until session 46 a star prism's 36-degree edge, seed 5 of six tried, was
 // this case; the surface now keeps borders where they were and no star prism seed leaves such a loop.)
 TEST(CloseCoveredHoles, mesh_cut_closes_a_loop_along_a_tetrahedrons_acute_edge)
 {
-    const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(200000, 6));
-    const Cut cut = cut_by_tolerance(h, 0.005);
+    const Hierarchy h = build_hierarchy(testing::sampled_tetrahedron(200000, 5));
+    const Cut cut = cut_by_tolerance(h, 0.01);
     MeshOptions on, off; // the caps alone: no crack rounds, which mend such loops before them
     on.crack_rounds = 0;
     off = on;
