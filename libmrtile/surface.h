@@ -92,6 +92,9 @@ struct SurfaceOptions
     double max_gap_width = 4.0;
     //! After assembly, collapse the ε-split points that carry no shape into their loop neighbours (the
     //! fans stay exactly as they were; gap faces re-attach; topology unchanged). Fewer faces, same error.
+    //! On the mesh's border every collapse (of these and of the two passes below) keeps the border
+    //! within a point spacing of its tile of where it was: of the points it removes and of every border
+    //! point removed before on the edges it changes, and the new border near the old.
     bool collapse_split_points = true;
     //! With collapse_split_points, loop points that are input points are collapsed too when the surface
     //! moves by at most this × their tile's RMS plane distance, in three passes that halve it (so at most
