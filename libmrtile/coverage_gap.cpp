@@ -701,9 +701,7 @@ double node_gap(const Hierarchy& h, const Node& node, const CoverageOptions& opt
 bool has_normal(const Node& n)
 {
     constexpr double kLineWidthSpacings = 0.5;
-    if (!(n.frame.values[1] > 0.0) || n.count() == 0)
-        return false;
-    const LineSpread spread = line_spread(n);
+    const LineSpread spread = line_spread(n); // an empty node, or one with no spread across, has none
     return spread.across > kLineWidthSpacings * spread.spacing_along;
 }
 

@@ -80,9 +80,10 @@ double node_spacing(const Node& n);
 
 //! How a node's points spread across the line of their largest axis (RMS along the second axis) and
 //! how far apart they lie along it, taken as spread evenly over a segment (variance L² / 12, so the
-//! spacing is L / count); model units, both 0 for an empty node. The line tests compare the two: a
-//! stretch of a scan line spreads across under its spacing along it (cut.cpp's is_line, the coverage
-//! gap's facing rule).
+//! spacing is L / count); model units, both 0 for an empty node. The line tests compare the two, each
+//! with its own factor: cut.cpp's is_line (across at most 2 spacings along: a stretch of a scan line
+//! with its noise) and the coverage gap's facing rule (a node has a normal when it spreads across more
+//! than half a spacing along).
 struct LineSpread
 {
     double across = 0.0;
