@@ -71,8 +71,11 @@ OpenMesh::IO::Options io_options(MeshFormat format, const Mesh& mesh, const Writ
 // Float keeps 24 bits: beyond about 16 extents from the origin it loses more than a millionth of the
 // mesh's extent (a survey in UTM coordinates, 5,000 km north: half a metre). Such meshes are written with
 // double coordinates (PLY, OBJ, OFF; .om always keeps doubles, STL has only floats). `shift` is added
-// to every position first (the origin of a mesh stored relative to it), `fraction` is of the extent.
-bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, double fraction = 1e-6)
+// to every position first (the origin of a mesh stored relative to it), `fraction` is of the extent;
+// `edge_fraction` (0 = not asked) of the mean edge length: the extent says nothing of the detail where
+// the mesh is small parts far apart (QA round 57: two unit spheres 200 km apart, both around the origin
+// at 100 km, in 1.6 cm float steps, 8 mm off the 1 mm mesh).
+bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, double fraction = 1e-6, double edge_fraction = 0.0)
 {
     double largest = 0.0;
     Mesh::Point lo(0, 0, 0), hi(0, 0, 0);
@@ -87,9 +90,19 @@ bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, doubl
         first = false;
     }
     const double extent = (hi - lo).norm();
+    const double step = largest * std::ldexp(1.0, -24);
+    double edges = 0.0;
+    if (edge_fraction > 0.0 && mesh.n_edges() > 0) {
+        for (const auto e : mesh.edges())
+            edges += mesh.calc_edge_length(e);
+        edges /= static_cast<double>(mesh.n_edges());
+    }
     // Beyond the largest float a coordinate is no float at all (1e39 was written as inf).
-    return largest * std::ldexp(1.0, -24) > fraction * extent || largest > std::numeric_limits<float>::max();
+    return step > fraction * extent || (edges > 0.0 && step > edge_fraction * edges) || largest > std::numeric_limits<float>::max();
 }
+
+// A thousandth of the mean edge: float steps finer than that move no vertex visibly.
+constexpr double kDoubleEdgeFraction = 1e-3;
 
 // Little-endian bytes of a value, whatever the host.
 template <typename T>
@@ -258,7 +271,8 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
     }
 
     const bool colors = options.colors && out.has_vertex_colors() && format != MeshFormat::obj;
-    if ((format == MeshFormat::ply || format == MeshFormat::obj || format == MeshFormat::off) && needs_doubles(out)) {
+    if ((format == MeshFormat::ply || format == MeshFormat::obj || format == MeshFormat::off) &&
+        needs_doubles(out, {0, 0, 0}, 1e-6, kDoubleEdgeFraction)) {
         AtomicFile file(path);
         const std::string bytes = double_precision_file(out, format, options.binary, options.normals, colors);
         file.write(bytes.data(), bytes.size());

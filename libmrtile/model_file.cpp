@@ -708,6 +708,8 @@ namespace {
 Model parse_model(const std::string& bytes, const std::string& name, bool with_levels)
 {
     Reader r(bytes, name);
+    if (bytes.empty())
+        r.fail("empty file (0 bytes)");
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
         r.fail("wrong magic (not an .mrt file, or damaged by a text-mode transfer)");
     if (bytes.size() < kHeaderSize + kTrailerSize)

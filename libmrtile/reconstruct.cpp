@@ -11,6 +11,7 @@
 #include "libmrtile/errors.h"
 #include "libmrtile/gap_triangulation.h"
 #include "libmrtile/median.h"
+#include "libmrtile/parallel.h"
 #include "libmrtile/pca.h"
 #include "libmrtile/union_find.h"
 
@@ -411,18 +412,27 @@ private:
 // farther from the mesh than they were.
 constexpr std::size_t kFarSample = 20000;
 
+// The step of that sample: every this many points.
+std::size_t far_sample_step(const Hierarchy& h) { return std::max<std::size_t>(1, h.cloud.size() / kFarSample); }
+
+// The distances from that sample (points 0, step, 2 step, ...) to `mesh`.
+std::vector<double> sample_distances(const Hierarchy& h, const Mesh& mesh, std::size_t threads)
+{
+    std::vector<Vec3> sample;
+    for (std::size_t i = 0; i < h.cloud.size(); i += far_sample_step(h))
+        sample.push_back(h.cloud.positions[i]);
+    const std::vector<ClosestPoint> closest = closest_points(sample, mesh, threads);
+    std::vector<double> distances(sample.size());
+    for (std::size_t i = 0; i < sample.size(); ++i)
+        distances[i] = distance(sample[i], closest[i].point);
+    return distances;
+}
+
 // The largest distance from a regular sample of h's points to `mesh`.
 double farthest_sample_point(const Hierarchy& h, const Mesh& mesh, std::size_t threads)
 {
-    std::vector<Vec3> sample;
-    const std::size_t step = std::max<std::size_t>(1, h.cloud.size() / kFarSample);
-    for (std::size_t i = 0; i < h.cloud.size(); i += step)
-        sample.push_back(h.cloud.positions[i]);
-    const std::vector<ClosestPoint> closest = closest_points(sample, mesh, threads);
-    double farthest = 0.0;
-    for (std::size_t i = 0; i < sample.size(); ++i)
-        farthest = std::max(farthest, distance(sample[i], closest[i].point));
-    return farthest;
+    const std::vector<double> distances = sample_distances(h, mesh, threads);
+    return distances.empty() ? 0.0 : *std::max_element(distances.begin(), distances.end());
 }
 
 // The median reach of the watches (0 for none).
@@ -698,6 +708,219 @@ std::vector<bool> refine_dropped_tiles(const Hierarchy& h, const MeshOptions& op
     return away;
 }
 
+// A face of the surface lies over a hole of the sample when a spot of it (its centre, its edges'
+// midpoints) has no input point within its reach: the larger of its tiles' geometric error
+// (node_error: a coarse tile's fan may lie that far from the points anyway) and kHoleSpacings of
+// their sample spacing (the fill keeps holes of a mean width of SurfaceOptions::max_gap_width = 4
+// spacings open). No tile's own coverage gap sees a hole that lies between tiles: three tiles around
+// it, each hull over a rim of it under 4 spacings deep, and gap triangles within the local alpha
+// radius across the rest (a sphere with a hole 11 spacings wide at tolerance 0.01: covered, the mesh
+// 0.13 from every point over it).
+constexpr double kHoleSpacings = 4.0;
+// In a height field, faces at least this steep (60 degrees) are bridged steps (see faces_over_holes).
+constexpr double kMinHoleFaceCos = 0.5;
+// A face over a hole turns from its tiles' planes by at most 45 degrees (see faces_over_holes).
+constexpr double kMinHoleTileCos = 0.7071;
+
+struct FacesOverHoles
+{
+    std::vector<bool> tiles; //!< per tile of the cut: a corner of such a face
+    double area = 0.0;       //!< of those faces
+};
+
+// Whether an input point lies within `reach` of q: down the tree by the nodes' boxes, first found ends it.
+bool point_within(const Hierarchy& h, const Vec3& q, double reach, std::vector<std::int32_t>& stack)
+{
+    const double reach2 = reach * reach;
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+        const Node& n = h.nodes[static_cast<std::size_t>(stack.back())];
+        stack.pop_back();
+        if (!(n.box.squared_distance_to(q) <= reach2))
+            continue;
+        if (!n.is_leaf()) {
+            stack.push_back(n.left);
+            stack.push_back(n.right);
+            continue;
+        }
+        for (std::uint32_t i = n.begin; i < n.end; ++i)
+            if (squared_distance(h.cloud.positions[i], q) <= reach2)
+                return true;
+    }
+    return false;
+}
+
+FacesOverHoles faces_over_holes(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles, const Mesh& mesh,
+                                const SurfaceStats& surface, std::size_t threads)
+{
+    FacesOverHoles out;
+    out.tiles.assign(cut.size(), false);
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!mesh.get_property_handle(cluster, kVertexCluster) || tiles.size() != cut.size())
+        return out;
+    const std::unordered_map<std::int32_t, std::size_t> index = positions_in(cut);
+    std::vector<double> reach(cut.size());
+    for (std::size_t k = 0; k < cut.size(); ++k)
+        reach[k] = std::max(node_error(h.nodes[static_cast<std::size_t>(cut[k])]), kHoleSpacings * sample_spacing(h, tiles[k]));
+    std::vector<char> over(mesh.n_faces(), 0);
+    run_parallel_ranges(mesh.n_faces(), 256, threads, [&](std::size_t begin, std::size_t end) {
+        std::vector<std::int32_t> stack;
+        for (std::size_t f = begin; f < end; ++f) {
+            std::array<Vec3, 3> c{};
+            std::array<std::size_t, 3> tile{cut.size(), cut.size(), cut.size()};
+            double r = 0.0;
+            int k = 0;
+            for (const Mesh::VertexHandle v : mesh.fv_range(Mesh::FaceHandle(static_cast<int>(f)))) {
+                if (const auto it = index.find(mesh.property(cluster, v)); it != index.end()) {
+                    r = std::max(r, reach[it->second]);
+                    tile[static_cast<std::size_t>(k)] = it->second;
+                }
+                c[static_cast<std::size_t>(k++)] = to_vec3(mesh.point(v));
+            }
+            // A face no longer than half its reach has every spot within that of a corner, and its
+            // corners are on the sample (rim points, or split points between them).
+            const double longest = std::max({distance(c[0], c[1]), distance(c[1], c[2]), distance(c[2], c[0])});
+            if (!(r > 0.0) || longest <= 0.5 * r)
+                continue;
+            // A height field bridges its steps on purpose (SurfaceOptions::bridge_steps): a face
+            // standing steep over the plane is a wall no scan saw from above, not a hole.
+            const Vec3 n = cross(c[1] - c[0], c[2] - c[0]);
+            if (surface.height_field_used && !(std::abs(dot(n, surface.height_field_axis)) >= kMinHoleFaceCos * norm(n)))
+                continue;
+            // A face across a hole lies in the surface around it, as its tiles do; one that turns
+            // from a tile's plane by more than 45 degrees joins tiles across an edge (the folds and
+            // cracks of coarse tiles at an acute edge, the crack and crossing rounds' business).
+            bool in_surface = true;
+            for (const std::size_t t : tile)
+                in_surface = in_surface && t < cut.size() && std::abs(dot(n, tiles[t].normal)) >= kMinHoleTileCos * norm(n);
+            if (!in_surface)
+                continue;
+            for (const Vec3& spot : {(c[0] + c[1] + c[2]) / 3.0, (c[0] + c[1]) * 0.5, (c[1] + c[2]) * 0.5, (c[2] + c[0]) * 0.5})
+                if (!point_within(h, spot, r, stack)) {
+                    over[f] = 1;
+                    break;
+                }
+        }
+    });
+    for (const Mesh::FaceHandle f : mesh.faces()) {
+        if (!over[static_cast<std::size_t>(f.idx())])
+            continue;
+        out.area += mesh.calc_face_area(f);
+        for (const Mesh::VertexHandle v : mesh.fv_range(f))
+            if (const auto it = index.find(mesh.property(cluster, v)); it != index.end())
+                out.tiles[it->second] = true;
+    }
+    return out;
+}
+
+// Rim steps of a hole round (refine_over_holes).
+constexpr int kRimSteps = 2;
+
+// The indices of the marked entries.
+std::vector<std::size_t> marked_tiles(const std::vector<bool>& marked)
+{
+    std::vector<std::size_t> which;
+    for (std::size_t k = 0; k < marked.size(); ++k)
+        if (marked[k])
+            which.push_back(k);
+    return which;
+}
+
+// The tiles (indices into `cut`, which is in point order) holding a point of the regular sample
+// (sample_distances) farther than `limit` from the mesh.
+std::vector<bool> tiles_of_far_points(const Hierarchy& h, const Cut& cut, const std::vector<double>& distances, double limit)
+{
+    std::vector<bool> far(cut.size(), false);
+    const std::size_t step = far_sample_step(h);
+    for (std::size_t s = 0; s < distances.size(); ++s) {
+        if (!(distances[s] > limit))
+            continue;
+        const auto i = static_cast<std::uint32_t>(s * step);
+        const auto it = std::upper_bound(cut.begin(), cut.end(), i, [&](std::uint32_t point, std::int32_t node) {
+            return point < h.nodes[static_cast<std::size_t>(node)].begin;
+        });
+        if (it != cut.begin())
+            far[static_cast<std::size_t>(it - cut.begin() - 1)] = true;
+    }
+    return far;
+}
+
+// Where faces of the surface lie over a hole of the sample (faces_over_holes), the tiles of their
+// corners that are not leaves are refined and the cut meshed again (MeshOptions::hole_rounds): finer
+// tiles reach less far over the hole and their gap triangles are narrower, so that the hole opens and
+// the fill (its width test) keeps it open. A round is kept only when less of the surface lies over
+// holes, with no more pieces and no more fans left out.
+void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOptions& surface, MeshResult& result,
+                       std::vector<Tile>& tiles)
+{
+    if (options.hole_rounds == 0)
+        return;
+    FacesOverHoles over = faces_over_holes(h, result.cut, tiles, result.mesh, result.surface, options.fit.threads);
+    for (int round = 0; round < options.hole_rounds && over.area > 0.0; ++round) {
+        bool refinable = false;
+        for (std::size_t k = 0; k < over.tiles.size(); ++k)
+            refinable = refinable || (over.tiles[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
+        if (!refinable)
+            return;
+        Cut cut = refine_marked(h, result.cut, over.tiles);
+        SurfaceOptions again_options;
+        std::vector<Tile> again_tiles = tiles_for(h, cut, options, again_options);
+        SurfaceStats again_stats;
+        Mesh again;
+        try {
+            build_surface(h, again_tiles, again, again_options, &again_stats);
+            result.meshed_tiles += again_tiles.size();
+        } catch (const InvalidInput&) {
+            return; // the refined cut cannot be meshed: keep the mesh as it is
+        }
+        FacesOverHoles over_again = faces_over_holes(h, cut, again_tiles, again, again_stats, options.fit.threads);
+        if (!(over_again.area < over.area) || topology_stats(again).components > topology_stats(result.mesh).components ||
+            again_stats.dropped_fans > result.surface.dropped_fans)
+            return;
+        // An opened hole's rim runs along the outlines of its tiles, which a tile built from a sample of
+        // its points (TileOptions::max_points) draws up to a sample spacing inside the points there (a
+        // terrain's lakes at tolerance 0.02: the rim 0.03 inside the sample). The tiles of the sample
+        // points that the new mesh leaves farther than the old one left any, by a spacing, are refined
+        // (fewer points, a finer sample) and meshed again, up to kRimSteps times; the round is kept only
+        // once none is left.
+        const std::vector<double> before = sample_distances(h, result.mesh, options.fit.threads);
+        const double limit = (before.empty() ? 0.0 : *std::max_element(before.begin(), before.end())) +
+                             crack_reach(h, tiles, marked_tiles(over.tiles)) / kCrackReach;
+        bool rim_kept = false;
+        for (int step = 0; step <= kRimSteps; ++step) {
+            const std::vector<bool> far = tiles_of_far_points(h, cut, sample_distances(h, again, options.fit.threads), limit);
+            if (std::none_of(far.begin(), far.end(), [](bool b) { return b; })) {
+                rim_kept = true;
+                break;
+            }
+            if (step == kRimSteps)
+                break;
+            cut = refine_marked(h, cut, far);
+            again_tiles = tiles_for(h, cut, options, again_options);
+            again = Mesh();
+            again_stats = SurfaceStats{};
+            try {
+                build_surface(h, again_tiles, again, again_options, &again_stats);
+                result.meshed_tiles += again_tiles.size();
+            } catch (const InvalidInput&) {
+                return;
+            }
+            over_again = faces_over_holes(h, cut, again_tiles, again, again_stats, options.fit.threads);
+            if (!(over_again.area < over.area) || topology_stats(again).components > topology_stats(result.mesh).components ||
+                again_stats.dropped_fans > result.surface.dropped_fans)
+                return;
+        }
+        if (!rim_kept)
+            return;
+        result.cut = cut;
+        result.mesh = std::move(again);
+        result.surface = again_stats;
+        tiles = std::move(again_tiles);
+        surface = again_options;
+        over = std::move(over_again);
+    }
+}
+
 // The tiles (indices into the cut) of the faces that cross another face: a fan face's own tile, a gap
 // face's corners' tiles.
 std::vector<bool> tiles_of_crossings(const Cut& cut, const Mesh& mesh, const std::vector<std::pair<int, int>>& pairs)
@@ -833,10 +1056,10 @@ void refine_crossings(const Hierarchy& h, const MeshOptions& options, MeshResult
 
 void check_mesh_options(const MeshOptions& options)
 {
-    for (const int rounds : {options.small_object_rounds, options.gap_rounds, options.dropped_rounds, options.piece_rounds,
+    for (const int rounds : {options.small_object_rounds, options.gap_rounds, options.hole_rounds, options.dropped_rounds, options.piece_rounds,
                              options.crack_rounds, options.crossing_rounds})
         if (rounds < 0 || rounds > kMaxRefineRounds)
-            throw InvalidInput("MeshOptions: small_object_rounds, gap_rounds, dropped_rounds, piece_rounds, crack_rounds and crossing_rounds must be in [0, " +
+            throw InvalidInput("MeshOptions: small_object_rounds, gap_rounds, hole_rounds, dropped_rounds, piece_rounds, crack_rounds and crossing_rounds must be in [0, " +
                                std::to_string(kMaxRefineRounds) + "]");
     // Before any work: mesh_cut untangles only when max_rounds > 0 and the mesh crosses itself, so bad
     // untangling options were otherwise taken without a word; the fit and slivers' options were checked
@@ -884,6 +1107,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     build_surface(h, tiles, result.mesh, surface_options, &result.surface);
     result.meshed_tiles = tiles.size();
     refine_broken_pieces(h, options, surface_options, result, tiles);
+    refine_over_holes(h, options, surface_options, result, tiles);
     std::vector<bool> away = refine_dropped_tiles(h, options, surface_options, result, tiles);
     finish_mesh(h, options, result, tiles, away);
     refine_crossings(h, options, result, tiles, away);

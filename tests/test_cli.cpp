@@ -269,6 +269,8 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --tolerance 0x10", "'0x10' is not a number"},
         {a + " --alpha ' 5'", "' 5' is not a number"},
         {tiles + " --geoid-height ''", "must not be empty"},
+        // One cause per message (QA round 57: a finite height without a CRS was told it needs a finite value).
+        {tiles + " --geoid-height 10", "not placed by a CRS"},
         {"mesh " + (dir / "a.mrt").string() + " -o " + (dir / "x.txt").string(), "unknown output extension"},
         {tiles + " --levels 10000000", "--levels"},
         // Zero levels or a zero alpha cannot work; both were taken as the default (QA round 27).
@@ -311,6 +313,7 @@ TEST(Cli, outputs_are_checked_before_any_work)
         // A LOD set's levels are mended by finer whole cuts (QA round 48: both were accepted and ignored).
         {tiles + " --crack-rounds 0", "--crack-rounds: mends one mesh"},
         {tiles + " --crossing-rounds 1", "--crossing-rounds: mends one mesh"},
+        {tiles + " --hole-rounds 1", "--hole-rounds: mends one mesh"},
         {"export " + (dir / "a.mrt").string() + " -o " + (dir / "x.glb").string() + " --format lod-glb --crack-rounds 0", "--crack-rounds: mends"},
         {"reconstruct " + in + " -o " + (dir / "t").string() + " --format 3dtiles --crossing-rounds 0", "--crossing-rounds"},
         // A flag given a value (session 42: `--thin-walls=3` was taken as the flag, `=0` as off).
@@ -455,6 +458,40 @@ TEST(Cli, crossing_rounds_are_an_option_of_mesh_and_reconstruct)
     EXPECT_GE(folded, 100u);
     EXPECT_LT(refined, folded / 20);
     expect_a_rounds_option(dir, "--crossing-rounds");
+}
+
+// --hole-rounds reaches the library: a unit sphere of 50k points with three round holes of 10-20
+// degrees (test_reconstruct: holes between tiles covered by gap triangles) is meshed at 0.01 nearer its
+// points over the holes by default (mesh to points max) than with --hole-rounds 0, with one loop per
+// hole; out of range is a usage error naming the option, and lods, whose levels must nest, has no such
+// option.
+TEST(Cli, hole_rounds_are_an_option_of_mesh_and_reconstruct)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const std::vector<Vec3> centres{normalized(Vec3{-0.85, -0.48, 0.21}), normalized(Vec3{0.3, -0.5, -0.8}), normalized(Vec3{-0.3, 0.9, 0.3})};
+    const std::vector<double> radii{10.7, 15.0, 20.0};
+    std::string text;
+    const PointCloud sphere = shapes::sphere(50000, 1.0, 2);
+    for (const Vec3& p : sphere.positions) {
+        bool in_a_hole = false;
+        for (std::size_t k = 0; k < centres.size(); ++k)
+            in_a_hole = in_a_hole || dot(normalized(p + sphere.origin), centres[k]) > std::cos(radii[k] * M_PI / 180.0);
+        if (!in_a_hole)
+            text += std::to_string(p.x + sphere.origin.x) + " " + std::to_string(p.y + sphere.origin.y) + " " +
+                    std::to_string(p.z + sphere.origin.z) + "\n";
+    }
+    write_text(dir / "holes.xyz", text);
+    const auto stats = [&](const std::string& extra) {
+        const Result r = mrtile("reconstruct " + (dir / "holes.xyz").string() + " -o " + (dir / "h.ply").string() +
+                                    " --tolerance 0.01 --stats-json " + (dir / "h.json").string() + extra, dir);
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(slurp(dir / "h.json"));
+    };
+    const nlohmann::json opened = stats(""), covered = stats(" --hole-rounds 0");
+    EXPECT_LT(opened["mesh_to_points_max"].get<double>(), 0.7 * covered["mesh_to_points_max"].get<double>());
+    EXPECT_EQ(opened["boundary_loops"].get<std::size_t>(), 3u);
+    EXPECT_EQ(opened["components"].get<std::size_t>(), 1u);
+    expect_a_rounds_option(dir, "--hole-rounds");
 }
 
 // --thin-walls reaches the library (test_reconstruct: a sphere shell 3 point spacings thick, both sides

@@ -196,7 +196,7 @@ TEST(LodSet, draco_grid_spans_the_meshes_not_a_stray_point)
     o.max_tile_triangles = 2048;
     const LodSet set = make_lod_set(h, o);
     ASSERT_FALSE(set.tiles.empty());
-    EXPECT_GT(set.tiles[0].box.largest_side(), 50.0);
+    EXPECT_LT(set.tiles[0].box.largest_side(), 3.0); // its content's (before QA round 57: over 50)
     const QuantizationGrid grid = tileset_grid(set);
     EXPECT_LT(grid.range, 3.0); // the sphere and its skirts (before: over 50)
     EXPECT_GT(grid.range, 1.9);
@@ -208,6 +208,61 @@ TEST(LodSet, draco_grid_spans_the_meshes_not_a_stray_point)
                 EXPECT_LE(d, grid.range);
             }
         }
+}
+
+// Stray points the surface leaves out (their own cluster, no fan) set no tile's box, error or skirt
+// (QA round 57: a unit sphere of 20k points with five strays within 50 had skirts 16 deep through the
+// sphere, a geometric error of 8.4 on every coarse tile and a root box 60 wide). Every tile's box and
+// content stay within the sphere and its skirts, and the errors are those of the sphere alone.
+TEST(LodSet, strays_left_out_set_no_box_error_or_skirt)
+{
+    PointCloud c = shapes::sphere(20000);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> far(-50.0, 50.0);
+    for (int k = 0; k < 5; ++k)
+        c.positions.push_back({far(rng), far(rng), far(rng)});
+    const Hierarchy h = build_hierarchy(c);
+    const Hierarchy clean = build_hierarchy(shapes::sphere(20000));
+    LodSetOptions o;
+    o.max_tile_triangles = 1000;
+    const LodSet set = make_lod_set(h, o), reference = make_lod_set(clean, o);
+    ASSERT_GT(set.tiles.size(), 1u);
+    EXPECT_LT(set.tiles[0].geometric_error, 2.0 * reference.tiles[0].geometric_error + 1e-9);
+    for (const LodLevel& level : set.levels)
+        EXPECT_LT(level.max_plane_distance, 0.2);
+    // Skirts hang at most twice the level's largest plane distance (under 0.2) from the surface.
+    const double reach = 1.45;
+    for (const LodTile& t : set.tiles) {
+        EXPECT_LT(t.geometric_error, 0.5);
+        if (t.mesh.n_vertices() == 0)
+            continue;
+        for (const double side : {t.box.min.x, t.box.min.y, t.box.min.z, t.box.max.x, t.box.max.y, t.box.max.z})
+            EXPECT_LT(std::abs(side), 1.1 * reach);
+        for (const auto v : t.mesh.vertices())
+            EXPECT_LT(norm(to_vec3(t.mesh.point(v))), 1.1 * reach);
+    }
+}
+
+// No two levels mesh the same cut (QA round 57: the bunny with three stray points, as `mrtile lods`
+// cuts it, had levels 0 and 1 at the same 258 tiles, and its tileset two byte-identical root tiles).
+TEST(LodSet, no_level_repeats_the_one_before)
+{
+    PointCloud c = read_points(MRTILE_SHARED_DATA "/bun_zipper.ply");
+    for (const Vec3& stray : {Vec3{0.4, 0.1, 0.0}, Vec3{-0.3, 0.5, 0.2}, Vec3{0.0, -0.4, -0.3}})
+        c.positions.push_back(stray - c.origin);
+    const Hierarchy h = build_hierarchy(c);
+    LodSetOptions o;
+    o.tileset = false;
+    o.first_level_triangles = 4096; // as `mrtile lods`
+    const std::vector<LodLevel> levels = make_lod_levels(h, o);
+    ASSERT_GE(levels.size(), 3u);
+    for (std::size_t k = 0; k + 1 < levels.size(); ++k) {
+        Cut a = levels[k].cut, b = levels[k + 1].cut;
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        EXPECT_NE(a, b) << k;
+        EXPECT_LT(levels[k].mesh.n_faces(), levels[k + 1].mesh.n_faces()) << k;
+    }
 }
 
 // One Draco grid spans a whole tileset: 14 bits gave a survey 20 km wide 1.4 m steps, and its finest

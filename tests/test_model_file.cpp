@@ -405,6 +405,13 @@ TEST(ModelFile, truncated_or_corrupted_is_rejected)
         damaged[at] = static_cast<char>(damaged[at] ^ 0x5a);
         EXPECT_THROW(deserialize_model(damaged, "bad.mrt"), IoError) << at;
     }
+    try { // an empty file says so (QA round 57: "wrong magic")
+        deserialize_model("", "empty.mrt");
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("empty.mrt: "), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("empty file"), std::string::npos) << e.what();
+    }
     try {
         deserialize_model(bytes.substr(0, bytes.size() - 3), "short.mrt");
         FAIL();

@@ -248,12 +248,14 @@ TEST(RefineMesh, the_bunny_keeps_its_borders)
 
     // Refined three levels at once, some regions are steep in their planes and would fold over their
     // surroundings: such regions are put back (or their fans alone refined), so no face crosses another.
+    // (At 0.01 the hole rounds open one more of the base's small holes than 0.005 keeps open: the
+    // refinement keeps the coarse mesh's borders, as above.)
     const MeshResult coarse = mesh_cut(h, cut_by_tolerance(h, 0.01));
     ASSERT_TRUE(self_intersecting_faces(coarse.mesh).empty());
     MeshResult checked = coarse;
     refine_mesh(h, checked, cut_by_tolerance(h, 0.002));
     EXPECT_TRUE(self_intersecting_faces(checked.mesh).empty());
-    expect_manifold(checked.mesh, before.boundary_loops, before.genus);
+    expect_manifold(checked.mesh, topology_stats(coarse.mesh).boundary_loops, before.genus);
     LocalRefineOptions unchecked;
     unchecked.no_crossings = false;
     MeshResult folded = coarse;

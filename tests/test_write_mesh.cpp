@@ -164,6 +164,28 @@ TEST(WriteMesh, far_meshes_keep_double_coordinates)
     write_mesh(octahedron(), {0, 0, 0}, dir / "near.ply");
     EXPECT_NE(read_bytes(dir / "near.ply").find("property float x"), std::string::npos);
     EXPECT_NE(read_bytes(dir / "far.ply").find("property double x"), std::string::npos);
+    // Small parts far apart with the origin between them (QA round 57: two unit spheres 200 km apart
+    // came out in 1.6 cm float steps): the extent is large, the detail is not. Doubles, exact.
+    const Mesh one = octahedron();
+    Mesh pair = one;
+    const std::size_t n = pair.n_vertices();
+    std::vector<Mesh::VertexHandle> copy;
+    for (std::size_t k = 0; k < n; ++k)
+        copy.push_back(pair.add_vertex(pair.point(Mesh::VertexHandle(static_cast<int>(k))) * 0.01 + Mesh::Point(200000.3, 0, 0)));
+    for (const auto f : one.faces()) {
+        std::vector<Mesh::VertexHandle> corners;
+        for (const auto v : one.fv_range(f))
+            corners.push_back(copy[static_cast<std::size_t>(v.idx())]);
+        ASSERT_TRUE(pair.add_face(corners).is_valid());
+    }
+    for (std::size_t k = 0; k < n; ++k)
+        pair.set_point(Mesh::VertexHandle(static_cast<int>(k)), pair.point(Mesh::VertexHandle(static_cast<int>(k))) * 0.01);
+    write_mesh(pair, {0, 0, 0}, dir / "pair.ply");
+    EXPECT_NE(read_bytes(dir / "pair.ply").find("property double x"), std::string::npos);
+    const PointCloud back = read_points(dir / "pair.ply");
+    ASSERT_EQ(back.size(), 2 * n);
+    for (std::size_t k = 0; k < 2 * n; ++k)
+        EXPECT_EQ(back.origin + back.positions[k], to_vec3(pair.point(Mesh::VertexHandle(static_cast<int>(k)))));
 }
 
 // .om keeps double coordinates far from the origin (OpenMesh's readers round the other formats to float).

@@ -449,9 +449,11 @@ struct MeshArgs
     std::size_t close_holes = 0;
     int crack_rounds = MeshOptions{}.crack_rounds;
     int crossing_rounds = MeshOptions{}.crossing_rounds;
+    int hole_rounds = MeshOptions{}.hole_rounds;
     bool thin_walls = false;
     const CLI::Option* crack_option = nullptr;    // one mesh only: LOD levels are mended by whole cuts
     const CLI::Option* crossing_option = nullptr;
+    const CLI::Option* hole_option = nullptr;
 
     //! `one_mesh` false: `lods`, whose per-level statistics go to lods.json (no --stats-json).
     void add(CLI::App* cmd, bool one_mesh = true)
@@ -492,6 +494,11 @@ struct MeshArgs
                                               "rounds refining the tiles of faces that cross each other and meshing again (0 = off)")
                                   ->check(CLI::Range(0, kMaxRefineRounds))
                                   ->capture_default_str();
+        if (one_mesh)
+            hole_option = cmd->add_option("--hole-rounds", hole_rounds,
+                                          "rounds refining the tiles of faces over holes of the sample and meshing again (0 = off)")
+                              ->check(CLI::Range(0, kMaxRefineRounds))
+                              ->capture_default_str();
     }
 
     MeshOptions options() const
@@ -506,6 +513,7 @@ struct MeshArgs
         o.surface.close_holes = close_holes;
         o.crack_rounds = crack_rounds;
         o.crossing_rounds = crossing_rounds;
+        o.hole_rounds = hole_rounds;
         o.tiles.meet_factor = thin_walls ? kThinWallMeetFactor : 0.0;
         return o;
     }
@@ -1320,8 +1328,12 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     }
     if (crs && t.gltf.up_axis != UpAxis::Z)
         throw UsageError("--up y: the model's CRS (" + crs->name + ") has z up; leave --up out");
-    if (e.geoid_height != 0.0 && (!crs || !std::isfinite(e.geoid_height)))
-        throw UsageError("--geoid-height: needs a finite value and a tileset placed by the model's CRS (not --enu)");
+    // One cause per message (QA round 57: a finite height without a CRS was told "needs a finite value").
+    if (e.geoid_height != 0.0 && !std::isfinite(e.geoid_height))
+        throw UsageError("--geoid-height: needs a finite value");
+    if (e.geoid_height != 0.0 && !crs)
+        throw UsageError(e.enu.empty() ? "--geoid-height: the tileset is not placed by a CRS (the model has none; give --crs)"
+                                       : "--geoid-height: applies to a tileset placed by a CRS, not by --enu");
     const LodSetOptions options = e.options(m);
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
     note_noise_floor(h, set);
@@ -1484,7 +1496,7 @@ struct ProduceArgs
         if (exp.lod_set() && mesh.no_quality)
             throw UsageError("--no-quality: a LOD set's levels are not measured; it skips the measurement of one mesh");
         // Accepted and ignored until QA round 48: the levels of a LOD set are mended by whole cuts.
-        for (const CLI::Option* o : {mesh.crack_option, mesh.crossing_option})
+        for (const CLI::Option* o : {mesh.crack_option, mesh.crossing_option, mesh.hole_option})
             if (exp.lod_set() && given(o))
                 throw UsageError(o->get_name() + ": mends one mesh; a LOD set's levels are mended by finer whole cuts instead");
     }
@@ -2240,9 +2252,20 @@ int run(int argc, char** argv)
         store.model_crs = h.cloud.crs;
         naming_input(inputs_name(rec_in), [&] { rec_args.write(h, g, rec_out, store); });
         // Last, so that a failed command leaves no model either (with --store-levels it is already
-        // written, with its levels, before the tileset).
+        // written, with its levels, before the tileset). A model that cannot be saved (a full disk)
+        // takes the output just written with it: exit 1 leaves nothing behind (QA round 57 found the
+        // tileset left).
         if (!rec_model.empty() && store.stored == 0) {
-            save_model(h, rec_model);
+            try {
+                save_model(h, rec_model);
+            } catch (...) {
+                std::error_code ec;
+                if (fs::is_directory(rec_out, ec) && fs::exists(rec_out / "tileset.json", ec))
+                    fs::remove_all(rec_out, ec);
+                else if (fs::is_regular_file(rec_out, ec))
+                    fs::remove(rec_out, ec);
+                throw;
+            }
             std::printf("wrote %s\n", rec_model.string().c_str());
         }
         return 0;
