@@ -499,6 +499,43 @@ bool crossings_grow(std::size_t before, std::size_t after)
     return 20 * after > 21 * before;
 }
 
+// A cut meshed again by a refinement round: its tiles, the surface options they chose, its surface.
+struct Remeshed
+{
+    Cut cut;
+    std::vector<Tile> tiles;
+    SurfaceOptions options;
+    SurfaceStats stats;
+    Mesh mesh;
+};
+
+// The surface of `cut` for a round (tiles_for, build_surface), its tiles counted in `result`; false
+// when the refined cut cannot be meshed (no surface left): the caller keeps the mesh it has.
+bool remesh(const Hierarchy& h, const MeshOptions& options, Cut cut, Remeshed& out, MeshResult& result)
+{
+    out.cut = std::move(cut);
+    out.tiles = tiles_for(h, out.cut, options, out.options);
+    out.stats = SurfaceStats{};
+    out.mesh = Mesh();
+    try {
+        build_surface(h, out.tiles, out.mesh, out.options, &out.stats);
+    } catch (const InvalidInput&) {
+        return false;
+    }
+    result.meshed_tiles += out.tiles.size();
+    return true;
+}
+
+// The round's surface becomes the result's.
+void keep_round(Remeshed& again, MeshResult& result, std::vector<Tile>& tiles, SurfaceOptions& surface)
+{
+    result.cut = std::move(again.cut);
+    result.mesh = again.mesh;
+    result.surface = again.stats;
+    tiles = std::move(again.tiles);
+    surface = again.options;
+}
+
 // After the surface: boundary loops along tiles that their neighbours surround are cracks, not the
 // sample's borders (a scan's outline runs along tiles that face the empty outside: bun045, most of its
 // loop tiles). Three kinds are mended by refining those tiles and meshing the cut again, up to
@@ -582,18 +619,10 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
             refinable = refinable || (marked[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
         if (!refinable)
             return;
-        const Cut cut = refine_marked(h, result.cut, marked);
-        SurfaceOptions again_options;
-        std::vector<Tile> again_tiles = tiles_for(h, cut, options, again_options);
-        SurfaceStats again_stats;
-        Mesh again;
-        try {
-            build_surface(h, again_tiles, again, again_options, &again_stats);
-            result.meshed_tiles += again_tiles.size();
-        } catch (const InvalidInput&) {
-            return; // the refined cut cannot be meshed (no surface left): keep the mesh as it is
-        }
-        const TopologyStats then = topology_stats(again);
+        Remeshed again;
+        if (!remesh(h, options, refine_marked(h, result.cut, marked), again, result))
+            return;
+        const TopologyStats then = topology_stats(again.mesh);
         bool better = pieces ? then.components < now.components && then.boundary_loops <= now.boundary_loops
                              : then.boundary_loops < now.boundary_loops && then.components <= now.components &&
                                    (slits || then.genus <= now.genus);
@@ -602,7 +631,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
             // that loop (the others may be cracks), and the loop is left to later rounds as well.
             std::vector<const CrackWatch*> spanning;
             for (const CrackWatch& watch : mended)
-                if (watch.spans_a_hole(h, again))
+                if (watch.spans_a_hole(h, again.mesh))
                     spanning.push_back(&watch);
             if (!spanning.empty()) {
                 for (const CrackWatch* watch : spanning)
@@ -613,18 +642,14 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
                 continue;
             }
             const double reach = median_reach(mended);
-            better = again_stats.dropped_fans <= result.surface.dropped_fans &&
-                     !crossings_grow(self_intersecting_faces(result.mesh).size(), self_intersecting_faces(again).size()) &&
-                     !spans_more_holes(h, result.mesh, again, reach) &&
-                     !leaves_points(h, result.mesh, again, reach, options.fit.threads);
+            better = again.stats.dropped_fans <= result.surface.dropped_fans &&
+                     !crossings_grow(self_intersecting_faces(result.mesh).size(), self_intersecting_faces(again.mesh).size()) &&
+                     !spans_more_holes(h, result.mesh, again.mesh, reach) &&
+                     !leaves_points(h, result.mesh, again.mesh, reach, options.fit.threads);
         }
         if (!better)
             return;
-        result.cut = cut;
-        result.mesh = again;
-        result.surface = again_stats;
-        tiles = std::move(again_tiles);
-        surface = again_options;
+        keep_round(again, result, tiles, surface);
         ++round;
         retried = false;
     }
@@ -862,20 +887,16 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
             refinable = refinable || (over.tiles[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
         if (!refinable)
             return;
-        Cut cut = refine_marked(h, result.cut, over.tiles);
-        SurfaceOptions again_options;
-        std::vector<Tile> again_tiles = tiles_for(h, cut, options, again_options);
-        SurfaceStats again_stats;
-        Mesh again;
-        try {
-            build_surface(h, again_tiles, again, again_options, &again_stats);
-            result.meshed_tiles += again_tiles.size();
-        } catch (const InvalidInput&) {
-            return; // the refined cut cannot be meshed: keep the mesh as it is
-        }
-        FacesOverHoles over_again = faces_over_holes(h, cut, again_tiles, again, again_stats, options.fit.threads);
-        if (!(over_again.area < over.area) || topology_stats(again).components > topology_stats(result.mesh).components ||
-            again_stats.dropped_fans > result.surface.dropped_fans)
+        Remeshed again;
+        if (!remesh(h, options, refine_marked(h, result.cut, over.tiles), again, result))
+            return;
+        FacesOverHoles over_again;
+        const auto better = [&] {
+            over_again = faces_over_holes(h, again.cut, again.tiles, again.mesh, again.stats, options.fit.threads);
+            return over_again.area < over.area && topology_stats(again.mesh).components <= topology_stats(result.mesh).components &&
+                   again.stats.dropped_fans <= result.surface.dropped_fans;
+        };
+        if (!better())
             return;
         // An opened hole's rim runs along the outlines of its tiles, which a tile built from a sample of
         // its points (TileOptions::max_points) draws up to a sample spacing inside the points there (a
@@ -886,37 +907,14 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
         const std::vector<double> before = sample_distances(h, result.mesh, options.fit.threads);
         const double limit = (before.empty() ? 0.0 : *std::max_element(before.begin(), before.end())) +
                              crack_reach(h, tiles, marked_tiles(over.tiles)) / kCrackReach;
-        bool rim_kept = false;
-        for (int step = 0; step <= kRimSteps; ++step) {
-            const std::vector<bool> far = tiles_of_far_points(h, cut, sample_distances(h, again, options.fit.threads), limit);
-            if (std::none_of(far.begin(), far.end(), [](bool b) { return b; })) {
-                rim_kept = true;
+        for (int step = 0;; ++step) {
+            const std::vector<bool> far = tiles_of_far_points(h, again.cut, sample_distances(h, again.mesh, options.fit.threads), limit);
+            if (std::none_of(far.begin(), far.end(), [](bool b) { return b; }))
                 break;
-            }
-            if (step == kRimSteps)
-                break;
-            cut = refine_marked(h, cut, far);
-            again_tiles = tiles_for(h, cut, options, again_options);
-            again = Mesh();
-            again_stats = SurfaceStats{};
-            try {
-                build_surface(h, again_tiles, again, again_options, &again_stats);
-                result.meshed_tiles += again_tiles.size();
-            } catch (const InvalidInput&) {
-                return;
-            }
-            over_again = faces_over_holes(h, cut, again_tiles, again, again_stats, options.fit.threads);
-            if (!(over_again.area < over.area) || topology_stats(again).components > topology_stats(result.mesh).components ||
-                again_stats.dropped_fans > result.surface.dropped_fans)
+            if (step == kRimSteps || !remesh(h, options, refine_marked(h, again.cut, far), again, result) || !better())
                 return;
         }
-        if (!rim_kept)
-            return;
-        result.cut = cut;
-        result.mesh = std::move(again);
-        result.surface = again_stats;
-        tiles = std::move(again_tiles);
-        surface = again_options;
+        keep_round(again, result, tiles, surface);
         over = std::move(over_again);
     }
 }
