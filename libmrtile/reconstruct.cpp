@@ -419,7 +419,8 @@ std::size_t far_sample_step(const Hierarchy& h) { return std::max<std::size_t>(1
 std::vector<double> sample_distances(const Hierarchy& h, const Mesh& mesh, std::size_t threads)
 {
     std::vector<Vec3> sample;
-    for (std::size_t i = 0; i < h.cloud.size(); i += far_sample_step(h))
+    const std::size_t step = far_sample_step(h);
+    for (std::size_t i = 0; i < h.cloud.size(); i += step)
         sample.push_back(h.cloud.positions[i]);
     const std::vector<ClosestPoint> closest = closest_points(sample, mesh, threads);
     std::vector<double> distances(sample.size());
@@ -855,6 +856,9 @@ std::vector<std::size_t> marked_tiles(const std::vector<bool>& marked)
 // (sample_distances) farther than `limit` from the mesh.
 std::vector<bool> tiles_of_far_points(const Hierarchy& h, const Cut& cut, const std::vector<double>& distances, double limit)
 {
+    assert(std::is_sorted(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) {
+        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+    }));
     std::vector<bool> far(cut.size(), false);
     const std::size_t step = far_sample_step(h);
     for (std::size_t s = 0; s < distances.size(); ++s) {

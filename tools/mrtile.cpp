@@ -590,7 +590,10 @@ Mesh::Point mesh_extent(const Mesh& mesh)
     return hi - lo;
 }
 
-void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out)
+// `range`: the extent the bits divide (0: the mesh's own, as one mesh's Draco grid); `chosen`: the
+// bits were picked by the tileset, not by --quantize (QA round 57: the note blamed a --quantize 24 the
+// user never gave, and suggested the 14-bit default, coarser still).
+void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out, double range = 0.0, bool chosen = false)
 {
     if (mesh.n_edges() == 0)
         return;
@@ -598,11 +601,19 @@ void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out)
     for (const auto e : mesh.edges())
         length += mesh.calc_edge_length(e);
     const double mean_edge = length / static_cast<double>(mesh.n_edges());
-    const double step = mesh_extent(mesh).max() / (std::ldexp(1.0, bits) - 1.0);
-    if (step > 0.25 * mean_edge)
+    const double step = (range > 0.0 ? range : mesh_extent(mesh).max()) / (std::ldexp(1.0, bits) - 1.0);
+    if (!(step > 0.25 * mean_edge))
+        return;
+    if (chosen)
+        std::printf("note: %s: Draco positions at %d bits, the most Draco takes, snap to steps of %.3g on the tileset's "
+                    "%.3g-wide grid, %.0f%% of the finest level's mean edge length: vertices merge and faces collapse "
+                    "when decoded (the statistics are of the mesh before quantization); leave --draco out, or export "
+                    "parts far apart separately\n",
+                    out.string().c_str(), bits, step, range, 100.0 * step / mean_edge);
+    else
         std::printf("note: %s: --quantize %d snaps positions to steps of %.3g, %.0f%% of the mean edge length: "
                     "vertices merge and faces collapse when decoded (the statistics are of the mesh before "
-                    "quantization); the default is 14 bits\n",
+                    "quantization); more bits keep them apart\n",
                     out.string().c_str(), bits, step, 100.0 * step / mean_edge);
 }
 
@@ -1355,7 +1366,9 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         if (!given(o.quantize_option)) {
             bits = tileset_position_bits(h, set, grid, crs ? crs->projection.unit_to_metre : 1.0, o.quantize);
             t.gltf.draco_options.position_bits = bits;
-            if (bits > o.quantize)
+            // At the most Draco takes the step can still be coarser than that (QA round 57: two spheres
+            // 200 km apart), and the note after the write says so instead.
+            if (bits > o.quantize && bits < kMaxPositionBits)
                 std::printf("Draco positions quantized to %d bits (steps of %.3g on the tileset's %.3g-wide grid), under "
                             "half the finest level's accuracy; --quantize N sets it\n",
                             bits, grid.range / (std::ldexp(1.0, bits) - 1.0), grid.range);
@@ -1363,19 +1376,27 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     }
     write_lod_tileset(set, origin, dir, t);
     if (o.draco) // one grid over the whole set: the finest level is where a coarse step shows
-        note_coarse_quantization(set.levels.back().mesh, bits, dir);
+        note_coarse_quantization(set.levels.back().mesh, bits, dir, t.gltf.draco_options.grid ? t.gltf.draco_options.grid->range : 0.0,
+                                 !given(o.quantize_option) && bits == kMaxPositionBits);
     if (placed)
         std::printf("placed on the globe by %s: local east-north-up metres at longitude %.7f, latitude %.7f, "
                     "height %.2f m (WGS 84)\n",
                     crs_label(*crs).c_str(), placed->anchor.longitude_deg, placed->anchor.latitude_deg,
                     placed->anchor.height);
     note_placement(h, e, placed.has_value());
-    std::size_t contents = 0, triangles = 0;
+    std::size_t contents = 0, triangles = 0, over = 0, largest = 0;
     for (const LodTile& tile : set.tiles)
         if (tile.mesh.n_faces() > 0) {
             ++contents;
             triangles += tile.mesh.n_faces();
+            largest = std::max(largest, tile.mesh.n_faces());
+            over += tile.mesh.n_faces() > options.max_tile_triangles ? 1 : 0;
         }
+    // Said, not silent (QA round 57: a corridor's root held 5,430 triangles at 4,096).
+    if (over > 0)
+        std::printf("note: %s: %zu of %zu tiles hold more than --max-tile-triangles %zu (up to %zu): regions their level cannot "
+                    "split (a cut node's faces stay together; a coarse level cut finer where it was in pieces)\n",
+                    dir.string().c_str(), over, contents, options.max_tile_triangles, largest);
     std::printf("wrote %s: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
                 (dir / "tileset.json").lexically_normal().string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
@@ -1427,6 +1448,14 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
             break;
         }
     }
+    // Level 0's budget, said where it is not met (QA round 57: a corridor's level 0 held 5,430 faces
+    // against 3,072, with no word): mending a level in pieces cuts it finer (lod_set.h).
+    if (!set.levels.empty() && options.tolerances.empty() && options.levels == 0 &&
+        set.levels.front().mesh.n_faces() > options.first_level_triangles * 3 / 4)
+        std::printf("note: level 0 has %zu faces, over its budget of %zu (three quarters of min(--max-tile-triangles, "
+                    "4096)): the coarsest cut that fits it came out in pieces or with more loops than the finest, and "
+                    "was cut finer\n",
+                    static_cast<std::size_t>(set.levels.front().mesh.n_faces()), options.first_level_triangles * 3 / 4);
     // Built aside and swapped in whole, as a tileset is: a chain with fewer levels than the one it
     // replaces left that one's finer levels beside it (QA).
     const TemporaryDirectory temporary(dir);
