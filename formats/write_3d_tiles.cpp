@@ -73,8 +73,16 @@ void validate_tree(const std::vector<TilesetTile>& tiles)
 // can choose for content inside this box).
 double quantization_padding(const BoundingBox& box, const GltfOptions& gltf)
 {
-    if (!gltf.draco)
-        return 0.0;
+    if (!gltf.draco) {
+        // Plain tiles hold float32 positions relative to the tileset's one offset: a vertex on the box
+        // rounds by up to half a float step of the largest stored coordinate (QA round 57: up to 2e-5
+        // of a half-axis outside, in small tiles far from the offset). One step of padding holds it.
+        if (!gltf.offset)
+            return 0.0;
+        const Vec3 a = to_output_frame(box.min, gltf.up_axis) - *gltf.offset, b = to_output_frame(box.max, gltf.up_axis) - *gltf.offset;
+        const double largest = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z), std::abs(b.x), std::abs(b.y), std::abs(b.z)});
+        return std::ldexp(largest, -23);
+    }
     const DracoOptions& d = gltf.draco_options;
     const double cube = d.grid ? d.grid->range : box.largest_side();
     return cube / (std::ldexp(1.0, d.position_bits) - 1.0);
@@ -199,7 +207,7 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
                 std::rethrow_exception(failure);
     });
 
-    Json root = tile_json(tiles, 0, options.gltf);
+    Json root = tile_json(tiles, 0, gltf); // with the offset the contents were written with
     std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     if (options.root_transform) {
         transform = *options.root_transform;
