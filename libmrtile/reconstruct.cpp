@@ -897,8 +897,11 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
         FacesOverHoles over_again;
         const auto better = [&] {
             over_again = faces_over_holes(h, again.cut, again.tiles, again.mesh, again.stats, options.fit.threads);
-            return over_again.area < over.area && topology_stats(again.mesh).components <= topology_stats(result.mesh).components &&
-                   again.stats.dropped_fans <= result.surface.dropped_fans;
+            const TopologyStats now = topology_stats(result.mesh), then = topology_stats(again.mesh);
+            // No fewer loops: refining beside one hole can cover another (QA round 58: terrains at
+            // 0.005 lost a 16-spacing hole that was open while the area over holes fell elsewhere).
+            return over_again.area < over.area && then.components <= now.components &&
+                   then.boundary_loops >= now.boundary_loops && again.stats.dropped_fans <= result.surface.dropped_fans;
         };
         if (!better())
             return;

@@ -1253,10 +1253,11 @@ TEST(Reconstruct, crack_rounds_leave_the_samples_holes_open)
 // it by less than its coverage gap rule counts, is covered by gap triangles within the local alpha
 // radius (the sphere's 100k points at 0.02: 0.30 of area farther than 3 spacings from every point
 // with seed 3, in faces up to 13 spacings off). Refining the tiles of the faces over it opens it:
-// that area falls by 40-90% at both tolerances, every hole open before stays open, no point
+// that area falls by 40-90% in three of the four cases and never grows, every hole open before stays open, no point
 // is left farther from the mesh and the mesh stays one piece. A sphere without holes meshes as before.
 TEST(Reconstruct, holes_between_tiles_are_opened)
 {
+    int opened_well = 0; // cases whose area over the holes falls by 40% or more
     for (const std::uint32_t seed : {2u, 3u}) {
         const HoledSphere sphere = holed_sphere(100000, seed);
         const Hierarchy h = build_hierarchy(sphere.cloud);
@@ -1271,7 +1272,11 @@ TEST(Reconstruct, holes_between_tiles_are_opened)
             const double before = area_off_the_sample(covered.mesh, h, everywhere, reach);
             const double after = area_off_the_sample(opened.mesh, h, everywhere, reach);
             EXPECT_GT(before, 50.0 * reach * reach); // the case this guards
-            EXPECT_LT(after, 0.6 * before); // 0.25 -> 0.13, 0.08 -> 0.009 (seed 2); 0.30 -> 0.11, 0.08 -> 0.012 (seed 3)
+            EXPECT_LE(after, before);
+            // 0.25 -> 0.13 (seed 2, 0.02); 0.30 -> 0.11, 0.08 -> 0.012 (seed 3). Seed 2 at 0.005 stays
+            // as it was: its round (0.08 -> 0.009) left 7 loops where there were 9, and rounds keep
+            // no fewer loops (QA round 58: a round beside one hole covered another on terrains).
+            opened_well += after < 0.6 * before ? 1 : 0;
             EXPECT_GT(opened.cut.size(), cut.size());
             const TopologyStats a = topology_stats(covered.mesh), b = topology_stats(opened.mesh);
             EXPECT_EQ(b.components, 1u);
@@ -1291,6 +1296,7 @@ TEST(Reconstruct, holes_between_tiles_are_opened)
                       point_to_mesh_distance(h.cloud.positions, covered.mesh).max + spacing);
         }
     }
+    EXPECT_GE(opened_well, 3);
     const Hierarchy whole = build_hierarchy(shapes::sphere(30000));
     const Cut cut = cut_by_tolerance(whole, 0.01);
     MeshOptions without;
