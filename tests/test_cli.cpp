@@ -460,6 +460,26 @@ TEST(Cli, crossing_rounds_are_an_option_of_mesh_and_reconstruct)
     expect_a_rounds_option(dir, "--crossing-rounds");
 }
 
+// Draco's grid spans a tileset: parts far apart need more bits than Draco takes (24). Then the export
+// says so, and neither claims the finest level's accuracy nor blames a --quantize never given (QA
+// round 57: two unit spheres 200 km apart).
+TEST(Cli, draco_at_its_bit_limit_says_so)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string text;
+    for (const double x : {0.0, 200000.0})
+        for (const Vec3& p : shapes::sphere(20000, 1.0, 3).positions)
+            text += std::to_string(p.x + x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+    write_text(dir / "far.xyz", text);
+    const Result r = mrtile("reconstruct " + (dir / "far.xyz").string() + " -o " + (dir / "t").string() +
+                                " --format 3dtiles --draco --build-tolerance 1e-9",
+                            dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("Draco positions at 24 bits, the most Draco takes"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("under half the finest level's accuracy"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("--quantize 24"), std::string::npos) << r.out;
+}
+
 // --hole-rounds reaches the library: a unit sphere of 50k points with three round holes of 10-20
 // degrees (test_reconstruct: holes between tiles covered by gap triangles) is meshed at 0.01 nearer its
 // points over the holes by default (mesh to points max) than with --hole-rounds 0, with one loop per
