@@ -287,8 +287,10 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     }
 }
 
-BoundingBox mesh_box(const Mesh& m, BoundingBox box)
+// The box of the mesh's vertices; empty (min above max) for a mesh without any.
+BoundingBox mesh_box(const Mesh& m)
 {
+    BoundingBox box{Vec3{1, 1, 1} * std::numeric_limits<double>::infinity(), Vec3{1, 1, 1} * -std::numeric_limits<double>::infinity()};
     for (const auto v : m.vertices()) {
         const Vec3 p = to_vec3(m.point(v));
         box.min = min(box.min, p);
@@ -623,11 +625,8 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         extract_region(h, level, index[tile.level], region, 2.0 * level.max_plane_distance, o.skirts, tile.mesh,
                        &tile.skirt_faces);
         // The content's box (not the region's points': strays the mesh leaves out made a bunny's root
-        // box 17 times its size, QA round 57); empty (min above max) for a tile without content.
-        tile.box = tile.mesh.n_vertices() > 0 ? mesh_box(tile.mesh, {to_vec3(tile.mesh.point(*tile.mesh.vertices_begin())),
-                                                                    to_vec3(tile.mesh.point(*tile.mesh.vertices_begin()))})
-                                              : BoundingBox{Vec3{1, 1, 1} * std::numeric_limits<double>::infinity(),
-                                                            Vec3{1, 1, 1} * -std::numeric_limits<double>::infinity()};
+        // box 17 times its size, QA round 57); empty for a tile without content.
+        tile.box = mesh_box(tile.mesh);
     });
     nest_tile_boxes(set.tiles);
     // A tile with no content at any level below (its points all left out) takes its parent's box (a

@@ -500,6 +500,15 @@ bool crossings_grow(std::size_t before, std::size_t after)
     return 20 * after > 21 * before;
 }
 
+// Whether a marked tile of `cut` is no leaf: a round has something to refine.
+bool any_refinable(const Hierarchy& h, const Cut& cut, const std::vector<bool>& marked)
+{
+    for (std::size_t k = 0; k < marked.size(); ++k)
+        if (marked[k] && !h.nodes[static_cast<std::size_t>(cut[k])].is_leaf())
+            return true;
+    return false;
+}
+
 // A cut meshed again by a refinement round: its tiles, the surface options they chose, its surface.
 struct Remeshed
 {
@@ -615,10 +624,7 @@ void refine_broken_pieces(const Hierarchy& h, const MeshOptions& options, Surfac
         }
         if (pieces && static_cast<double>(inner) < kMinSurroundedShare * static_cast<double>(on_loops))
             return;
-        bool refinable = false;
-        for (std::size_t k = 0; k < marked.size(); ++k)
-            refinable = refinable || (marked[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
-        if (!refinable)
+        if (!any_refinable(h, result.cut, marked))
             return;
         Remeshed again;
         if (!remesh(h, options, refine_marked(h, result.cut, marked), again, result))
@@ -697,10 +703,7 @@ std::vector<bool> refine_dropped_tiles(const Hierarchy& h, const MeshOptions& op
     std::vector<bool> away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
     std::size_t crossings = 0; // self-intersecting pairs of the surface, counted once a round starts
     for (int round = 0; round < options.dropped_rounds && !away.empty(); ++round) {
-        bool refinable = false;
-        for (std::size_t k = 0; k < away.size(); ++k)
-            refinable = refinable || (away[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
-        if (!refinable)
+        if (!any_refinable(h, result.cut, away))
             break;
         if (round == 0)
             crossings = self_intersecting_faces(result.mesh).size();
@@ -885,19 +888,18 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
     if (options.hole_rounds == 0)
         return;
     FacesOverHoles over = faces_over_holes(h, result.cut, tiles, result.mesh, result.surface, options.fit.threads);
+    std::vector<double> distances; // of the regular sample to result.mesh, once needed
     for (int round = 0; round < options.hole_rounds && over.area > 0.0; ++round) {
-        bool refinable = false;
-        for (std::size_t k = 0; k < over.tiles.size(); ++k)
-            refinable = refinable || (over.tiles[k] && !h.nodes[static_cast<std::size_t>(result.cut[k])].is_leaf());
-        if (!refinable)
+        if (!any_refinable(h, result.cut, over.tiles))
             return;
         Remeshed again;
         if (!remesh(h, options, refine_marked(h, result.cut, over.tiles), again, result))
             return;
         FacesOverHoles over_again;
+        const TopologyStats now = topology_stats(result.mesh);
         const auto better = [&] {
             over_again = faces_over_holes(h, again.cut, again.tiles, again.mesh, again.stats, options.fit.threads);
-            const TopologyStats now = topology_stats(result.mesh), then = topology_stats(again.mesh);
+            const TopologyStats then = topology_stats(again.mesh);
             // No fewer loops: refining beside one hole can cover another (QA round 58: terrains at
             // 0.005 lost a 16-spacing hole that was open while the area over holes fell elsewhere).
             return over_again.area < over.area && then.components <= now.components &&
@@ -911,11 +913,15 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
         // points that the new mesh leaves farther than the old one left any, by a spacing, are refined
         // (fewer points, a finer sample) and meshed again, up to kRimSteps times; the round is kept only
         // once none is left.
-        const std::vector<double> before = sample_distances(h, result.mesh, options.fit.threads);
-        const double limit = (before.empty() ? 0.0 : *std::max_element(before.begin(), before.end())) +
+        // (The sample's distances to the mesh kept are those found for it as the round before's new mesh.)
+        if (distances.empty())
+            distances = sample_distances(h, result.mesh, options.fit.threads);
+        const double limit = (distances.empty() ? 0.0 : *std::max_element(distances.begin(), distances.end())) +
                              crack_reach(h, tiles, marked_tiles(over.tiles)) / kCrackReach;
+        std::vector<double> again_distances;
         for (int step = 0;; ++step) {
-            const std::vector<bool> far = tiles_of_far_points(h, again.cut, sample_distances(h, again.mesh, options.fit.threads), limit);
+            again_distances = sample_distances(h, again.mesh, options.fit.threads);
+            const std::vector<bool> far = tiles_of_far_points(h, again.cut, again_distances, limit);
             if (std::none_of(far.begin(), far.end(), [](bool b) { return b; }))
                 break;
             if (step == kRimSteps || !remesh(h, options, refine_marked(h, again.cut, far), again, result) || !better())
@@ -923,6 +929,7 @@ void refine_over_holes(const Hierarchy& h, const MeshOptions& options, SurfaceOp
         }
         keep_round(again, result, tiles, surface);
         over = std::move(over_again);
+        distances = std::move(again_distances);
     }
 }
 

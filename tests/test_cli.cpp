@@ -56,6 +56,13 @@ Result mrtile(const std::string& args, const fs::path& dir, const std::string& e
 
 void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
+// One point as a line of an .xyz file.
+std::string xyz_line(double x, double y, double z)
+{
+    return std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+}
+std::string xyz_line(const Vec3& p) { return xyz_line(p.x, p.y, p.z); }
+
 // A small sphere sample (a Fibonacci spiral on the unit sphere).
 std::vector<std::array<double, 3>> sphere_points(int n)
 {
@@ -72,7 +79,7 @@ fs::path sphere_xyz(const fs::path& dir, int n = 3000)
 {
     std::string text;
     for (const auto& [x, y, z] : sphere_points(n))
-        text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+        text += xyz_line(x, y, z);
     const fs::path p = dir / "sphere.xyz";
     write_text(p, text);
     return p;
@@ -353,10 +360,10 @@ TEST(Cli, points_along_a_curve_are_noted)
     std::string helix, sphere;
     for (int i = 0; i < 5000; ++i) {
         const double t = 10.0 * M_PI * i / 5000.0;
-        helix += std::to_string(std::cos(t)) + " " + std::to_string(std::sin(t)) + " " + std::to_string(0.1 * t) + "\n";
+        helix += xyz_line(std::cos(t), std::sin(t), 0.1 * t);
     }
     for (const auto& [x, y, z] : sphere_points(3000))
-        sphere += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+        sphere += xyz_line(x, y, z);
     write_text(dir / "helix.xyz", helix);
     write_text(dir / "sphere.xyz", sphere);
     Result r = mrtile("reconstruct " + (dir / "helix.xyz").string() + " -o " + (dir / "h.ply").string() + " --stats-json " +
@@ -380,7 +387,7 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
     const fs::path dir = testing::fresh_test_dir("cli");
     std::string cone;
     for (const Vec3& p : shapes::cone(30000, 0.5, 0.5 / std::tan(radians(60.0))).positions)
-        cone += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+        cone += xyz_line(p);
     write_text(dir / "cone.xyz", cone);
     Result r = mrtile("reconstruct " + (dir / "cone.xyz").string() + " -o " + (dir / "c.ply").string() + " --tolerance 0.005 --stats-json " +
                           (dir / "c.json").string(), dir);
@@ -405,7 +412,7 @@ void write_sampled_tetrahedron(const fs::path& path, std::size_t count, std::uin
 {
     std::string text;
     for (const Vec3& p : testing::sampled_tetrahedron(count, seed).positions)
-        text += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+        text += xyz_line(p);
     write_text(path, text);
 }
 
@@ -469,7 +476,7 @@ TEST(Cli, draco_at_its_bit_limit_says_so)
     std::string text;
     for (const double x : {0.0, 200000.0})
         for (const Vec3& p : shapes::sphere(20000, 1.0, 3).positions)
-            text += std::to_string(p.x + x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+            text += xyz_line(p.x + x, p.y, p.z);
     write_text(dir / "far.xyz", text);
     const Result r = mrtile("reconstruct " + (dir / "far.xyz").string() + " -o " + (dir / "t").string() +
                                 " --format 3dtiles --draco --build-tolerance 1e-9",
@@ -497,8 +504,7 @@ TEST(Cli, hole_rounds_are_an_option_of_mesh_and_reconstruct)
         for (std::size_t k = 0; k < centres.size(); ++k)
             in_a_hole = in_a_hole || dot(normalized(p + sphere.origin), centres[k]) > std::cos(radii[k] * M_PI / 180.0);
         if (!in_a_hole)
-            text += std::to_string(p.x + sphere.origin.x) + " " + std::to_string(p.y + sphere.origin.y) + " " +
-                    std::to_string(p.z + sphere.origin.z) + "\n";
+            text += xyz_line(p + sphere.origin);
     }
     write_text(dir / "holes.xyz", text);
     const auto stats = [&](const std::string& extra) {
@@ -524,8 +530,7 @@ TEST(Cli, thin_walls_is_an_option_of_every_meshing_command)
     const PointCloud shell = testing::sphere_shell(10000, 3);
     std::string text;
     for (const Vec3& p : shell.positions)
-        text += std::to_string(p.x + shell.origin.x) + " " + std::to_string(p.y + shell.origin.y) + " " +
-                std::to_string(p.z + shell.origin.z) + "\n";
+        text += xyz_line(p + shell.origin);
     write_text(dir / "shell.xyz", text);
     const Result r = mrtile("reconstruct " + (dir / "shell.xyz").string() + " -o " + (dir / "s.ply").string() +
                                 " --thin-walls --model " + (dir / "s.mrt").string() + " --stats-json " + (dir / "s.json").string(), dir);
@@ -584,7 +589,7 @@ TEST(Cli, far_points_left_out_are_noted)
     const fs::path dir = testing::fresh_test_dir("cli");
     std::string text;
     for (const auto& [x, y, z] : sphere_points(3000))
-        text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+        text += xyz_line(x, y, z);
     const fs::path clean = dir / "clean.xyz", strays = dir / "strays.xyz";
     write_text(clean, text);
     write_text(strays, text + "1000 0 0\n-1000 0.5 0\n");
@@ -1200,7 +1205,7 @@ TEST(Cli, tileset_placement_note)
     sphere_xyz(dir, 2000);
     std::string utm;
     for (const auto& [x, y, z] : sphere_points(2000))
-        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+        utm += xyz_line(500000 + 10 * x, 4100000 + 10 * y, 100 + 10 * z);
     write_text(dir / "utm.xyz", utm);
     const std::string note = "note: the tileset is placed at its input coordinates";
     const Result far = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "a").string() + " --format 3dtiles", dir);
@@ -1387,7 +1392,7 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     const fs::path dir = testing::fresh_test_dir("cli");
     std::string utm;
     for (const auto& [x, y, z] : sphere_points(2000))
-        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+        utm += xyz_line(500000 + 10 * x, 4100000 + 10 * y, 100 + 10 * z);
     write_text(dir / "utm.xyz", utm);
     const Result r = mrtile("reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "t").string() +
                                 " --format 3dtiles --crs epsg:32633",
@@ -1447,7 +1452,7 @@ TEST(Cli, info_json_of_a_crs_in_latin1)
                "PARAMETER[\"false_easting\",500000],PARAMETER[\"false_northing\",0],UNIT[\"metre\",1]]\n");
     std::string utm;
     for (const auto& [x, y, z] : sphere_points(2000))
-        utm += std::to_string(500000 + 10 * x) + " " + std::to_string(4100000 + 10 * y) + " " + std::to_string(100 + 10 * z) + "\n";
+        utm += xyz_line(500000 + 10 * x, 4100000 + 10 * y, 100 + 10 * z);
     write_text(dir / "utm.xyz", utm);
     const Result built = mrtile("build " + (dir / "utm.xyz").string() + " -o " + (dir / "m.mrt").string() + " --crs " +
                                     (dir / "zone.prj").string(),
