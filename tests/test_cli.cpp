@@ -487,6 +487,21 @@ TEST(Cli, draco_at_its_bit_limit_says_so)
     EXPECT_EQ(r.out.find("--quantize 24"), std::string::npos) << r.out;
 }
 
+// A level 0 over its budget is said (QA round 57: a corridor's held 5,430 faces against 3,072, with no
+// word): a 3,000-point sphere's coarsest usable cut at --max-tile-triangles 64 has 58 faces against 48.
+TEST(Cli, lods_notes_a_level_0_over_its_budget)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    ASSERT_EQ(mrtile("build " + sphere_xyz(dir).string() + " -o " + (dir / "s.mrt").string(), dir).code, 0);
+    const Result r = mrtile("lods " + (dir / "s.mrt").string() + " -o " + (dir / "l").string() + " --max-tile-triangles 64", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json levels = nlohmann::json::parse(slurp(dir / "l" / "lods.json"));
+    ASSERT_FALSE(levels.empty());
+    const std::size_t faces = levels[0]["faces"].get<std::size_t>();
+    EXPECT_GT(faces, 48u); // the case this guards
+    EXPECT_NE(r.out.find("note: level 0 has " + std::to_string(faces) + " faces, over its budget of 48"), std::string::npos) << r.out;
+}
+
 // --hole-rounds reaches the library: a unit sphere of 50k points with three round holes of 10-20
 // degrees (test_reconstruct: holes between tiles covered by gap triangles) is meshed at 0.01 nearer its
 // points over the holes by default (mesh to points max) than with --hole-rounds 0, with one loop per

@@ -1449,12 +1449,12 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         }
     }
     // Level 0's budget, said where it is not met (QA round 57: a corridor's level 0 held 5,430 faces
-    // against 3,072, with no word): mending a level in pieces cuts it finer (lod_set.h).
+    // against 3,072, with no word): no coarser cut fits it that the set can use (one tile's faces stay
+    // together; a level in pieces or with more loops than the finest is cut finer, lod_set.h).
     if (!set.levels.empty() && options.tolerances.empty() && options.levels == 0 &&
         set.levels.front().mesh.n_faces() > options.first_level_triangles * 3 / 4)
         std::printf("note: level 0 has %zu faces, over its budget of %zu (three quarters of min(--max-tile-triangles, "
-                    "4096)): the coarsest cut that fits it came out in pieces or with more loops than the finest, and "
-                    "was cut finer\n",
+                    "4096)): no coarser cut that the set can use fits it\n",
                     static_cast<std::size_t>(set.levels.front().mesh.n_faces()), options.first_level_triangles * 3 / 4);
     // Built aside and swapped in whole, as a tileset is: a chain with fewer levels than the one it
     // replaces left that one's finer levels beside it (QA).
