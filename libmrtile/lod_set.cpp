@@ -588,8 +588,12 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         const std::size_t id = set.tiles.size();
         if (p.parent >= 0)
             set.tiles[static_cast<std::size_t>(p.parent)].children.push_back(id);
+        const bool exact = tile.geometric_error <= 0.0;
         set.tiles.push_back(std::move(tile));
-        if (p.level == last)
+        // A tile whose error is 0 ends its branch: clients refine by screen-space error, which is 0 for it
+        // at any distance, so its children would never load (QA round 57: fandisk's flat faces at
+        // --max-tile-triangles 128 had two such chains, 2,988 bytes nobody fetches).
+        if (p.level == last || exact)
             continue;
         // Children: the largest regions below whose next-level content fits the budget; never below
         // that level's cut (a cut node's faces cannot be split between tiles).

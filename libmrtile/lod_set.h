@@ -19,7 +19,8 @@
 //! or the tile's coverage gap) over the level's cut (model units), forced non-increasing with the
 //! level. A tile's = the largest node_error of the level's cut nodes in its region, never above its
 //! parent tile's or its level's (a smooth region refines later than a rough one of the same level);
-//! the finest level's tiles get 0. Errors, plane distances and boxes count only the cut nodes that the
+//! the finest level's tiles get 0, and a tile whose error is 0 at a coarser level has no children (a
+//! client never refines it). Errors, plane distances and boxes count only the cut nodes that the
 //! level's mesh shows (a vertex names them): stray points the surface leaves out set none of them.
 //! A tile's box is that of its content and its descendants' (the region's when it has none).
 

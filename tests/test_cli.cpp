@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -500,6 +501,95 @@ TEST(Cli, lods_notes_a_level_0_over_its_budget)
     const std::size_t faces = levels[0]["faces"].get<std::size_t>();
     EXPECT_GT(faces, 48u); // the case this guards
     EXPECT_NE(r.out.find("note: level 0 has " + std::to_string(faces) + " faces, over its budget of 48"), std::string::npos) << r.out;
+}
+
+// Triangles of a .glb tile: index counts of its primitives, read from the GLB's JSON chunk (skirts
+// included, as the budget counts them).
+std::size_t glb_triangles(const fs::path& p)
+{
+    const std::string bytes = slurp(p);
+    if (bytes.size() < 20)
+        return 0;
+    std::uint32_t json_length = 0;
+    std::memcpy(&json_length, bytes.data() + 12, 4);
+    const nlohmann::json gltf = nlohmann::json::parse(bytes.substr(20, json_length));
+    std::size_t indices = 0;
+    for (const auto& mesh : gltf["meshes"])
+        for (const auto& primitive : mesh["primitives"])
+            indices += gltf["accessors"][primitive["indices"].get<std::size_t>()]["count"].get<std::size_t>();
+    return indices / 3;
+}
+
+// Tiles over --max-tile-triangles are said, counted and sized as the tileset has them (QA round 57: a
+// corridor's root held 5,430 triangles at 4,096 without a word): eight unit spheres in a row are eight
+// closed pieces that level 0 keeps whole, so the root is over a budget of 64 and cannot be split. At a
+// budget that every tile fits there is no note.
+TEST(Cli, export_notes_tiles_over_their_budget)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string text;
+    for (int k = 0; k < 8; ++k)
+        for (const auto& [x, y, z] : sphere_points(1500))
+            text += xyz_line(x + 4.0 * k, y, z);
+    write_text(dir / "row.xyz", text);
+    ASSERT_EQ(mrtile("build " + (dir / "row.xyz").string() + " -o " + (dir / "row.mrt").string(), dir).code, 0);
+    for (const std::size_t budget : {64, 100000}) {
+        const fs::path out = dir / ("t" + std::to_string(budget));
+        const Result r = mrtile("export " + (dir / "row.mrt").string() + " -o " + out.string() +
+                                    " --format 3dtiles --max-tile-triangles " + std::to_string(budget),
+                                dir);
+        ASSERT_EQ(r.code, 0) << r.err;
+        std::size_t contents = 0, over = 0, largest = 0;
+        for (const auto& entry : fs::directory_iterator(out / "tiles")) {
+            const std::size_t triangles = glb_triangles(entry.path());
+            ++contents;
+            over += triangles > budget ? 1 : 0;
+            largest = std::max(largest, triangles);
+        }
+        const std::string note = "note: " + out.string() + ": " + std::to_string(over) + " of " + std::to_string(contents) +
+                                 " tiles hold more than --max-tile-triangles " + std::to_string(budget) + " (up to " +
+                                 std::to_string(largest) + ")";
+        if (budget == 64) {
+            EXPECT_GT(over, 0u); // the case this guards
+            EXPECT_NE(r.out.find(note), std::string::npos) << note << "\n" << r.out;
+        } else {
+            EXPECT_EQ(over, 0u);
+            EXPECT_EQ(r.out.find("hold more than"), std::string::npos) << r.out;
+        }
+    }
+}
+
+// A model that cannot be saved after the output is written takes the output with it (QA round 57: a
+// full disk left the mesh or tileset of a failed `reconstruct --model`): past a file size limit the
+// 1.2 MB model fails, the 4 kB mesh and the tiles of at most 2,000 triangles do not; exit 1, one line
+// naming the model, nothing left.
+TEST(Cli, reconstruct_leaves_nothing_when_its_model_cannot_be_saved)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    const fs::path xyz = sphere_xyz(dir, 20000);
+    const fs::path out = dir / "out";
+    for (const std::string& target : {std::string("s.ply"), std::string("tiles")}) {
+        fs::create_directories(out);
+        const std::string format = target == "tiles" ? " --format 3dtiles --max-tile-triangles 2000" : " --tolerance 0.05";
+        const std::string command = "ulimit -f 600 && " + std::string(MRTILE_CLI) + " reconstruct " + xyz.string() + " -o " +
+                                    (out / target).string() + format + " --model " + (out / "s.mrt").string() +
+                                    " >/dev/null 2>" + (dir / "err.txt").string();
+        const int status = std::system(command.c_str());
+        ASSERT_TRUE(WIFEXITED(status));
+        EXPECT_EQ(WEXITSTATUS(status), 1) << target;
+        const std::string err = slurp(dir / "err.txt");
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+        EXPECT_NE(err.find("s.mrt"), std::string::npos) << err;
+        EXPECT_TRUE(fs::is_empty(out)) << target;
+        // Without the limit the same command writes both, so the limit is what failed.
+        ASSERT_EQ(mrtile("reconstruct " + xyz.string() + " -o " + (out / target).string() + format + " --model " + (out / "s.mrt").string(),
+                         dir)
+                      .code,
+                  0);
+        EXPECT_TRUE(fs::exists(out / target));
+        EXPECT_GT(fs::file_size(out / "s.mrt"), 600u * 1024u); // in 1 kB or 512 B blocks
+        fs::remove_all(out);
+    }
 }
 
 // --hole-rounds reaches the library: a unit sphere of 50k points with three round holes of 10-20

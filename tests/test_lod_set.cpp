@@ -434,9 +434,10 @@ TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
         const Node& region = h.nodes[static_cast<std::size_t>(t.region)];
         if (t.children.empty()) {
             ++leaves;
-            EXPECT_EQ(t.level, set.levels.size() - 1);
+            EXPECT_TRUE(t.level == set.levels.size() - 1 || t.geometric_error == 0.0) << t.level;
             continue;
         }
+        EXPECT_GT(t.geometric_error, 0.0);
         std::uint32_t next = region.begin;
         std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
         for (std::size_t c : t.children) {
@@ -464,6 +465,31 @@ TEST(LodSet, tile_tree_is_a_valid_replace_hierarchy)
         if (t.level == set.levels.size() - 1)
             faces += t.mesh.n_faces() - t.skirt_faces;
     EXPECT_EQ(faces, set.levels.back().mesh.n_faces());
+}
+
+// A tile whose geometric error is 0 (every cut node in its region exactly planar) ends its branch: a
+// client's screen-space error for it is 0 at any distance, so children under it would never load (QA
+// round 57: fandisk's flat faces at a budget of 128 had two such chains). A box's faces are exactly
+// planar, so its coarse levels have such tiles; the rest of the tree is as before, children covering
+// their parent's points.
+TEST(LodSet, a_tile_without_error_has_no_children)
+{
+    const Hierarchy h = build_hierarchy(shapes::box_surface({1.0, 2.0, 0.5}, 30000 / 7.0));
+    LodSetOptions o;
+    o.max_tile_triangles = 128;
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_GT(set.levels.size(), 2u);
+    std::size_t exact_above_finest = 0, refined = 0;
+    for (const LodTile& t : set.tiles) {
+        if (t.level + 1 < set.levels.size() && t.geometric_error == 0.0) {
+            ++exact_above_finest;
+            EXPECT_TRUE(t.children.empty()) << "tile of level " << t.level << " region " << t.region;
+        }
+        if (!t.children.empty())
+            ++refined;
+    }
+    EXPECT_GT(exact_above_finest, 0u);
+    EXPECT_GT(refined, 0u);
 }
 
 // --max-tile-triangles counts the skirts (QA round 28b): regions were chosen by their faces alone,
