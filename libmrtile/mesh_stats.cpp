@@ -399,16 +399,21 @@ DistanceStats summarize(const std::vector<double>& squared_distances, double dia
     stats.diagonal = diagonal;
     if (squared_distances.empty())
         return stats;
-    double sum = 0.0, sum_squares = 0.0, max = 0.0;
+    double sum = 0.0, near_sum = 0.0, sum_squares = 0.0, max = 0.0;
     for (const double d2 : squared_distances) {
         const double d = std::sqrt(d2);
         sum += d;
         sum_squares += d2;
         max = std::max(max, d);
-        stats.far += d > far_beyond ? 1 : 0;
+        if (d > far_beyond)
+            ++stats.far;
+        else
+            near_sum += d;
     }
     const double n = static_cast<double>(squared_distances.size());
     stats.mean = sum / n / diagonal;
+    const std::size_t near = squared_distances.size() - stats.far;
+    stats.near_mean = near > 0 ? near_sum / static_cast<double>(near) / diagonal : 0.0;
     stats.max = max / diagonal;
     stats.rms = std::sqrt(sum_squares / n) / diagonal;
     // Order statistics on a copy: nth_element is linear and the input order stays what the caller gave.

@@ -71,6 +71,11 @@ struct DistanceStats
     //! points the mesh leaves out (a far piece too small to mesh, strays), which also widen the diagonal
     //! the fractions are of.
     std::size_t far = 0;
+    //! The mean over the points not counted in `far`: what the surface stands for (equals `mean` when
+    //! `far` is 0). A few strays far off set most of `mean` on their own and
+    //! move it by more than a finer level gains (QA round 57: `lods` of a sphere with five strays stopped at
+    //! 2,088 of 16,458 faces, its mean rising 0.4% at the next level).
+    double near_mean = 0.0;
 };
 
 constexpr double kFarFraction = 0.05; //!< DistanceStats::far: of the diagonal at the least

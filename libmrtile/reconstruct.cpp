@@ -113,8 +113,14 @@ Mesh hull_mesh(const Hierarchy& h, std::int32_t node_id)
 // (their median distance over up to 16 of them above 3 of the tile's spacings). Such points sample
 // surface the mesh does not have: a small detached piece left out, a strip that failed to join at a
 // coarse cut, or the other half of a 2-tile sphere whose surface kept one fan. A fan covered by its
-// neighbours' gap faces (at a sharp edge) has its points on the mesh and is not away. Empty when no
-// tile is (the usual case: no closest-point queries at all when every fan is in the mesh).
+// neighbours' gap faces (at a sharp edge) has its points on the mesh and is not away. A tile without a
+// fan (too few points, or in a line) whose points are no vertex of the mesh is judged the same way,
+// by the typical (median) spacing of the fan tiles: stray points far off, which the hierarchy puts in
+// clusters of their own (QA round 57: a unit sphere with five strays 24-50 away had its side facing
+// one stray pulled out by the fit, the points there 0.03-0.04 from the mesh at tolerance 0.00158, and
+// the mean distance of the sphere's points twice the clean sphere's at every finer cut). Empty when no
+// tile is (the usual case: no closest-point queries at all when every fan is in the mesh and every
+// tile without one has a vertex).
 std::vector<bool> away_tiles(const Hierarchy& h, const Cut& cut, const std::vector<Tile>& tiles, const Mesh& mesh,
                              std::size_t threads)
 {
@@ -127,18 +133,41 @@ std::vector<bool> away_tiles(const Hierarchy& h, const Cut& cut, const std::vect
             meshed.push_back(mesh.property(tile_of_face, f));
     std::sort(meshed.begin(), meshed.end());
     meshed.erase(std::unique(meshed.begin(), meshed.end()), meshed.end());
+    std::vector<std::int32_t> with_vertex;
+    OpenMesh::VPropHandleT<int> cluster;
+    if (mesh.get_property_handle(cluster, kVertexCluster))
+        for (const auto v : mesh.vertices())
+            with_vertex.push_back(mesh.property(cluster, v));
+    std::sort(with_vertex.begin(), with_vertex.end());
+    with_vertex.erase(std::unique(with_vertex.begin(), with_vertex.end()), with_vertex.end());
     constexpr std::size_t kProbes = 16;
     constexpr double kAwaySpacings = 3.0;
-    std::vector<std::size_t> unmeshed; // cut positions of fan tiles without a fan face
+    std::vector<std::size_t> unmeshed; // cut positions of fan tiles without a fan face, fanless ones without a vertex
     std::vector<Vec3> probes;
-    for (std::size_t k = 0; k < cut.size(); ++k)
-        if (tiles[k].has_fan() && !std::binary_search(meshed.begin(), meshed.end(), cut[k])) {
+    double typical_spacing = -1.0; // of the fan tiles, found when a fanless tile needs it
+    for (std::size_t k = 0; k < cut.size(); ++k) {
+        const bool fan = tiles[k].has_fan();
+        if (!fan && typical_spacing < 0.0 && !std::binary_search(with_vertex.begin(), with_vertex.end(), cut[k])) {
+            std::vector<double> spacings;
+            for (const Tile& t : tiles)
+                if (t.has_fan() && t.spacing() > 0.0)
+                    spacings.push_back(t.spacing());
+            typical_spacing = 0.0;
+            if (!spacings.empty()) {
+                std::nth_element(spacings.begin(), spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2), spacings.end());
+                typical_spacing = spacings[spacings.size() / 2];
+            }
+        }
+        const bool candidate = fan ? !std::binary_search(meshed.begin(), meshed.end(), cut[k])
+                                   : typical_spacing > 0.0 && !std::binary_search(with_vertex.begin(), with_vertex.end(), cut[k]);
+        if (candidate) {
             unmeshed.push_back(k);
             const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
             const std::size_t step = std::max<std::size_t>(1, n.count() / kProbes);
             for (std::size_t i = 0; i < kProbes; ++i)
                 probes.push_back(h.cloud.positions[std::min<std::size_t>(n.end - 1, n.begin + i * step)]);
         }
+    }
     if (unmeshed.empty())
         return {};
     const std::vector<ClosestPoint> closest = closest_points(probes, mesh, threads);
@@ -150,7 +179,7 @@ std::vector<bool> away_tiles(const Hierarchy& h, const Cut& cut, const std::vect
             d[i] = distance(probes[u * kProbes + i], closest[u * kProbes + i].point);
         std::nth_element(d.begin(), d.begin() + kProbes / 2, d.end());
         const std::size_t k = unmeshed[u];
-        away[k] = d[kProbes / 2] > kAwaySpacings * tiles[k].spacing();
+        away[k] = d[kProbes / 2] > kAwaySpacings * (tiles[k].has_fan() ? tiles[k].spacing() : typical_spacing);
         any = any || away[k];
     }
     return any ? away : std::vector<bool>{};

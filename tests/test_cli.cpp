@@ -503,6 +503,37 @@ TEST(Cli, lods_notes_a_level_0_over_its_budget)
     EXPECT_NE(r.out.find("note: level 0 has " + std::to_string(faces) + " faces, over its budget of 48"), std::string::npos) << r.out;
 }
 
+// Strays far off neither stop `lods` early nor set its mean errors (QA round 57: a 20,000-point sphere
+// with five strays 24-50 radii away stopped after 2,088 of 16,458 faces, "the next level did not lower
+// the measured mean error": the fit pulled the faces nearest each stray out, and the strays' own
+// distances made most of the mean). The chain goes on to the finest cut; each level's mean is of the
+// points the surface stands for and falls level by level; the strays count in far_points and the max.
+TEST(Cli, lods_with_far_strays_go_on_to_the_finest_level)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    std::string text;
+    for (const auto& [x, y, z] : sphere_points(20000))
+        text += xyz_line(x, y, z);
+    for (const Vec3& p : {Vec3{-49.6, -15.9, 13.4}, Vec3{-33.1, 35.1, 39.5}, Vec3{3.1, -24.2, 2.2}, Vec3{-2.8, 21.1, 34.8}, Vec3{-48.1, 7.7, 45.7}})
+        text += xyz_line(p);
+    write_text(dir / "s.xyz", text);
+    ASSERT_EQ(mrtile("build " + (dir / "s.xyz").string() + " -o " + (dir / "s.mrt").string(), dir).code, 0);
+    const Result r = mrtile("lods " + (dir / "s.mrt").string() + " -o " + (dir / "l").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.find("stopped after"), std::string::npos) << r.out;
+    const nlohmann::json levels = nlohmann::json::parse(slurp(dir / "l" / "lods.json"));
+    ASSERT_GE(levels.size(), 4u);
+    EXPECT_GT(levels.back()["faces"].get<std::size_t>(), 15000u); // the finest cut of a 20,000-point sphere
+    for (std::size_t k = 0; k < levels.size(); ++k) {
+        EXPECT_EQ(levels[k]["far_points"].get<std::size_t>(), 5u) << k;
+        EXPECT_GT(levels[k]["max_error"].get<double>(), 0.2) << k; // a stray, as fraction of the diagonal
+        if (k > 0) {
+            EXPECT_LT(levels[k]["mean_error"].get<double>(), levels[k - 1]["mean_error"].get<double>()) << k;
+        }
+    }
+    EXPECT_LT(levels.back()["mean_error"].get<double>(), 1e-5);
+}
+
 // Triangles of a .glb tile: index counts of its primitives, read from the GLB's JSON chunk (skirts
 // included, as the budget counts them).
 std::size_t glb_triangles(const fs::path& p)

@@ -195,7 +195,9 @@ TEST(Outliers, a_scan_with_stray_points_meshes_like_the_clean_scan)
             far += distance(vertices[i], closest[i].point) > 0.01 * diagonal ? 1 : 0;
         return static_cast<double>(far) / static_cast<double>(vertices.size());
     };
-    EXPECT_GT(far_vertices(noisy), 0.05);
+    // 4.1% since session 48 (the vertex fit no longer follows strays the surface leaves out in clusters
+    // of their own); the strays that join tiles still make spikes.
+    EXPECT_GT(far_vertices(noisy), 0.03);
     const std::size_t removed = remove_outliers(noisy);
     EXPECT_GT(removed, clean.size() / 100 * 3 / 4);
     EXPECT_LT(far_vertices(noisy), 0.01);
