@@ -19,6 +19,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
 #include <limits>
 #include <memory>
 
@@ -88,10 +91,30 @@ std::vector<T> read_attribute(const draco::Mesh& mesh, const draco::PointAttribu
     return values;
 }
 
+// Draco 1.5 keeps encoder options as text with six decimals (std::to_string), so the explicit grid's
+// range reaches it rounded to a millionth of a unit: under 5e-7 it was 0 and every vertex decoded to one
+// point (QA round 59), and a range rounded down would leave the top vertices outside the cube. The range
+// passed is the smallest whose text is not below `range`; if that coarsens the grid more than twice (a
+// model under about a millionth of a unit across), the grid is refused rather than losing more than a bit.
+float text_exact_range(float range)
+{
+    auto as_read = [](float r) { return std::stof(std::to_string(r)); };
+    float r = range;
+    for (int step = 0; step < 4 && as_read(r) < range; ++step)
+        r = static_cast<float>((std::floor(static_cast<double>(r) * 1e6) + 1.0 + step) / 1e6);
+    if (!(as_read(r) >= range) || as_read(r) > 2.0f * range) {
+        char what[200];
+        std::snprintf(what, sizeof what, "Draco: a model %.3g units across is too small for Draco's quantization grid (it keeps six "
+                      "decimals: at least 1e-6 units); scale the points up, or leave Draco out", static_cast<double>(range));
+        throw InvalidInput(what);
+    }
+    return r;
+}
+
 // The bounds of the positions a decoder gets back: the per-axis extremes of the input, quantized
 // and dequantized by Draco's own transform with the parameters its encoder used: the explicit grid as
-// the encoder reads it back from its options (which keep numbers as text, six significant digits: the
-// range differs from the one passed in), or those it computes from the attribute. Quantizing and
+// the encoder reads it back from its options (which keep numbers as text with six decimals: the range
+// differs from the one passed in, text_exact_range), or those it computes from the attribute. Quantizing and
 // dequantizing never reorder two values, so the extremes of the decoded positions are the decoded
 // extremes.
 void decoded_bounds(const draco::Encoder& encoder, const draco::PointAttribute& positions, const MeshBuffers& buffers,
@@ -194,14 +217,16 @@ DracoEncoded encode_draco(const MeshBuffers& buffers, const DracoOptions& option
         const auto range = static_cast<float>(options.grid->range);
         for (std::size_t i = 0; i < buffers.positions.size(); ++i) {
             const float v = buffers.positions[i];
-            if (!(v >= 0.0f && v <= range))
-                throw InvalidInput("DracoOptions::grid: vertex " + std::to_string(i / 3) + " lies outside the explicit " +
-                                   "quantization cube (coordinate " + std::to_string(v) + " not in [0, " +
-                                   std::to_string(range) + "])");
+            if (!(v >= 0.0f && v <= range)) {
+                char detail[160];
+                std::snprintf(detail, sizeof detail, "coordinate %.9g not in [0, %.9g]", v, range);
+                throw InvalidInput("DracoOptions::grid: vertex " + std::to_string(i / 3) +
+                                   " lies outside the explicit quantization cube (" + detail + ")");
+            }
         }
         const float grid_origin[3] = {0.0f, 0.0f, 0.0f};
         encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3,
-                                                 grid_origin, range);
+                                                 grid_origin, text_exact_range(range));
     } else {
         encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
     }

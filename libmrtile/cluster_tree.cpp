@@ -559,6 +559,12 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
     const std::size_t clusters = parent_of.size();
     if (leaf_of_point.size() != n || clusters == 0)
         throw InvalidInput("assemble_hierarchy: leaf_of_point must have one entry per point and parent_of at least the root");
+    // What build_hierarchy checks before it partitions, checked here for callers that bring their own
+    // (QA round 59: too few colours were copied past their end in the permutation below).
+    if (n > 0)
+        validate(cloud, "assemble_hierarchy");
+    else
+        check_colors(cloud, "assemble_hierarchy");
 
     // Children in creation order; a cluster's children are always created after it.
     std::vector<std::vector<std::uint32_t>> children(clusters);
@@ -567,6 +573,10 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         if (p < 0 || static_cast<std::uint32_t>(p) >= c)
             throw InvalidInput("assemble_hierarchy: parent_of must list parents before children");
         children[static_cast<std::size_t>(p)].push_back(c);
+        // A split makes two clusters: a third child had no place in the binary tree, its points no
+        // leaf, and the permutation below never ended (QA round 59).
+        if (children[static_cast<std::size_t>(p)].size() > 2)
+            throw InvalidInput("assemble_hierarchy: cluster " + std::to_string(p) + " has more than two children (a split makes two)");
     }
     std::vector<std::uint64_t> count(clusters, 0);
     for (std::uint32_t leaf : leaf_of_point) {
@@ -624,9 +634,7 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
             node_of_leaf[c] = index;
             continue;
         }
-        // A split makes two children; several only if the caller's history says so. Fold extra
-        // children into a right comb so the tree stays binary.
-        assert(kids.size() == 2);
+        assert(kids.size() == 2); // at most two children (checked above), and one is spliced out
         stack.push_back({kids[1], index, false});
         stack.push_back({kids[0], index, true});
     }
@@ -716,6 +724,9 @@ Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& 
         node.max_plane_distance = max_plane;
     }
     set_coverage_gaps(h);
+    // A caller's partition has no smallest cluster size (build_hierarchy records its own): 1 lets the
+    // hierarchy be saved (save_model refuses 0, QA round 59).
+    h.info.min_cluster = 1;
     return h;
 }
 
@@ -797,6 +808,12 @@ Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options)
             throw InvalidInput(std::string(text) + ": doubles keep too few of their digits there; call recenter(cloud) "
                                "(point_cloud.h) first, as the readers do");
         }
+        // Nearer, the input keeps its digits but the build loses them: moments updated point by point
+        // cancel (QA round 59: the bunny placed at (5e5, 5e6), 2e7 times its extent from its origin,
+        // built 953 nodes instead of 5,819, its mesh 3.5 times as far from the points). The cloud is
+        // recentred as the readers do; the hierarchy is relative to its origin anyway.
+        if (std::isfinite(farthest) && std::isfinite(extent) && extent > 0.0 && farthest > kRecenterBeyond * extent)
+            recenter(cloud);
     }
     // The points to denoise, without duplicates (a point repeated is its own nearest neighbours), and
     // where each came from in the input (empty: the same index).

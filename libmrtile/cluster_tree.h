@@ -92,11 +92,20 @@ struct BuildOptions
 //! with Denoise::On), the denoising (about 6-10 µs per point) and the second build.
 Hierarchy build_hierarchy(PointCloud cloud, const BuildOptions& options = {});
 
+//! build_hierarchy recentres (recenter(), point_cloud.h) a cloud whose points lie farther than this
+//! many times their extent from its origin: the hierarchy's cloud then has another origin, its
+//! positions the same points relative to it (meshes are relative to Hierarchy::cloud.origin, which the
+//! writers add back). Beyond 1e9 times it refuses the cloud: the input has lost its digits.
+inline constexpr double kRecenterBeyond = 1e3;
+
 //! Builds the tree's nodes from a final assignment of points to leaves and their split history; the
 //! last step of build_hierarchy(), public for tests and tools that bring their own partition.
 //! `parent_of[c]` is the cluster that was split to make cluster c (-1 for the root, which is cluster
 //! 0); `leaf_of_point[i]` is the leaf cluster of point i. Empty leaves are dropped and internal nodes
-//! left with one child are spliced out, so the result is a strict binary tree.
+//! left with one child are spliced out, so the result is a strict binary tree. Its BuildInfo records a
+//! min_cluster of 1 (build_hierarchy records its own options).
+//! \throw InvalidInput if the cloud fails validate() (non-finite points, colours not one per point, ...),
+//! a cluster has more than two children, a parent is listed after its child, or a point's cluster is no leaf.
 Hierarchy assemble_hierarchy(PointCloud cloud, const std::vector<std::int32_t>& parent_of,
                              const std::vector<std::uint32_t>& leaf_of_point);
 

@@ -288,6 +288,10 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
             }
         }
     }
+    // In point order, as every cut is returned (QA round 59: a caller's cut in another order came back in it).
+    std::sort(out.begin(), out.end(), [&](std::int32_t a, std::int32_t b) {
+        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+    });
     return out;
 }
 

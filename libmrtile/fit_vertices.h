@@ -101,7 +101,7 @@ void check_fit_options(const FitOptions& options);
 
 //! \brief Moves the vertices of `mesh` to fit `points` (see the file comment). Deterministic; updates
 //! the face and vertex normals. A mesh without faces, or no points, is left unchanged.
-//! \throw InvalidInput if an option is out of range or a point is not finite.
+//! \throw InvalidInput if an option is out of range or a point or a vertex of the mesh is not finite.
 FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOptions& options = {});
 
 } // namespace mrt

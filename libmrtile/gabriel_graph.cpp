@@ -4,11 +4,15 @@
 // strictly closer than |pm|, which CGAL's nearest_vertex answers exactly by walking the triangulation.
 #include "libmrtile/gabriel_graph.h"
 
+#include "libmrtile/errors.h"
+
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 namespace mrt {
 namespace {
@@ -28,6 +32,13 @@ void for_each_delaunay_edge(const std::vector<Vec3>& points, Visit visit)
 {
     // Insert in input order (not spatially sorted) so that coincident points always merge into the
     // first of them, as documented; the triangulation itself does not depend on the order.
+    // CGAL's exact fallback dies in GMP on a NaN or an infinity, and the Gabriel test squares distances
+    // (QA round 59: SIGFPE on a NaN; at 1e300 every Delaunay edge was kept): refused, naming the point.
+    for (std::size_t i = 0; i < points.size(); ++i)
+        for (int k = 0; k < 3; ++k)
+            if (!(std::abs(points[i][k]) <= kMaxGraphCoordinate))
+                throw InvalidInput("gabriel_graph: point " + std::to_string(i) +
+                                   " has a NaN, infinite or larger than 1e100 coordinate");
     Delaunay dt;
     Delaunay::Vertex_handle hint;
     for (std::uint32_t i = 0; i < points.size(); ++i) {

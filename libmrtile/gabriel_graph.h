@@ -16,13 +16,19 @@
 
 namespace mrt {
 
+//! The largest coordinate magnitude delaunay_graph() and gabriel_graph() take: squared distances of
+//! such points stay far from overflow.
+inline constexpr double kMaxGraphCoordinate = 1e100;
+
 //! Adjacency lists (sorted ascending) of the Delaunay graph of `points`: i and j are adjacent when
 //! their Voronoi cells share a face. Same precondition as gabriel_graph().
+//! \throw InvalidInput if a coordinate is NaN, infinite or larger than kMaxGraphCoordinate in magnitude.
 std::vector<std::vector<std::uint32_t>> delaunay_graph(const std::vector<Vec3>& points);
 
 //! Adjacency lists (sorted ascending) of the Gabriel graph of `points`.
 //! \pre the points are pairwise distinct (coincident points are merged into the first of them, which
 //! then carries their edges).
+//! \throw InvalidInput as delaunay_graph().
 std::vector<std::vector<std::uint32_t>> gabriel_graph(const std::vector<Vec3>& points);
 
 //! True when no point of `others` lies strictly inside the ball with diameter pq.

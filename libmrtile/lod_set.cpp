@@ -414,6 +414,11 @@ void check_lod_options(const Hierarchy& h, const LodSetOptions& o)
 {
     if (o.max_tile_triangles < 64)
         throw InvalidInput("lods: max_tile_triangles must be at least 64");
+    // Level 0 is the tileset's root tile (QA round 59: 2,000 gave a root of 1,363 faces against 1,000).
+    if (o.tileset && o.first_level_triangles > o.max_tile_triangles)
+        throw InvalidInput("lods: first_level_triangles (" + std::to_string(o.first_level_triangles) +
+                           ") above max_tile_triangles (" + std::to_string(o.max_tile_triangles) +
+                           "): level 0 is the tileset's root tile, which must fit one tile");
     if (o.levels == 0 && o.tolerances.empty() && o.max_levels == 0)
         throw InvalidInput("lods: max_levels must be at least 1");
     if (h.nodes.empty())

@@ -41,7 +41,8 @@ struct LodSetOptions
     //! a root whose level 0 cannot be made as small (a level's faces of one cut node stay together).
     std::size_t max_tile_triangles = 65536;
     //! Triangles of level 0 (when no tolerances are given); 0 = max_tile_triangles. Level 0 is cut to
-    //! three quarters of it, since a tileset's root must fit one tile (skirts included). A plain LOD chain (`mrtile lods`) starts coarser.
+    //! three quarters of it, since a tileset's root must fit one tile (skirts included): with `tileset`,
+    //! more than max_tile_triangles is an InvalidInput. A plain LOD chain (`mrtile lods`) starts coarser.
     std::size_t first_level_triangles = 0;
     //! Number of levels; 0 = halve the tolerance until the cut reaches the hierarchy's leaves (at most
     //! max_levels), leaving out a level whose next finer one has less than 1.5× its tiles (a step

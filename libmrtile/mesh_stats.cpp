@@ -535,8 +535,8 @@ bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b)
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g)
 {
     for (const Mesh::FaceHandle h : {f, g})
-        if (!h.is_valid() || h.idx() >= static_cast<int>(mesh.n_faces()))
-            throw InvalidInput("faces_intersect: face handle " + std::to_string(h.idx()) + " is no face of the mesh");
+        if (!h.is_valid() || h.idx() >= static_cast<int>(mesh.n_faces()) || (mesh.has_face_status() && mesh.status(h).deleted()))
+            throw InvalidInput("faces_intersect: face handle " + std::to_string(h.idx()) + " is no face of the mesh (or a deleted one)");
     return corners_intersect(mesh, face_vertices(mesh, f), face_vertices(mesh, g));
 }
 

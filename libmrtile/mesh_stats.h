@@ -112,7 +112,7 @@ std::vector<std::pair<int, int>> self_intersecting_faces(const Mesh& mesh, const
 //! self_intersecting_faces applies (CGAL's strict face intersection, exact predicates). No shared
 //! corner: any contact; one: the edge opposite it in either face touching the other face; an edge: the
 //! two faces folded onto each other. Faces without area never intersect. \throw InvalidInput if a
-//! handle is no face of the mesh.
+//! handle is no face of the mesh (or a deleted one).
 bool faces_intersect(const Mesh& mesh, Mesh::FaceHandle f, Mesh::FaceHandle g);
 
 //! The same test for two triangles given by their corners, which need not be faces of the mesh yet (an

@@ -65,6 +65,7 @@ std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, con
 
 std::size_t remove_outliers(PointCloud& cloud, const OutlierOptions& options)
 {
+    check_colors(cloud, "remove_outliers");
     const std::vector<std::uint32_t> outliers = find_outliers(cloud.positions, options);
     if (outliers.empty())
         return 0;

@@ -39,7 +39,7 @@ struct OutlierOptions
 std::vector<std::uint32_t> find_outliers(const std::vector<Vec3>& positions, const OutlierOptions& options = {});
 
 //! \brief Removes the outliers (positions and their colours) in place; returns how many went.
-//! \throw InvalidInput as find_outliers.
+//! \throw InvalidInput as find_outliers, or unless the colours are empty or one per position (check_colors).
 std::size_t remove_outliers(PointCloud& cloud, const OutlierOptions& options = {});
 
 } // namespace mrt

@@ -104,13 +104,18 @@ void append(PointCloud& into, PointCloud from)
     }
 }
 
+void check_colors(const PointCloud& cloud, const std::string& what)
+{
+    if (!cloud.colors.empty() && cloud.colors.size() != cloud.positions.size())
+        throw InvalidInput(what + ": " + std::to_string(cloud.colors.size()) + " colours for " +
+                           std::to_string(cloud.positions.size()) + " points");
+}
+
 void validate(const PointCloud& cloud, const std::string& what)
 {
     if (cloud.empty())
         throw InvalidInput(what + ": no points");
-    if (!cloud.colors.empty() && cloud.colors.size() != cloud.positions.size())
-        throw InvalidInput(what + ": " + std::to_string(cloud.colors.size()) + " colours for " +
-                           std::to_string(cloud.positions.size()) + " points");
+    check_colors(cloud, what);
     if (!is_finite(cloud.origin))
         throw InvalidInput(what + ": origin is not finite");
     if (cloud.viewpoint && !is_finite(*cloud.viewpoint))
@@ -250,6 +255,7 @@ std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions)
 
 std::vector<std::uint32_t> remove_duplicates(PointCloud& cloud)
 {
+    check_colors(cloud, "remove_duplicates");
     std::vector<std::uint32_t> kept = first_occurrences(cloud.positions);
     if (kept.size() == cloud.positions.size())
         return kept;

@@ -114,6 +114,11 @@ inline constexpr double kMaxExtent = 1e30;
 //! smaller ones underflow in the build (1e-80 and less: no surface was left).
 inline constexpr double kMinExtent = 1e-30;
 
+//! \throw InvalidInput naming `what` unless the colours are empty or one per position (what every
+//! stage that moves points together with their colours checks first: QA round 59 found
+//! remove_outliers and remove_duplicates writing past a shorter colour buffer).
+void check_colors(const PointCloud& cloud, const std::string& what);
+
 //! \brief Checks a cloud before building a hierarchy.
 //! \throw InvalidInput naming `what` (typically the file name) if a position is NaN or infinite (with
 //! its index), if the points span more than kMaxExtent or less than kMinExtent (but not 0), if colours do not match positions, or if the
@@ -136,7 +141,8 @@ double tolerance_scale(const std::vector<Vec3>& positions);
 std::vector<std::uint32_t> first_occurrences(const std::vector<Vec3>& positions);
 
 //! Keeps only the first occurrence of each distinct position (and its colour); returns the input
-//! indices of the points kept (first_occurrences).
+//! indices of the points kept (first_occurrences). \throw InvalidInput unless the colours are empty or one
+//! per position (check_colors).
 std::vector<std::uint32_t> remove_duplicates(PointCloud& cloud);
 
 } // namespace mrt

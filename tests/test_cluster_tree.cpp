@@ -2,6 +2,7 @@
 // checked against brute-force recomputation.
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/errors.h"
+#include "libmrtile/model_file.h"
 #include "libmrtile/shapes.h"
 
 #include <gtest/gtest.h>
@@ -451,6 +452,51 @@ TEST(ClusterTree, unknown_denoise_is_refused)
     } catch (const InvalidInput& e) {
         EXPECT_EQ(std::string(e.what()), "build_hierarchy: BuildOptions::denoise 42 is none of Auto, Off, On");
     }
+}
+
+// assemble_hierarchy takes a caller's partition, so it checks it (QA round 59): a cluster split in three
+// hung it (its third child's points had no leaf, and the permutation never ended), too few colours
+// were copied past their end, NaN points were taken; a valid partition's hierarchy can be saved.
+TEST(ClusterTree, assemble_hierarchy_checks_what_it_is_given)
+{
+    PointCloud cloud = shapes::sphere(30);
+    std::vector<std::uint32_t> three(30), two(30);
+    for (std::uint32_t i = 0; i < 30; ++i) {
+        three[i] = 1 + i % 3;
+        two[i] = 1 + i % 2;
+    }
+    EXPECT_THROW(assemble_hierarchy(cloud, {-1, 0, 0, 0}, three), InvalidInput);
+    PointCloud few_colours = cloud;
+    few_colours.colors.assign(3, {0, 0, 0, 255});
+    EXPECT_THROW(assemble_hierarchy(few_colours, {-1, 0, 0}, two), InvalidInput);
+    PointCloud nan = cloud;
+    nan.positions[7].y = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(assemble_hierarchy(nan, {-1, 0, 0}, two), InvalidInput);
+
+    const Hierarchy h = assemble_hierarchy(cloud, {-1, 0, 0}, two);
+    ASSERT_EQ(h.nodes.size(), 3u);
+    EXPECT_EQ(h.nodes[0].count(), 30u);
+    EXPECT_EQ(h.nodes[1].count() + h.nodes[2].count(), 30u);
+    EXPECT_EQ(h.info.min_cluster, 1u);
+    EXPECT_EQ(deserialize_model(serialize_model(h), "assembled").nodes.size(), 3u);
+}
+
+// A cloud placed at ordinary UTM-like coordinates without recenter() (QA round 59: the bunny at
+// (5e5, 5e6), 2e7 times its extent from its origin, built 953 nodes instead of 5,819, its moments
+// cancelling as points moved between clusters; a torus at 3e7 1,345 instead of 3,409) is recentred by
+// the build and gives the tree of the same cloud near its origin; its positions are the same points
+// relative to the new origin.
+TEST(ClusterTree, a_cloud_far_from_its_origin_is_recentred)
+{
+    const PointCloud near = shapes::torus(20000);
+    PointCloud far = near;
+    const Vec3 offset{3e7, 3e7, 100};
+    for (Vec3& p : far.positions)
+        p = p + offset;
+    const Hierarchy a = build_hierarchy(near), b = build_hierarchy(far);
+    EXPECT_GT(norm(b.cloud.origin - near.origin), 1e5);
+    EXPECT_NEAR(static_cast<double>(b.nodes.size()), static_cast<double>(a.nodes.size()), 0.03 * static_cast<double>(a.nodes.size()));
+    EXPECT_NEAR(norm(b.cloud.origin + b.cloud.positions[0] - (near.origin + offset + near.positions[b.input_index[0]])), 0.0, 1e-9);
 }
 
 } // namespace

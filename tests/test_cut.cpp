@@ -574,5 +574,22 @@ TEST(Cut, a_bent_thin_pipe_is_no_line)
     }
 }
 
+// refine_cut returns its cut in point order, as every cut is, whatever the order it was given in (QA
+// round 59: a shuffled cut came back shuffled).
+TEST(Cut, refine_cut_returns_point_order_from_any_order)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(5000));
+    Cut cut = cut_by_tolerance(h, 0.02);
+    std::reverse(cut.begin(), cut.end());
+    FocusRegion region;
+    region.centre = Vec3{1, 0, 0} - h.cloud.origin;
+    region.radius = 0.5;
+    region.tolerance = 0.002;
+    const Cut refined = refine_cut(h, cut, 0.02, {region});
+    ASSERT_GT(refined.size(), cut.size());
+    for (std::size_t k = 1; k < refined.size(); ++k)
+        EXPECT_EQ(h.nodes[static_cast<std::size_t>(refined[k])].begin, h.nodes[static_cast<std::size_t>(refined[k - 1])].end) << k;
+}
+
 } // namespace
 } // namespace mrt

@@ -230,6 +230,39 @@ TEST(DracoEncode, reports_what_the_decoder_gets_back)
     EXPECT_EQ(split.vertex_count, 6u);
 }
 
+// Draco keeps its options as text with six decimals, so an explicit grid's range under 5e-7 reached it
+// as 0 and every vertex decoded to one point (QA round 59, a torus 1e-7 across). The range passed is
+// rounded up to what Draco reads back: a sphere 2e-6 and 6e-7 across decodes within a step of the
+// range it was given; a model under about a millionth of a unit is refused, not collapsed.
+TEST(DracoEncode, a_tiny_model_keeps_its_grid)
+{
+    for (const double radius : {1e-6, 3e-7}) {
+        const Mesh sphere = uv_sphere(12, 24, radius, {0, 0, 0}, true);
+        DracoOptions options;
+        options.grid = QuantizationGrid{Vec3{-1.1, -1.1, -1.1} * radius, 2.2 * radius};
+        MeshBufferOptions buffer_options;
+        buffer_options.offset = draco_grid_offset(options, buffer_options.up_axis);
+        const MeshBuffers buffers = make_mesh_buffers(sphere, buffer_options);
+        const DracoDecoded decoded = decode_draco(encode_draco(buffers, options).bytes, "tiny");
+        ASSERT_EQ(decoded.positions.size(), buffers.positions.size()) << radius;
+        double worst = 0.0;
+        for (std::size_t i = 0; i < decoded.positions.size(); i += 3) {
+            double nearest = INFINITY;
+            for (std::size_t j = 0; j < buffers.positions.size(); j += 3)
+                nearest = std::min(nearest, std::hypot(double{decoded.positions[i] - buffers.positions[j]}, double{decoded.positions[i + 1] - buffers.positions[j + 1]},
+                                                       double{decoded.positions[i + 2] - buffers.positions[j + 2]}));
+            worst = std::max(worst, nearest);
+        }
+        EXPECT_LT(worst, 2.2 * radius * std::ldexp(1.0, 2 - options.position_bits)) << radius; // a step, doubled by the rounding up
+    }
+    const Mesh speck = uv_sphere(12, 24, 1e-8, {0, 0, 0}, true);
+    DracoOptions options;
+    options.grid = QuantizationGrid{Vec3{-1.1e-8, -1.1e-8, -1.1e-8}, 2.2e-8};
+    MeshBufferOptions buffer_options;
+    buffer_options.offset = draco_grid_offset(options, buffer_options.up_axis);
+    EXPECT_THROW(encode_draco(make_mesh_buffers(speck, buffer_options), options), InvalidInput);
+}
+
 TEST_F(DracoFiles, output_is_byte_deterministic)
 {
     const Mesh mesh = uv_sphere(10, 20, 1.0, {}, true);

@@ -287,5 +287,13 @@ TEST(FitVertices, bad_options_are_refused_and_empty_input_is_a_no_op)
     EXPECT_EQ(positions(mesh), before);
 }
 
+// A NaN vertex is refused like a NaN point (QA round 59: it stayed NaN without a word).
+TEST(FitVertices, a_vertex_that_is_not_finite_is_refused)
+{
+    Mesh mesh = testing::uv_sphere(8, 16, 1.0);
+    mesh.set_point(Mesh::VertexHandle(5), Mesh::Point(0.0, std::numeric_limits<double>::quiet_NaN(), 0.0));
+    EXPECT_THROW(fit_vertices(mesh, shapes::sphere(500).positions), InvalidInput);
+}
+
 } // namespace
 } // namespace mrt

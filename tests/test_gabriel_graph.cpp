@@ -1,10 +1,13 @@
 // Tests of gabriel_graph.h against the O(n³) definition on seeded random point sets.
+#include "libmrtile/errors.h"
 #include "libmrtile/gabriel_graph.h"
 #include "libmrtile/shapes.h"
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
+#include <string>
 
 namespace mrt {
 namespace {
@@ -53,6 +56,26 @@ TEST(GabrielGraph, equals_brute_force_on_planar_and_surface_sets)
     EXPECT_EQ(gabriel_graph(planar), brute_force(planar));
     const auto sphere = shapes::sphere(250, 1.0, 4).positions;
     EXPECT_EQ(gabriel_graph(sphere), brute_force(sphere));
+}
+
+// CGAL's exact arithmetic died in GMP (SIGFPE) on a NaN, and squares of 1e300 overflowed so that every
+// Delaunay edge was kept (QA round 59): such points are refused with the point's index.
+TEST(GabrielGraph, points_it_cannot_take_are_refused)
+{
+    std::vector<Vec3> points = shapes::sphere(50).positions;
+    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300}) {
+        std::vector<Vec3> p = points;
+        p[17].z = bad;
+        for (auto graph : {gabriel_graph, delaunay_graph}) {
+            try {
+                graph(p);
+                ADD_FAILURE() << bad;
+            } catch (const InvalidInput& e) {
+                EXPECT_NE(std::string(e.what()).find("point 17"), std::string::npos) << e.what();
+            }
+        }
+    }
+    EXPECT_EQ(gabriel_graph(points).size(), points.size());
 }
 
 } // namespace

@@ -640,5 +640,20 @@ TEST(LodSet, georeferenced_draco_tileset_passes_real_clients)
     expect_clients_pass(dir / "tiles", 3);
 }
 
+// Level 0 is a tileset's root tile, so its triangles may not exceed a tile's (QA round 59: 2,000 against
+// 1,000 gave a root of 1,363 faces, 100,000 a single 23,000-face tile); a plain chain has no tiles.
+TEST(LodSet, a_first_level_larger_than_a_tile_is_refused_for_a_tileset)
+{
+    LodSetOptions o;
+    o.max_tile_triangles = 1000;
+    o.first_level_triangles = 2000;
+    EXPECT_THROW(make_lod_levels(torus(), o), InvalidInput);
+    o.first_level_triangles = 1000;
+    EXPECT_LE(make_lod_levels(torus(), o).front().mesh.n_faces(), 1000u);
+    o.tileset = false;
+    o.first_level_triangles = 2000;
+    EXPECT_LE(make_lod_levels(torus(), o).front().mesh.n_faces(), 1500u); // three quarters of 2,000
+}
+
 } // namespace
 } // namespace mrt

@@ -729,5 +729,18 @@ TEST(Distance, degenerate_input)
     EXPECT_THROW(closest_points({{0, 0, 0}}, Mesh{}), InvalidInput);
 }
 
+// A deleted face is no face of the mesh (QA round 59: faces_intersect took one and said false).
+TEST(MeshStats, faces_intersect_refuses_a_deleted_face)
+{
+    Mesh mesh = testing::uv_sphere(8, 16, 1.0);
+    mesh.request_face_status();
+    mesh.request_edge_status();
+    mesh.request_vertex_status();
+    mesh.request_halfedge_status();
+    EXPECT_FALSE(faces_intersect(mesh, Mesh::FaceHandle(3), Mesh::FaceHandle(40)));
+    mesh.delete_face(Mesh::FaceHandle(3), false);
+    EXPECT_THROW(faces_intersect(mesh, Mesh::FaceHandle(3), Mesh::FaceHandle(40)), InvalidInput);
+}
+
 } // namespace
 } // namespace mrt

@@ -203,5 +203,34 @@ TEST(Outliers, a_scan_with_stray_points_meshes_like_the_clean_scan)
     EXPECT_LT(far_vertices(noisy), 0.01);
 }
 
+// Colours travel with their points, so a cloud whose colours are not one per position is refused
+// before anything moves (QA round 59: one colour for 100,001 points was copied past its end, the heap
+// silently corrupted); one per position, they stay with their points.
+TEST(Outliers, colours_not_one_per_point_are_refused)
+{
+    PointCloud cloud = shapes::sphere(3000);
+    cloud.positions.push_back({40, 0, 0}); // an outlier
+    cloud.positions.push_back(cloud.positions[0]); // a duplicate
+    cloud.colors.assign(1, {1, 2, 3, 255});
+    PointCloud copy = cloud;
+    EXPECT_THROW(remove_outliers(copy), InvalidInput);
+    EXPECT_EQ(copy.positions.size(), cloud.positions.size());
+    EXPECT_THROW(remove_duplicates(copy), InvalidInput);
+    EXPECT_EQ(copy.positions.size(), cloud.positions.size());
+
+    cloud.colors.resize(cloud.positions.size());
+    for (std::size_t i = 0; i < cloud.colors.size(); ++i)
+        cloud.colors[i] = {static_cast<std::uint8_t>(i % 251), static_cast<std::uint8_t>(i / 251 % 251), 0, 255};
+    PointCloud cleaned = cloud;
+    EXPECT_EQ(remove_duplicates(cleaned).size(), cloud.positions.size() - 1);
+    EXPECT_GE(remove_outliers(cleaned), 1u);
+    ASSERT_EQ(cleaned.colors.size(), cleaned.positions.size());
+    for (std::size_t i = 0; i < cleaned.positions.size(); ++i) {
+        const auto at = std::find(cloud.positions.begin(), cloud.positions.end(), cleaned.positions[i]);
+        ASSERT_NE(at, cloud.positions.end());
+        EXPECT_EQ(cleaned.colors[i], cloud.colors[static_cast<std::size_t>(at - cloud.positions.begin())]);
+    }
+}
+
 } // namespace
 } // namespace mrt
