@@ -42,7 +42,9 @@ struct DracoOptions
     //! 0 (best compression) .. 10 (fastest). Default 3/3 = `draco_encoder`'s default -cl 7.
     int encoding_speed = 3;
     int decoding_speed = 3; //!< 0 .. 10, as encoding_speed: what the encoder may trade for faster decoding
-    //! Default: none, Draco quantizes on the mesh's own bounding cube.
+    //! Default: none, Draco quantizes on the mesh's own bounding cube. Draco keeps the range as text with
+    //! six decimals: it is rounded up to the next millionth of a unit, and a range under 1e-6 that this
+    //! would more than double is an InvalidInput.
     std::optional<QuantizationGrid> grid;
     //! Colours as linear_colors (mesh_buffers.h): 16-bit normalized linear values, what glTF's COLOR_0
     //! means (the glTF writer sets it); false keeps the sRGB bytes, as a bare .drc holds them (three.js

@@ -37,7 +37,7 @@ void for_each_delaunay_edge(const std::vector<Vec3>& points, Visit visit)
     for (std::size_t i = 0; i < points.size(); ++i)
         for (int k = 0; k < 3; ++k)
             if (!(std::abs(points[i][k]) <= kMaxGraphCoordinate))
-                throw InvalidInput("gabriel_graph: point " + std::to_string(i) +
+                throw InvalidInput("delaunay_graph/gabriel_graph: point " + std::to_string(i) +
                                    " has a NaN, infinite or larger than 1e100 coordinate");
     Delaunay dt;
     Delaunay::Vertex_handle hint;

@@ -1277,8 +1277,13 @@ MendedMeshResult mesh_mended(const Hierarchy& h, const std::function<Cut(int)>& 
     std::size_t best_kept = out.in_pieces ? kept_points(h, out.result) : 0;
     for (int step = 1; step <= mend_steps && out.in_pieces; ++step) {
         Cut finer = cut_at(step);
-        if (finer.size() <= cut_size) // at the leaves, or at a noise floor: nothing finer
+        // At the leaves, or at a noise floor: nothing finer. Checked first, since it is not meshed (QA
+        // round 59: {a node, its child} as step 1's cut ended the steps without a word, where mesh_cut's
+        // InvalidInput is promised); a cut meshed is checked by mesh_cut.
+        if (finer.size() <= cut_size) {
+            check_cut(h, finer, "mesh_mended: step " + std::to_string(step) + "'s cut");
             break;
+        }
         // A large cut that is nearly all leaves (two sheets a few spacings apart, whose leaves straddle
         // both: 6,055 of 6,234 nodes) splits too few tiles to join its pieces, and each step costs a
         // whole meshing (QA round 31's box shell: three more steps, 13 to 75 s, 56 pieces to 44).

@@ -2323,5 +2323,22 @@ TEST(Reconstruct, triangle_count_in_pieces_takes_a_smaller_budget)
     EXPECT_TRUE(found_pieces);
 }
 
+// mesh_mended checks each step's cut before its size can end the steps (QA round 59: {a node, its child}
+// at step 1 ended them without a word, though mesh_cut's InvalidInput is promised). Fandisk at 0.03 is in
+// pieces, so step 1 is asked for.
+TEST(Reconstruct, mesh_mended_checks_each_steps_cut)
+{
+    const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/fandisk.obj"));
+    const Cut first = cut_by_tolerance(h, 0.03);
+    ASSERT_GT(topology_stats(mesh_cut(h, first).mesh).components, 1u); // the case this guards
+    int asked = 0;
+    EXPECT_THROW(mesh_mended(h, [&](int step) {
+                     asked = std::max(asked, step);
+                     return step == 0 ? first : Cut{0, 1};
+                 }),
+                 InvalidInput);
+    EXPECT_EQ(asked, 1);
+}
+
 } // namespace
 } // namespace mrt
