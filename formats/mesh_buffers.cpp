@@ -124,11 +124,22 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
         const Vec3 local = frame_positions[i] - out.offset;
         for (int k = 0; k < 3; ++k) {
             const float value = static_cast<float>(local[k]);
-            // A vertex farther than 3.4e38 from the offset became an infinite float in the file.
+            // A vertex farther than 3.4e38 from the offset became an infinite float in the file. The
+            // message names the vertex farthest from the median along the axis, the one set far (QA
+            // round 59: with the offset at the box's centre, the first one over was any other vertex).
             if (!std::isfinite(value)) {
+                std::vector<double> along(used.size());
+                for (std::size_t j = 0; j < used.size(); ++j)
+                    along[j] = frame_positions[j][k];
+                std::nth_element(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(along.size() / 2), along.end());
+                const double median = along[along.size() / 2];
+                std::size_t far = i;
+                for (std::size_t j = 0; j < used.size(); ++j)
+                    if (std::abs(frame_positions[j][k] - median) > std::abs(frame_positions[far][k] - median))
+                        far = j;
                 char distance[32];
-                std::snprintf(distance, sizeof distance, "%.6g", local[k]);
-                throw InvalidInput("mesh: vertex " + std::to_string(used[i].idx()) + " lies " + distance +
+                std::snprintf(distance, sizeof distance, "%.6g", frame_positions[far][k] - out.offset[k]);
+                throw InvalidInput("mesh: vertex " + std::to_string(used[far].idx()) + " lies " + distance +
                                    " from the offset along an axis, beyond the 3.4e38 a 32-bit float can store");
             }
             const auto ku = static_cast<std::size_t>(k);

@@ -237,6 +237,10 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
 
     Mesh out(mesh);
     out.garbage_collection();
+    // As the glTF and Draco writers refuse one (QA round 59: a PLY/OBJ/OFF of no faces was written where
+    // write_gltf said "no faces to write"); no stage of this library returns such a mesh.
+    if (out.n_faces() == 0)
+        throw InvalidInput(path.string() + ": the mesh has no faces to write");
     // Normals come from positions relative to the origin, where the cross products are accurate. A mesh
     // whose normals the caller released (release_vertex_normals) has them requested on the copy and
     // computed, whatever recompute_normals says: OpenMesh read a property that no longer existed (an

@@ -46,8 +46,8 @@ bool stl_is_relative(const Mesh& mesh, const Vec3& origin);
 //! coordinates had lost 1,244 of its 5,741 positions and got 194 degenerate triangles). Atomic: the file is written next to the target under a temporary name and renamed, so a
 //! failure leaves no partial file. Deleted elements are not written. Deterministic: the same mesh and
 //! options give byte-identical files.
-//! \throw InvalidInput for an unknown extension, a non-finite origin or vertex; IoError naming `path` if
-//! it cannot be written.
+//! \throw InvalidInput for an unknown extension, a non-finite origin or vertex, a mesh without faces (as
+//! write_gltf); IoError naming `path` if it cannot be written.
 void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path,
                 const WriteMeshOptions& options = {});
 

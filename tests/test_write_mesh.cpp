@@ -466,6 +466,16 @@ TEST(WriteMesh, a_vertex_beyond_the_float_range_is_kept_as_double_or_refused)
                                              "a 32-bit float can store");
         }
     }
+    // With the offset at the box's centre every vertex is 5e38 from it; the one named is the one set
+    // far, not the first found over (QA round 59 named vertex 258 of a mesh whose vertex 0 was at 1e39).
+    Mesh one_far = octahedron();
+    one_far.set_point(Mesh::VertexHandle(3), Mesh::Point(1e39, 0, 0));
+    try {
+        write_gltf(one_far, Vec3{}, dir / "one_far.glb");
+        ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("mesh: vertex 3 lies ", 0), 0u) << e.what();
+    }
     Mesh far = octahedron();
     far.set_point(*far.vertices_begin(), Mesh::Point(1e308, 0, 0));
     try {
@@ -476,6 +486,32 @@ TEST(WriteMesh, a_vertex_beyond_the_float_range_is_kept_as_double_or_refused)
                                              ": mesh vertex 0 lies at (inf, 0, 0), beyond the largest double (1.8e308)");
     }
     EXPECT_TRUE(directory_listing(dir).empty());
+}
+
+// A mesh without faces is refused by every writer alike (QA round 59: write_mesh wrote a 0-face PLY, OBJ
+// or OFF where write_gltf said "no faces to write"), and leaves no file; so is one whose faces were all
+// deleted.
+TEST(WriteMesh, a_mesh_without_faces_is_refused_as_by_the_gltf_writer)
+{
+    const auto dir = testing::fresh_test_dir("write_mesh");
+    Mesh points_only;
+    points_only.add_vertex(Mesh::Point(0, 0, 0));
+    points_only.add_vertex(Mesh::Point(1, 0, 0));
+    for (const char* name : {"e.ply", "e.obj", "e.off", "e.stl", "e.om"}) {
+        EXPECT_THROW(write_mesh(points_only, Vec3{0, 0, 0}, dir / name), InvalidInput) << name;
+        EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    }
+    EXPECT_THROW(write_gltf(points_only, Vec3{0, 0, 0}, dir / "e.glb"), InvalidInput);
+    Mesh one;
+    const auto a = one.add_vertex(Mesh::Point(0, 0, 0)), b = one.add_vertex(Mesh::Point(1, 0, 0)), c = one.add_vertex(Mesh::Point(0, 1, 0));
+    one.add_face(a, b, c);
+    EXPECT_NO_THROW(write_mesh(one, Vec3{0, 0, 0}, dir / "one.ply"));
+    one.request_face_status();
+    one.request_edge_status();
+    one.request_vertex_status();
+    one.request_halfedge_status();
+    one.delete_face(Mesh::FaceHandle(0), false);
+    EXPECT_THROW(write_mesh(one, Vec3{0, 0, 0}, dir / "deleted.ply"), InvalidInput);
 }
 
 } // namespace
