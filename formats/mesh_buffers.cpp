@@ -6,6 +6,7 @@
 #include "formats/mesh_buffers.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/median.h"
 
 #include <meshoptimizer.h>
 
@@ -131,8 +132,7 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
                 std::vector<double> along(used.size());
                 for (std::size_t j = 0; j < used.size(); ++j)
                     along[j] = frame_positions[j][k];
-                std::nth_element(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(along.size() / 2), along.end());
-                const double median = along[along.size() / 2];
+                const double median = upper_median_in_place(along);
                 std::size_t far = i;
                 for (std::size_t j = 0; j < used.size(); ++j)
                     if (std::abs(frame_positions[j][k] - median) > std::abs(frame_positions[far][k] - median))

@@ -91,14 +91,9 @@ bool needs_doubles(const Mesh& mesh, const Mesh::Point& shift = {0, 0, 0}, doubl
     }
     const double extent = (hi - lo).norm();
     const double step = largest * std::ldexp(1.0, -24);
-    double edges = 0.0;
-    if (edge_fraction > 0.0 && mesh.n_edges() > 0) {
-        for (const auto e : mesh.edges())
-            edges += mesh.calc_edge_length(e);
-        edges /= static_cast<double>(mesh.n_edges());
-    }
     // Beyond the largest float a coordinate is no float at all (1e39 was written as inf).
-    return step > fraction * extent || (edges > 0.0 && step > edge_fraction * edges) || largest > std::numeric_limits<float>::max();
+    return step > fraction * extent || (edge_fraction > 0.0 && step > edge_fraction * mean_edge_length(mesh)) ||
+           largest > std::numeric_limits<float>::max();
 }
 
 // A thousandth of the mean edge: float steps finer than that move no vertex visibly.

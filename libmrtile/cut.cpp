@@ -145,9 +145,7 @@ Cut cut_by_budget(const Hierarchy& h, std::size_t tiles)
         open.pop();
     }
     // Depth-first order = order of the point ranges.
-    std::sort(done.begin(), done.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    });
+    sort_in_point_order(h, done);
     return done;
 }
 
@@ -178,6 +176,25 @@ void check_node_ids(const Hierarchy& h, const Cut& cut)
     for (std::int32_t id : cut)
         if (id < 0 || static_cast<std::size_t>(id) >= h.nodes.size())
             throw InvalidInput("cut: node id " + std::to_string(id) + " is not in the hierarchy");
+}
+
+namespace {
+
+bool before_in_points(const Hierarchy& h, std::int32_t a, std::int32_t b)
+{
+    return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
+}
+
+} // namespace
+
+void sort_in_point_order(const Hierarchy& h, Cut& cut)
+{
+    std::sort(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) { return before_in_points(h, a, b); });
+}
+
+bool in_point_order(const Hierarchy& h, const Cut& cut)
+{
+    return std::is_sorted(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) { return before_in_points(h, a, b); });
 }
 
 std::string cut_problem(const Hierarchy& h, const Cut& cut)
@@ -289,9 +306,7 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
         }
     }
     // In point order, as every cut is returned (QA round 59: a caller's cut in another order came back in it).
-    std::sort(out.begin(), out.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    });
+    sort_in_point_order(h, out);
     return out;
 }
 

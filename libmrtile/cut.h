@@ -83,6 +83,13 @@ void check_node_ids(const Hierarchy& h, const Cut& cut);
 //! node listed twice, a node inside another node of the cut, or points in no node of it (a missing subtree).
 void check_cut(const Hierarchy& h, const Cut& cut, const std::string& what);
 
+//! Sorts `cut` in point order (by its nodes' first points): the depth-first order every cut of this
+//! file comes in, and the one mesh_cut meshes in.
+void sort_in_point_order(const Hierarchy& h, Cut& cut);
+
+//! Whether `cut` is in point order (sort_in_point_order).
+bool in_point_order(const Hierarchy& h, const Cut& cut);
+
 //! What makes `cut` no frontier of the tree, in words (the text check_cut puts after `what`), or an
 //! empty string when it is one. For entry points that say what they expected before naming the problem.
 std::string cut_problem(const Hierarchy& h, const Cut& cut);

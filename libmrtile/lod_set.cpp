@@ -44,26 +44,10 @@ struct LevelIndex
     std::vector<std::uint32_t> faces_by_owner;
 };
 
-// Per node: whether a vertex of the level's mesh names it (v:cluster). A tile the surface left out
-// shows nothing: a few stray points far from a scan are a cluster of their own, whose plane distance
-// set the level's error, its tiles' boxes and the skirts' depth (QA round 57: a unit sphere with five
-// strays within 50 got skirts 16 deep and a geometric error of 8.4 on every coarse tile). All nodes
-// count when no vertex names any (a mesh without the property).
-std::vector<char> nodes_in_mesh(const Hierarchy& h, const Mesh& mesh)
-{
-    std::vector<char> shown(h.nodes.size(), 0);
-    OpenMesh::VPropHandleT<int> cluster;
-    bool any = false;
-    if (mesh.get_property_handle(cluster, kVertexCluster))
-        for (const auto v : mesh.vertices())
-            if (const int id = mesh.property(cluster, v); id >= 0 && static_cast<std::size_t>(id) < shown.size()) {
-                shown[static_cast<std::size_t>(id)] = 1;
-                any = true;
-            }
-    if (!any)
-        std::fill(shown.begin(), shown.end(), 1);
-    return shown;
-}
+// A level's errors, boxes and skirts count only the nodes its mesh shows (nodes_in_mesh, reconstruct.h):
+// a few stray points far from a scan are a cluster of their own, whose plane distance set the level's
+// error, its tiles' boxes and the skirts' depth (QA round 57: a unit sphere with five strays within 50
+// got skirts 16 deep and a geometric error of 8.4 on every coarse tile).
 
 // The largest point-to-tile-plane distance over the cut's tiles that the mesh shows (nodes_in_mesh).
 double level_max_plane_distance(const Hierarchy& h, const Cut& cut, const std::vector<char>& shown)

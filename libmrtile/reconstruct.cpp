@@ -133,33 +133,27 @@ std::vector<bool> away_tiles(const Hierarchy& h, const Cut& cut, const std::vect
             meshed.push_back(mesh.property(tile_of_face, f));
     std::sort(meshed.begin(), meshed.end());
     meshed.erase(std::unique(meshed.begin(), meshed.end()), meshed.end());
-    std::vector<std::int32_t> with_vertex;
-    OpenMesh::VPropHandleT<int> cluster;
-    if (mesh.get_property_handle(cluster, kVertexCluster))
-        for (const auto v : mesh.vertices())
-            with_vertex.push_back(mesh.property(cluster, v));
-    std::sort(with_vertex.begin(), with_vertex.end());
-    with_vertex.erase(std::unique(with_vertex.begin(), with_vertex.end()), with_vertex.end());
     constexpr std::size_t kProbes = 16;
     constexpr double kAwaySpacings = 3.0;
     std::vector<std::size_t> unmeshed; // cut positions of fan tiles without a fan face, fanless ones without a vertex
     std::vector<Vec3> probes;
-    double typical_spacing = -1.0; // of the fan tiles, found when a fanless tile needs it
+    std::vector<char> shown;       // nodes_in_mesh, found when a fanless tile asks
+    double typical_spacing = 0.0;  // the fan tiles' median spacing, found with it
     for (std::size_t k = 0; k < cut.size(); ++k) {
-        const bool fan = tiles[k].has_fan();
-        if (!fan && typical_spacing < 0.0 && !std::binary_search(with_vertex.begin(), with_vertex.end(), cut[k])) {
-            std::vector<double> spacings;
-            for (const Tile& t : tiles)
-                if (t.has_fan() && t.spacing() > 0.0)
-                    spacings.push_back(t.spacing());
-            typical_spacing = 0.0;
-            if (!spacings.empty()) {
-                std::nth_element(spacings.begin(), spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2), spacings.end());
-                typical_spacing = spacings[spacings.size() / 2];
+        bool candidate = false;
+        if (tiles[k].has_fan()) {
+            candidate = !std::binary_search(meshed.begin(), meshed.end(), cut[k]);
+        } else {
+            if (shown.empty()) {
+                shown = nodes_in_mesh(h, mesh);
+                std::vector<double> spacings;
+                for (const Tile& t : tiles)
+                    if (t.has_fan() && t.spacing() > 0.0)
+                        spacings.push_back(t.spacing());
+                typical_spacing = upper_median_in_place(spacings);
             }
+            candidate = typical_spacing > 0.0 && !shown[static_cast<std::size_t>(cut[k])];
         }
-        const bool candidate = fan ? !std::binary_search(meshed.begin(), meshed.end(), cut[k])
-                                   : typical_spacing > 0.0 && !std::binary_search(with_vertex.begin(), with_vertex.end(), cut[k]);
         if (candidate) {
             unmeshed.push_back(k);
             const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
@@ -888,9 +882,7 @@ std::vector<std::size_t> marked_tiles(const std::vector<bool>& marked)
 // (sample_distances) farther than `limit` from the mesh.
 std::vector<bool> tiles_of_far_points(const Hierarchy& h, const Cut& cut, const std::vector<double>& distances, double limit)
 {
-    assert(std::is_sorted(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    }));
+    assert(in_point_order(h, cut));
     std::vector<bool> far(cut.size(), false);
     const std::size_t step = far_sample_step(h);
     for (std::size_t s = 0; s < distances.size(); ++s) {
@@ -1124,9 +1116,7 @@ MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& opt
     // the same nodes in another order give the same mesh and result.cut. The tiles' order steers the
     // surface's ties: the 0.02 cut of a sphere reversed made 338 faces instead of 322.
     Cut cut = given;
-    std::sort(cut.begin(), cut.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    });
+    sort_in_point_order(h, cut);
     check_mesh_options(options);
     const auto start = std::chrono::steady_clock::now();
     MeshResult result;
@@ -1539,6 +1529,22 @@ std::size_t count_sharp_loops(const Mesh& mesh, double degrees)
         sharp += 5 * sharp_vertices >= 4 * at.size() ? 1 : 0;
     }
     return sharp;
+}
+
+std::vector<char> nodes_in_mesh(const Hierarchy& h, const Mesh& mesh)
+{
+    std::vector<char> shown(h.nodes.size(), 0);
+    OpenMesh::VPropHandleT<int> cluster;
+    bool any = false;
+    if (mesh.get_property_handle(cluster, kVertexCluster))
+        for (const auto v : mesh.vertices())
+            if (const int id = mesh.property(cluster, v); id >= 0 && static_cast<std::size_t>(id) < shown.size()) {
+                shown[static_cast<std::size_t>(id)] = 1;
+                any = true;
+            }
+    if (!any)
+        std::fill(shown.begin(), shown.end(), 1);
+    return shown;
 }
 
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)

@@ -249,6 +249,11 @@ inline constexpr double kSharpLoopDegrees = 110.0;
 //! locally as QualityReport::sharp_loops says.
 std::size_t count_sharp_loops(const Mesh& mesh, double degrees = kSharpLoopDegrees);
 
+//! Per node of `h`: whether a vertex of `mesh` names it (kVertexCluster), i.e. its tile shows in the
+//! mesh; every node when no vertex names any (a mesh without the property). The surface leaves out
+//! tiles of strays far off, which the hierarchy puts in clusters of their own.
+std::vector<char> nodes_in_mesh(const Hierarchy& h, const Mesh& mesh);
+
 //! \throw InvalidInput if `cut` is not a partition of the points, a vertex of `mesh` is not finite, or
 //! `mesh` has no faces (no distance to it exists; mesh_cut never returns such a mesh).
 QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);

@@ -1394,9 +1394,7 @@ std::vector<std::vector<std::int32_t>> runs_below(const Hierarchy& h, const Cut&
 
 void finish(const Hierarchy& h, MeshResult& result, LocalRefiner& refiner, Cut meshed, const LocalRefineOptions& options)
 {
-    std::sort(meshed.begin(), meshed.end(), [&](std::int32_t a, std::int32_t b) {
-        return h.nodes[static_cast<std::size_t>(a)].begin < h.nodes[static_cast<std::size_t>(b)].begin;
-    });
+    sort_in_point_order(h, meshed);
     if (options.refit && options.fit) {
         FitOptions fit = options.remesh.fit;
         if (result.surface.height_field_used) {

@@ -597,10 +597,7 @@ void note_coarse_quantization(const Mesh& mesh, int bits, const fs::path& out, d
 {
     if (mesh.n_edges() == 0)
         return;
-    double length = 0.0;
-    for (const auto e : mesh.edges())
-        length += mesh.calc_edge_length(e);
-    const double mean_edge = length / static_cast<double>(mesh.n_edges());
+    const double mean_edge = mean_edge_length(mesh);
     const double step = (range > 0.0 ? range : mesh_extent(mesh).max()) / (std::ldexp(1.0, bits) - 1.0);
     if (!(step > 0.25 * mean_edge))
         return;
