@@ -392,23 +392,30 @@ std::vector<std::size_t> morton_order(const std::vector<Vec3>& points)
 }
 
 // Sums in index order so that the result does not depend on how the distances were computed.
-DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal, double far_beyond = 0.0)
+DistanceStats summarize(const std::vector<double>& squared_distances, double diagonal, const FarPoints& far_points = {})
 {
-    far_beyond = std::max(far_beyond, kFarFraction * diagonal);
+    const double far_beyond = std::max(far_points.beyond, kFarFraction * diagonal);
     DistanceStats stats;
     stats.diagonal = diagonal;
+    if (far_points.found)
+        far_points.found->assign(squared_distances.size(), 0);
     if (squared_distances.empty())
         return stats;
     double sum = 0.0, near_sum = 0.0, sum_squares = 0.0, max = 0.0;
-    for (const double d2 : squared_distances) {
+    for (std::size_t i = 0; i < squared_distances.size(); ++i) {
+        const double d2 = squared_distances[i];
         const double d = std::sqrt(d2);
         sum += d;
         sum_squares += d2;
         max = std::max(max, d);
-        if (d > far_beyond)
+        const bool far = far_points.given ? (*far_points.given)[i] != 0 : d > far_beyond;
+        if (far) {
             ++stats.far;
-        else
+            if (far_points.found)
+                (*far_points.found)[i] = 1;
+        } else {
             near_sum += d;
+        }
     }
     const double n = static_cast<double>(squared_distances.size());
     stats.mean = sum / n / diagonal;
@@ -502,8 +509,21 @@ std::vector<std::pair<std::uint32_t, Vec3>> soup_closest_points(const std::vecto
 
 DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, double far_beyond)
 {
-    if (points.empty())
+    FarPoints far_points;
+    far_points.beyond = far_beyond;
+    return point_to_mesh_distance(points, mesh, far_points);
+}
+
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, const FarPoints& far_points)
+{
+    if (far_points.given && far_points.given->size() != points.size())
+        throw InvalidInput("point_to_mesh_distance: " + std::to_string(far_points.given->size()) + " far flags for " +
+                           std::to_string(points.size()) + " points");
+    if (points.empty()) {
+        if (far_points.found)
+            far_points.found->clear();
         return {};
+    }
     const double diagonal = checked_diagonal(points, "point_to_mesh_distance");
     const Soup soup = mesh_to_soup(mesh);
     if (soup.triangles.empty())
@@ -512,7 +532,7 @@ DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh
     std::vector<double> squared(points.size());
     for (std::size_t i = 0; i < points.size(); ++i)
         squared[i] = squared_norm(points[i] - closest[i].second);
-    return summarize(squared, diagonal, far_beyond);
+    return summarize(squared, diagonal, far_points);
 }
 
 namespace {

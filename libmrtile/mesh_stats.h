@@ -86,6 +86,23 @@ constexpr double kFarFraction = 0.05; //!< DistanceStats::far: of the diagonal a
 //! `far_beyond` (model units) raises DistanceStats::far's bound above kFarFraction of the diagonal.
 DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, double far_beyond = 0.0);
 
+//! Which points DistanceStats::far counts, for point_to_mesh_distance.
+struct FarPoints
+{
+    //! Model units: raises the bound above kFarFraction of the diagonal.
+    double beyond = 0.0;
+    //! One flag per point, nonzero for the points to count far, in place of the bound: the levels of a
+    //! chain compared over the same points (QA round 60: a level that left 262 more points out of its
+    //! mean looked more accurate for it). Its size must be the points'.
+    const std::vector<char>* given = nullptr;
+    //! When not null, set to one flag per point: 1 for the points counted far.
+    std::vector<char>* found = nullptr;
+};
+
+//! \brief As above, with the far points chosen by `far_points`.
+//! \throw InvalidInput as above, or if `far_points.given` does not have one flag per point.
+DistanceStats point_to_mesh_distance(const std::vector<Vec3>& points, const Mesh& mesh, const FarPoints& far_points);
+
 //! \brief The other one-sided distance: from the mesh (sampled at its vertices and face centroids) to
 //! the closest point of `points`. Deterministic.
 //! \throw InvalidInput if the mesh has vertices but no point is given, if a point is not finite, or if

@@ -716,7 +716,7 @@ constexpr std::size_t kFansPerCrossing = 10;
 // After the surface: tiles whose fans it left out although their points lie away from it are refined
 // and the cut meshed again (MeshOptions::dropped_rounds), into `result` and `tiles`. A round whose
 // surface crosses itself more than the one before, by more than the untangling undoes (judged on
-// copies of both; kFansPerCrossing), is undone and ends the rounds: where refined tiles fold into each
+// copies of both; kFansPerCrossing), is not kept and ends the rounds: where refined tiles fold into each
 // other or into their neighbours (a roof tile that is half wall in a height field, a thin rod's
 // tiles), the untangling cannot undo it, and a piece left out is the smaller harm.
 // Returns the tiles still away from the mesh (away_tiles), whose points the fit leaves out.
@@ -730,30 +730,17 @@ std::vector<bool> refine_dropped_tiles(const Hierarchy& h, const MeshOptions& op
             break;
         if (round == 0)
             crossings = self_intersecting_faces(result.mesh).size();
-        MeshResult before; // kept to go back to
-        before.cut = result.cut;
-        before.mesh = result.mesh;
-        before.surface = result.surface;
-        std::vector<Tile> tiles_before = tiles;
-        const SurfaceOptions surface_before = surface;
-        result.cut = refine_marked(h, result.cut, away);
-        tiles = tiles_for(h, result.cut, options, surface);
-        result.mesh = Mesh();
-        result.surface = SurfaceStats{};
-        build_surface(h, tiles, result.mesh, surface, &result.surface);
-        result.meshed_tiles += tiles.size();
-        const std::size_t now = self_intersecting_faces(result.mesh).size();
-        const std::size_t regained = before.surface.dropped_fans > result.surface.dropped_fans
-                                         ? before.surface.dropped_fans - result.surface.dropped_fans : 0;
-        if (now > crossings && (regained == 0 || crossings_left(result.mesh, result.surface, options.untangle) >
-                                                     crossings_left(before.mesh, before.surface, options.untangle) + regained / kFansPerCrossing)) {
-            result.cut = std::move(before.cut);
-            result.mesh = before.mesh;
-            result.surface = before.surface;
-            tiles = std::move(tiles_before);
-            surface = surface_before;
+        // A refined cut that cannot be meshed (no surface left) ends the rounds as the other rounds do.
+        Remeshed again;
+        if (!remesh(h, options, refine_marked(h, result.cut, away), again, result))
             break;
-        }
+        const std::size_t now = self_intersecting_faces(again.mesh).size();
+        const std::size_t regained = result.surface.dropped_fans > again.stats.dropped_fans
+                                         ? result.surface.dropped_fans - again.stats.dropped_fans : 0;
+        if (now > crossings && (regained == 0 || crossings_left(again.mesh, again.stats, options.untangle) >
+                                                     crossings_left(result.mesh, result.surface, options.untangle) + regained / kFansPerCrossing))
+            break;
+        keep_round(again, result, tiles, surface);
         crossings = now;
         away = away_tiles(h, result.cut, tiles, result.mesh, options.fit.threads);
     }
@@ -1547,10 +1534,12 @@ std::vector<char> nodes_in_mesh(const Hierarchy& h, const Mesh& mesh)
     return shown;
 }
 
-QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh)
+QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh, const QualityOptions& options)
 {
     QualityReport q;
     q.e_rms = e_rms(h, cut); // first: it checks the cut
+    if (options.far_points_found)
+        options.far_points_found->clear(); // as no point is measured when the points have no extent
     // A vertex the caller moved to NaN or infinity reached CGAL's distance and intersection queries,
     // which threw their own precondition exception.
     for (const auto v : mesh.vertices())
@@ -1569,7 +1558,11 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
         double coarsest = 0.0;
         for (const std::int32_t id : cut)
             coarsest = std::max(coarsest, node_error(h.nodes[static_cast<std::size_t>(id)]));
-        q.point_to_mesh = point_to_mesh_distance(points, mesh, 2.0 * coarsest);
+        FarPoints far;
+        far.beyond = 2.0 * coarsest;
+        far.given = options.far_points;
+        far.found = options.far_points_found;
+        q.point_to_mesh = point_to_mesh_distance(points, mesh, far);
         q.mesh_to_points = mesh_to_point_distance(mesh, h, points);
     }
     if (q.topology.nonmanifold_edges == 0 && q.topology.nonmanifold_vertices == 0)

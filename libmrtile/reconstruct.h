@@ -254,9 +254,21 @@ std::size_t count_sharp_loops(const Mesh& mesh, double degrees = kSharpLoopDegre
 //! tiles of strays far off, which the hierarchy puts in clusters of their own.
 std::vector<char> nodes_in_mesh(const Hierarchy& h, const Mesh& mesh);
 
-//! \throw InvalidInput if `cut` is not a partition of the points, a vertex of `mesh` is not finite, or
-//! `mesh` has no faces (no distance to it exists; mesh_cut never returns such a mesh).
-QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh);
+//! How measure_quality picks the points its point_to_mesh distances count far.
+struct QualityOptions
+{
+    //! One flag per point of `h` (in the order of QualityReport::point_to_mesh's points): the points to
+    //! count far, in place of the bound QualityReport::point_to_mesh names; null = that bound. Levels
+    //! of one chain are compared over the same points so (`mrtile lods`).
+    const std::vector<char>* far_points = nullptr;
+    //! When not null, set to one flag per point: 1 for the points counted far.
+    std::vector<char>* far_points_found = nullptr;
+};
+
+//! \throw InvalidInput if `cut` is not a partition of the points, a vertex of `mesh` is not finite,
+//! `mesh` has no faces (no distance to it exists; mesh_cut never returns such a mesh), or
+//! `options.far_points` does not have one flag per point.
+QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& mesh, const QualityOptions& options = {});
 
 //! Paper eq. 4-6 for a cut (see QualityReport::e_rms). \throw InvalidInput if `cut` is not a partition.
 double e_rms(const Hierarchy& h, const Cut& cut);

@@ -574,6 +574,30 @@ TEST(Cut, a_bent_thin_pipe_is_no_line)
     }
 }
 
+// A torus with three strays 10⁶ away (QA round 60): the node holding the torus and one stray spread
+// along the stray like a line (eigenvalues 10⁸ apart, its spacing along inflated by the stray's
+// distance), the line rule stopped every tolerance cut at its parent, and the mesh was 4 faces, at
+// tolerance 0 too. Its points do not run along the stray's length: the cut refines, and the mesh is
+// the torus.
+TEST(Cut, a_blob_with_a_far_stray_is_no_line)
+{
+    PointCloud c = shapes::torus(40000);
+    for (const Vec3& stray : {Vec3{1e6, 0, 0}, Vec3{0, -1e6, 3e5}, Vec3{-5e5, 5e5, -1e6}})
+        c.positions.push_back(stray);
+    const Hierarchy h = build_hierarchy(c);
+    for (const Node& n : h.nodes)
+        EXPECT_FALSE(splits_into_lines(h, n) && n.count() > 1000) << n.count();
+    for (double tol : {0.01, 0.0}) {
+        const Cut cut = cut_by_tolerance(h, tol);
+        EXPECT_GT(cut.size(), 100u) << tol;
+        const MeshResult r = mesh_cut(h, cut);
+        const TopologyStats t = topology_stats(r.mesh);
+        EXPECT_EQ(t.genus, 1) << tol;
+        EXPECT_EQ(t.boundary_loops, 0u) << tol;
+        EXPECT_GT(r.mesh.n_faces(), 1000u) << tol;
+    }
+}
+
 // refine_cut returns its cut in point order, as every cut is, whatever the order it was given in (QA
 // round 59: a shuffled cut came back shuffled).
 TEST(Cut, refine_cut_returns_point_order_from_any_order)

@@ -598,6 +598,43 @@ TEST(Distance, offset_from_a_flat_square_is_exact)
     EXPECT_NEAR(e.mean, (121 * offset + 1 + 5) / 123 / e.diagonal, 1e-12);
 }
 
+// Far points: past 5% of the diagonal and `beyond` they are counted far and left out of near_mean; the
+// flags found say which; given flags replace the bound, so that two meshes are compared over the same
+// points (lods' levels).
+TEST(Distance, far_points_are_found_or_given)
+{
+    const Soup square{{{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+    const Mesh mesh = to_mesh(square);
+    // Heights 0.1 and 0.2 over the plane, then 1 and 5 beside it (diagonal sqrt(61 + 0.04), 5% = 0.39).
+    const std::vector<Vec3> points{{0.5, 0.5, 0.1}, {1.5, 1.5, 0.2}, {3, 1, 0}, {-3, -4, 0}};
+    std::vector<char> found;
+    FarPoints far;
+    far.found = &found;
+    const DistanceStats d = point_to_mesh_distance(points, mesh, far);
+    EXPECT_EQ(d.far, 2u);
+    EXPECT_EQ(found, (std::vector<char>{0, 0, 1, 1}));
+    EXPECT_NEAR(d.near_mean, 0.15 / d.diagonal, 1e-12);
+    EXPECT_NEAR(d.mean, 6.3 / 4 / d.diagonal, 1e-12);
+
+    far.beyond = 1.5; // raises the bound over the point 1 away
+    const DistanceStats raised = point_to_mesh_distance(points, mesh, far);
+    EXPECT_EQ(raised.far, 1u);
+    EXPECT_EQ(found, (std::vector<char>{0, 0, 0, 1}));
+    EXPECT_NEAR(raised.near_mean, 1.3 / 3 / raised.diagonal, 1e-12);
+
+    const std::vector<char> given{0, 1, 0, 0}; // whatever the distances
+    far.given = &given;
+    const DistanceStats chosen = point_to_mesh_distance(points, mesh, far);
+    EXPECT_EQ(chosen.far, 1u);
+    EXPECT_EQ(found, given);
+    EXPECT_NEAR(chosen.near_mean, 6.1 / 3 / chosen.diagonal, 1e-12);
+    EXPECT_NEAR(chosen.max, 5.0 / chosen.diagonal, 1e-12);
+
+    const std::vector<char> short_flags{0, 1};
+    far.given = &short_flags;
+    EXPECT_THROW(point_to_mesh_distance(points, mesh, far), InvalidInput);
+}
+
 // Median and 99th percentile are order statistics of the distances: 101 points at heights 0, 0.001, …,
 // 0.1 over the square (shuffled in x, y) put them at exactly 0.050 and 0.099.
 TEST(Distance, median_and_p99_are_exact_order_statistics)
