@@ -538,6 +538,14 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     // (QA round 51); the check costs nothing next to the tiling.
     for (std::size_t k = 0; k < levels.size(); ++k)
         check_cut(h, levels[k].cut, "lods: level " + std::to_string(k));
+    // Coarse to fine, as make_lod_levels gives them: levels in another order made a tile tree whose
+    // children were coarser than their parents, each clamped to its parent's error (QA round 59).
+    for (std::size_t k = 1; k < levels.size(); ++k)
+        if (!(levels[k].tolerance < levels[k - 1].tolerance) || levels[k].geometric_error > levels[k - 1].geometric_error)
+            throw InvalidInput("lods: level " + std::to_string(k) + " (tolerance " + std::to_string(levels[k].tolerance) +
+                               ", geometric error " + std::to_string(levels[k].geometric_error) + ") is not finer than level " +
+                               std::to_string(k - 1) + " (" + std::to_string(levels[k - 1].tolerance) + ", " +
+                               std::to_string(levels[k - 1].geometric_error) + "): levels go coarse to fine, as make_lod_levels gives them");
     LodSet set;
     set.levels = std::move(levels);
     if (!o.tileset)

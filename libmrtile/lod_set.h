@@ -115,7 +115,9 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
 
 //! \brief A LOD set over levels made by make_lod_levels for the same hierarchy (e.g. loaded with the
 //! model): the tile tree when options.tileset (cheap: it cuts the level meshes, it meshes nothing).
-//! The caller vouches that `levels` belong to `h`. \throw InvalidInput for no levels, bad options.
+//! The caller vouches that `levels` belong to `h`. \throw InvalidInput for no levels, bad options, a
+//! level's cut that is no partition of h, or levels not coarse to fine (each tolerance below the one
+//! before, no geometric error above it).
 LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const LodSetOptions& options = {});
 
 } // namespace mrt

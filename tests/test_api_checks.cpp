@@ -160,6 +160,23 @@ TEST(ApiChecks, lod_tiles_check_the_levels_cuts)
     EXPECT_NE(why.find("lods: level " + std::to_string(levels.size() - 1)), std::string::npos) << why;
 }
 
+// Levels fine to coarse made a tile tree whose children were coarser than their parents (QA round 59).
+TEST(ApiChecks, lod_tiles_take_levels_coarse_to_fine)
+{
+    const Hierarchy& h = sphere_model();
+    LodSetOptions o;
+    o.tolerances = {0.05, 0.01, 0.002};
+    std::vector<LodLevel> levels = make_lod_levels(h, o);
+    ASSERT_GE(levels.size(), 2u);
+    EXPECT_NO_THROW(make_lod_tiles(h, levels, o));
+    std::vector<LodLevel> reversed(levels.rbegin(), levels.rend());
+    const std::string why = refusal([&] { make_lod_tiles(h, reversed, o); });
+    EXPECT_NE(why.find("lods: level 1"), std::string::npos) << why;
+    EXPECT_NE(why.find("coarse to fine"), std::string::npos) << why;
+    std::vector<LodLevel> twice{levels[0], levels[0]};
+    EXPECT_THROW(make_lod_tiles(h, twice, o), InvalidInput);
+}
+
 // save_model refuses what load_model would refuse, so a hierarchy damaged in memory never replaces a
 // good file: a broken tree, repeated input indices, levels of another hierarchy.
 TEST(ApiChecks, save_model_writes_only_what_loads)
