@@ -21,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <numeric>
 #include <random>
 #include <set>
 
@@ -204,6 +205,46 @@ TEST(Surface, arc_walks_agree_with_the_arcs)
     EXPECT_GT(pinched, 0u); // the case is exercised: several fans, closed links and single arcs
     EXPECT_GT(closed, 0u);
     EXPECT_GT(checked, 50u);
+}
+
+// A vertex of hundreds of faces (a spike of a terrain scan joined to every tile around it, QA round 61)
+// has its arcs found through sorted copies of its link, not by scans per corner: the same arcs, in the
+// same order (that of its faces), with a random quarter of a 300-face fan left out.
+TEST(Surface, arcs_of_a_vertex_of_hundreds_of_faces)
+{
+    constexpr std::uint32_t rim = 300;
+    std::vector<std::uint32_t> order(rim);
+    std::iota(order.begin(), order.end(), 0u);
+    std::mt19937 rng(61);
+    std::shuffle(order.begin(), order.end(), rng);
+    surface_detail::Surface s(rim + 1);
+    for (const std::uint32_t i : order)
+        if (rng() % 4 != 0)
+            s.add(0, 1 + i, 1 + (i + 1) % rim, 0);
+    // By brute force: the link edges in the order the faces were added; an arc starts where no edge ends.
+    std::map<std::uint32_t, std::uint32_t> next;
+    std::set<std::uint32_t> has_previous;
+    std::vector<std::uint32_t> firsts;
+    for (std::uint32_t f = 0; f < s.faces().size(); ++f) {
+        next[s.faces()[f][1]] = s.faces()[f][2];
+        has_previous.insert(s.faces()[f][2]);
+        firsts.push_back(s.faces()[f][1]);
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs;
+    for (const std::uint32_t first : firsts)
+        if (has_previous.count(first) == 0) {
+            std::uint32_t last = next[first];
+            while (next.count(last) > 0)
+                last = next[last];
+            arcs.push_back({first, last});
+        }
+    ASSERT_GT(arcs.size(), 20u);
+    EXPECT_EQ(s.arcs(0), arcs);
+    EXPECT_EQ(s.arc_count(0), arcs.size());
+    for (const auto& [first, last] : arcs) {
+        EXPECT_EQ(s.arc_end(0, first), last);
+        EXPECT_EQ(s.arc_start(0, last), first);
+    }
 }
 
 TEST(Surface, sphere_is_closed_genus_0_outward)
