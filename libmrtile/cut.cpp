@@ -35,20 +35,24 @@ constexpr double kLineWidthSpacings = 2.0;
 // its length where a line holds one, so its spread across is r/√2 against a spacing along of
 // s²/(2πr): 4 times it at r = s, 111 times at r = 5s. Taken for lines, a bent pipe's arms stopped
 // every tolerance cut at the node holding both, one flat fan over the space between them (QA round 48).
-// And the points run along the line's whole length: the length their spread along gives (that of an
-// even spacing) is at least kLineFill of the node's box. A blob with a stray far off spreads along the
-// stray as a line does, its spacing along inflated by the stray's distance: a 40,000-point torus with a
-// stray 10⁶ away gave a length of 1.7·10⁴ against 10⁶ (a spacing along of 0.43, over half the tube's
-// spread across), the node holding the torus and two strays was taken to split into a line, and every
-// tolerance cut stopped there, at one fan (QA round 60: 4 faces).
+// And the points run along the line's length: a blob with a stray far off spreads along the stray as a
+// line does, its spacing along inflated by the stray's distance (a 40,000-point torus with a stray 10⁶
+// away: a spacing along of 0.43, over half the tube's spread across), the node holding the torus and
+// two strays was taken to split into a line, and every tolerance cut stopped there, at one fan (QA
+// round 60: 4 faces). Such a node is no line when both its points bunch (the length their spread along
+// gives, that of an even spacing, is under kLineFill of its box's diagonal: 1.7·10⁴ against 10⁶) and
+// they leave an empty stretch over kLineFill of it (Node::coverage_gap: 10⁶). Either alone is no
+// sign: a scan line with a dwell clump bunches but has no gap (QA round 61: taken for no line, a 20:1
+// terrain at tolerance 0 lost a piece), a line with a gap spreads as an even one does.
 constexpr double kLineFill = 0.5;
 bool is_line(const Node& n)
 {
     if (n.count() < 8 || !(n.frame.values[1] <= n.frame.values[2] / 900.0))
         return false;
     const LineSpread spread = line_spread(n);
-    const double length = spread.spacing_along * static_cast<double>(n.count());
-    return spread.across <= kLineWidthSpacings * spread.spacing_along && length >= kLineFill * n.box.diagonal();
+    const double length = spread.spacing_along * static_cast<double>(n.count()), diagonal = n.box.diagonal();
+    const bool blob_and_stray = length < kLineFill * diagonal && n.coverage_gap > kLineFill * diagonal;
+    return spread.across <= kLineWidthSpacings * spread.spacing_along && !blob_and_stray;
 }
 
 // The refinement rule of every cut by tolerance and region: the node's RMS plane distance is above

@@ -577,8 +577,8 @@ TEST(Cut, a_bent_thin_pipe_is_no_line)
 // A torus with three strays 10⁶ away (QA round 60): the node holding the torus and one stray spread
 // along the stray like a line (eigenvalues 10⁸ apart, its spacing along inflated by the stray's
 // distance), the line rule stopped every tolerance cut at its parent, and the mesh was 4 faces, at
-// tolerance 0 too. Its points do not run along the stray's length: the cut refines, and the mesh is
-// the torus.
+// tolerance 0 too. Its points bunch and leave the stray's length empty: the cut refines, and the mesh
+// is the torus.
 TEST(Cut, a_blob_with_a_far_stray_is_no_line)
 {
     PointCloud c = shapes::torus(40000);
@@ -596,6 +596,51 @@ TEST(Cut, a_blob_with_a_far_stray_is_no_line)
         EXPECT_EQ(t.boundary_loops, 0u) << tol;
         EXPECT_GT(r.mesh.n_faces(), 1000u) << tol;
     }
+}
+
+// Scan lines with a dwell clump each (a scanner that paused: three times a line's points within a few
+// spacings) bunch as a blob with a stray does, but leave no empty stretch: they are lines still (QA
+// round 61: taken for no lines, a 20:1 terrain at tolerance 0 lost a piece). Cross-checked node by node
+// against the line test without the blob rule (line_spread), through splits_into_lines of the parents.
+TEST(Cut, scan_lines_with_dwell_clumps_are_lines)
+{
+    PointCloud c;
+    std::mt19937 rng(61);
+    auto uniform = [&] { return static_cast<double>(rng()) / 4294967296.0; };
+    const double length = 50.0, line_gap = 2.0;
+    const int along = 500;
+    for (int line = 0; line * line_gap <= length; ++line) {
+        const double y = line * line_gap, clump = length * uniform();
+        for (int k = 0; k < along; ++k)
+            c.positions.push_back({length * k / along, y, 0.3 * std::sin(0.2 * y + 0.1 * length * k / along)});
+        for (int k = 0; k < 3 * along; ++k) {
+            const double x = clump + 0.15 * (uniform() + uniform() + uniform() - 1.5);
+            if (x >= 0.0 && x <= length)
+                c.positions.push_back({x, y, 0.3 * std::sin(0.2 * y + 0.1 * x)});
+        }
+    }
+    const Hierarchy h = build_hierarchy(c);
+    std::size_t bunched = 0;
+    for (const Node& parent : h.nodes) {
+        if (parent.is_leaf())
+            continue;
+        for (const std::int32_t child : {parent.left, parent.right}) {
+            const Node& n = h.nodes[static_cast<std::size_t>(child)];
+            if (n.count() < 8 || !(n.frame.values[1] <= n.frame.values[2] / 900.0))
+                continue;
+            const LineSpread spread = line_spread(n);
+            if (!(spread.across <= 2.0 * spread.spacing_along))
+                continue;
+            const LineSpread parent_spread = line_spread(parent);
+            const bool parent_line = parent.count() >= 8 && parent.frame.values[1] <= parent.frame.values[2] / 900.0 &&
+                                     parent_spread.across <= 2.0 * parent_spread.spacing_along;
+            bunched += spread.spacing_along * static_cast<double>(n.count()) < 0.5 * n.box.diagonal() ? 1 : 0;
+            if (!parent_line) {
+                EXPECT_TRUE(splits_into_lines(h, parent)) << n.count();
+            }
+        }
+    }
+    EXPECT_GT(bunched, 5u); // the case is exercised
 }
 
 // refine_cut returns its cut in point order, as every cut is, whatever the order it was given in (QA
