@@ -226,9 +226,8 @@ void write_mesh(const Mesh& mesh, const Vec3& origin, const std::filesystem::pat
     const MeshFormat format = mesh_format(path, ext);
     // As the glTF and Draco writers do (mesh_buffers.cpp): a NaN or infinite vertex was written as
     // "nan" / "inf" text or bits, a file that viewers reject or show with a spike.
-    for (const auto v : mesh.vertices())
-        if (!is_finite(to_vec3(mesh.point(v))))
-            throw InvalidInput(path.string() + ": mesh vertex " + std::to_string(v.idx()) + " has a non-finite position");
+    if (const Mesh::VertexHandle v = first_non_finite_vertex(mesh); v.is_valid())
+        throw InvalidInput(path.string() + ": mesh vertex " + std::to_string(v.idx()) + " has a non-finite position");
 
     Mesh out(mesh);
     out.garbage_collection();

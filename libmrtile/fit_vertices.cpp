@@ -520,9 +520,8 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
 {
     check_fit_options(options);
     // A NaN vertex stayed NaN without a word (QA round 59), where the points are checked.
-    for (const auto vh : mesh.vertices())
-        if (!is_finite(to_vec3(mesh.point(vh))))
-            throw InvalidInput("fit_vertices: vertex " + std::to_string(vh.idx()) + " has a NaN or infinite coordinate");
+    if (const Mesh::VertexHandle vh = first_non_finite_vertex(mesh); vh.is_valid())
+        throw InvalidInput("fit_vertices: vertex " + std::to_string(vh.idx()) + " has a NaN or infinite coordinate");
     const auto start = std::chrono::steady_clock::now();
     FitStats stats;
     if (options.rounds == 0 || points.empty() || mesh.n_faces() == 0 || options.max_move == 0.0)

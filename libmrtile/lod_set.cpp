@@ -17,6 +17,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <mutex>
 
@@ -541,11 +542,12 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     // Coarse to fine, as make_lod_levels gives them: levels in another order made a tile tree whose
     // children were coarser than their parents, each clamped to its parent's error (QA round 59).
     for (std::size_t k = 1; k < levels.size(); ++k)
-        if (!(levels[k].tolerance < levels[k - 1].tolerance) || levels[k].geometric_error > levels[k - 1].geometric_error)
-            throw InvalidInput("lods: level " + std::to_string(k) + " (tolerance " + std::to_string(levels[k].tolerance) +
-                               ", geometric error " + std::to_string(levels[k].geometric_error) + ") is not finer than level " +
-                               std::to_string(k - 1) + " (" + std::to_string(levels[k - 1].tolerance) + ", " +
-                               std::to_string(levels[k - 1].geometric_error) + "): levels go coarse to fine, as make_lod_levels gives them");
+        if (!(levels[k].tolerance < levels[k - 1].tolerance) || levels[k].geometric_error > levels[k - 1].geometric_error) {
+            char what[200]; // %g: a tolerance of 1e-7 is no "0.000000"
+            std::snprintf(what, sizeof what, " (tolerance %.6g, geometric error %.6g) is not finer than level %zu (%.6g, %.6g)",
+                          levels[k].tolerance, levels[k].geometric_error, k - 1, levels[k - 1].tolerance, levels[k - 1].geometric_error);
+            throw InvalidInput("lods: level " + std::to_string(k) + what + ": levels go coarse to fine, as make_lod_levels gives them");
+        }
     LodSet set;
     set.levels = std::move(levels);
     if (!o.tileset)

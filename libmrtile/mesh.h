@@ -70,6 +70,16 @@ inline double mean_edge_length(const Mesh& mesh)
     return mesh.n_edges() > 0 && sum > 0.0 ? sum / static_cast<double>(mesh.n_edges()) : 1.0;
 }
 
+//! The first vertex (deleted ones skipped) with a NaN or infinite coordinate; an invalid handle when
+//! there is none. The stages that take a caller's mesh refuse one with their own message.
+inline Mesh::VertexHandle first_non_finite_vertex(const Mesh& mesh)
+{
+    for (const auto v : mesh.vertices())
+        if (!is_finite(to_vec3(mesh.point(v))))
+            return v;
+    return Mesh::VertexHandle();
+}
+
 inline constexpr const char* kVertexCluster = "v:cluster";
 inline constexpr const char* kFaceTile = "f:tile";
 inline constexpr const char* kFaceGap = "f:gap";

@@ -1542,9 +1542,8 @@ QualityReport measure_quality(const Hierarchy& h, const Cut& cut, const Mesh& me
         options.far_points_found->clear(); // as no point is measured when the points have no extent
     // A vertex the caller moved to NaN or infinity reached CGAL's distance and intersection queries,
     // which threw their own precondition exception.
-    for (const auto v : mesh.vertices())
-        if (!is_finite(to_vec3(mesh.point(v))))
-            throw InvalidInput("measure_quality: mesh vertex " + std::to_string(v.idx()) + " has a NaN or infinite coordinate");
+    if (const Mesh::VertexHandle v = first_non_finite_vertex(mesh); v.is_valid())
+        throw InvalidInput("measure_quality: mesh vertex " + std::to_string(v.idx()) + " has a NaN or infinite coordinate");
     // A mesh without faces has no distance to the points: its report said 0 (every point on the mesh),
     // the best score there is, and the CLI prints distances as measured.
     if (mesh.faces().begin() == mesh.faces().end()) // deleted faces are skipped

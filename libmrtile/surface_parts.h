@@ -318,9 +318,9 @@ public:
     std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs(std::uint32_t v) const
     {
         const CornerList& link = corners_[v]; // directed link edges first -> second
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
         if (link.size() > kLargeLink)
             return large_link_arcs(link);
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
         for (const Corner& e : link)
             if (!has_link_edge_into(link, e.first))
                 out.push_back({e.first, arc_end(v, e.first)});
@@ -386,8 +386,12 @@ public:
     std::size_t arc_count(std::uint32_t v) const
     {
         const CornerList& link = corners_[v];
-        if (link.size() > kLargeLink)
-            return large_link_arcs(link).size();
+        if (link.size() > kLargeLink) {
+            const std::vector<std::uint32_t> into = link_ends(link);
+            return static_cast<std::size_t>(std::count_if(link.begin(), link.end(), [&](const Corner& e) {
+                return !std::binary_search(into.begin(), into.end(), e.first);
+            }));
+        }
         std::size_t count = 0;
         for (const Corner& e : link)
             count += has_link_edge_into(link, e.first) ? 0 : 1;
@@ -463,18 +467,25 @@ private:
 
     // arcs() of a large link, in the same order (the link's), in O(d log d): each link vertex starts
     // at most one link edge and ends at most one (links are simple paths, can_add).
+    // The vertices link edges end at, sorted: an arc starts at a link vertex that is none of them.
+    static std::vector<std::uint32_t> link_ends(const CornerList& link)
+    {
+        std::vector<std::uint32_t> into;
+        into.reserve(link.size());
+        for (const Corner& e : link)
+            into.push_back(e.second);
+        std::sort(into.begin(), into.end());
+        return into;
+    }
+
     static std::vector<std::pair<std::uint32_t, std::uint32_t>> large_link_arcs(const CornerList& link)
     {
         std::vector<std::pair<std::uint32_t, std::uint32_t>> next; // first -> second, by first
-        std::vector<std::uint32_t> into;                           // every second
         next.reserve(link.size());
-        into.reserve(link.size());
-        for (const Corner& e : link) {
+        for (const Corner& e : link)
             next.push_back({e.first, e.second});
-            into.push_back(e.second);
-        }
         std::sort(next.begin(), next.end());
-        std::sort(into.begin(), into.end());
+        const std::vector<std::uint32_t> into = link_ends(link);
         const auto step = [&](std::uint32_t x) {
             const auto it = std::lower_bound(next.begin(), next.end(), std::pair<std::uint32_t, std::uint32_t>{x, 0});
             return it != next.end() && it->first == x ? it->second : kNone;
