@@ -546,11 +546,7 @@ void Front::refresh(std::uint32_t v)
 {
     const CornerList& corners = surface_.corners_at(v); // push_best leaves the surface as it is
     for (const Corner& c : corners) {
-        bool out_twin = false, in_twin = false;
-        for (const Corner& o : corners) {
-            out_twin = out_twin || o.second == c.first;
-            in_twin = in_twin || o.first == c.second;
-        }
+        const bool out_twin = surface_.link_enters(v, c.first), in_twin = surface_.link_leaves(v, c.second);
         if (!out_twin)
             push_best(v, c.first);
         if (!in_twin)

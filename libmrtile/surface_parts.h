@@ -26,6 +26,7 @@
 #include <limits>
 #include <memory>
 #include <queue>
+#include <unordered_map>
 #include <utility>
 #include <map>
 #include <vector>
@@ -188,6 +189,8 @@ private:
     std::unique_ptr<Corner[]> heap_;
 };
 
+//! The oriented manifold-in-progress the front grows: faces, and per vertex its corners. Not for
+//! concurrent use, not even const: queries of large links keep sorted copies (link_index).
 class Surface
 {
 public:
@@ -319,7 +322,7 @@ public:
     {
         const CornerList& link = corners_[v]; // directed link edges first -> second
         if (link.size() > kLargeLink)
-            return large_link_arcs(link);
+            return large_link_arcs(v);
         std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
         for (const Corner& e : link)
             if (!has_link_edge_into(link, e.first))
@@ -332,6 +335,19 @@ public:
     std::uint32_t arc_end(std::uint32_t v, std::uint32_t first) const
     {
         const CornerList& link = corners_[v];
+        if (link.size() > kLargeLink) {
+            const LinkIndex& index = link_index(v);
+            if (std::binary_search(index.into.begin(), index.into.end(), first))
+                return kNone;
+            std::uint32_t end = link_step(index.next, first);
+            for (std::size_t steps = 0; end != kNone && steps < link.size(); ++steps) {
+                const std::uint32_t after = link_step(index.next, end);
+                if (after == kNone)
+                    break;
+                end = after;
+            }
+            return end;
+        }
         if (has_link_edge_into(link, first))
             return kNone;
         std::uint32_t end = kNone;
@@ -360,6 +376,19 @@ public:
     std::uint32_t arc_start(std::uint32_t v, std::uint32_t last) const
     {
         const CornerList& link = corners_[v];
+        if (link.size() > kLargeLink) {
+            const LinkIndex& index = link_index(v);
+            std::uint32_t start = link_step(index.previous, last);
+            if (start == kNone || link_step(index.next, last) != kNone)
+                return kNone;
+            for (std::size_t steps = 0; steps < link.size(); ++steps) {
+                const std::uint32_t before = link_step(index.previous, start);
+                if (before == kNone)
+                    break;
+                start = before;
+            }
+            return start;
+        }
         std::uint32_t start = kNone;
         for (const Corner& e : link)
             if (e.second == last) {
@@ -382,16 +411,31 @@ public:
         return start;
     }
 
+    //! Whether a link edge of v ends at x (a face (v, ?, x)): then half-edge v -> x has its twin.
+    bool link_enters(std::uint32_t v, std::uint32_t x) const
+    {
+        const CornerList& link = corners_[v];
+        if (link.size() > kLargeLink) {
+            const LinkIndex& index = link_index(v);
+            return std::binary_search(index.into.begin(), index.into.end(), x);
+        }
+        return has_link_edge_into(link, x);
+    }
+    //! Whether a link edge of v starts at x (a face (v, x, ?)): then half-edge x -> v has its twin.
+    bool link_leaves(std::uint32_t v, std::uint32_t x) const
+    {
+        const CornerList& link = corners_[v];
+        if (link.size() > kLargeLink)
+            return link_step(link_index(v).next, x) != kNone;
+        return has_link_edge_out_of(link, x);
+    }
+
     //! arcs(v).size() without building them.
     std::size_t arc_count(std::uint32_t v) const
     {
         const CornerList& link = corners_[v];
-        if (link.size() > kLargeLink) {
-            const std::vector<std::uint32_t> into = link_ends(link);
-            return static_cast<std::size_t>(std::count_if(link.begin(), link.end(), [&](const Corner& e) {
-                return !std::binary_search(into.begin(), into.end(), e.first);
-            }));
-        }
+        if (link.size() > kLargeLink)
+            return large_link_arcs(v).size();
         std::size_t count = 0;
         for (const Corner& e : link)
             count += has_link_edge_into(link, e.first) ? 0 : 1;
@@ -409,6 +453,9 @@ public:
     //! construction, for pinch splits).
     void relabel(std::uint32_t f, std::uint32_t from, std::uint32_t to)
     {
+        for (std::uint32_t w : faces_[f]) // these links change without a clock tick
+            link_index_.erase(w);
+        link_index_.erase(to);
         for (auto& x : faces_[f])
             if (x == from)
                 x = to;
@@ -465,44 +512,71 @@ private:
     // quarter of the meshing (QA round 61).
     static constexpr std::size_t kLargeLink = 24;
 
-    // arcs() of a large link, in the same order (the link's), in O(d log d): each link vertex starts
-    // at most one link edge and ends at most one (links are simple paths, can_add).
-    // The vertices link edges end at, sorted: an arc starts at a link vertex that is none of them.
-    static std::vector<std::uint32_t> link_ends(const CornerList& link)
+    // A large link's edges sorted three ways, kept until the vertex's faces change (clock: when they
+    // were sorted): the front asks about one spike vertex for each candidate around it, and sorting its
+    // link on every question was half of meshing a spiky terrain at tolerance 0.
+    struct LinkIndex
     {
-        std::vector<std::uint32_t> into;
-        into.reserve(link.size());
-        for (const Corner& e : link)
-            into.push_back(e.second);
-        std::sort(into.begin(), into.end());
-        return into;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> next;     // (first, second), by first
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> previous; // (second, first), by second
+        std::vector<std::uint32_t> into;                               // the seconds, sorted
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs;     // arcs(), once asked for
+        bool arcs_known = false;
+        std::uint64_t clock = 0;
+    };
+    LinkIndex& link_index(std::uint32_t v) const
+    {
+        LinkIndex& index = link_index_[v];
+        if (index.clock != 0 && changed_[v] <= index.clock)
+            return index;
+        const CornerList& link = corners_[v];
+        index.next.clear();
+        index.previous.clear();
+        index.into.clear();
+        for (const Corner& e : link) {
+            index.next.push_back({e.first, e.second});
+            index.previous.push_back({e.second, e.first});
+            index.into.push_back(e.second);
+        }
+        std::sort(index.next.begin(), index.next.end());
+        std::sort(index.previous.begin(), index.previous.end());
+        std::sort(index.into.begin(), index.into.end());
+        index.arcs.clear();
+        index.arcs_known = false;
+        index.clock = std::max<std::uint64_t>(clock_, 1);
+        return index;
+    }
+    //! The link vertex after x in `steps` (the second of the link edge from x; with `previous`, the one
+    //! before x), or kNone. At most one link edge leaves or enters a vertex (half-edge uniqueness).
+    static std::uint32_t link_step(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& steps, std::uint32_t x)
+    {
+        const auto it = std::lower_bound(steps.begin(), steps.end(), std::pair<std::uint32_t, std::uint32_t>{x, 0});
+        return it != steps.end() && it->first == x ? it->second : kNone;
     }
 
-    static std::vector<std::pair<std::uint32_t, std::uint32_t>> large_link_arcs(const CornerList& link)
+    // arcs() of a large link, in the same order (the link's), in O(d log d): each link vertex starts
+    // at most one link edge and ends at most one (links are simple paths, can_add). An arc starts at a
+    // link vertex that no link edge ends at.
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& large_link_arcs(std::uint32_t v) const
     {
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> next; // first -> second, by first
-        next.reserve(link.size());
-        for (const Corner& e : link)
-            next.push_back({e.first, e.second});
-        std::sort(next.begin(), next.end());
-        const std::vector<std::uint32_t> into = link_ends(link);
-        const auto step = [&](std::uint32_t x) {
-            const auto it = std::lower_bound(next.begin(), next.end(), std::pair<std::uint32_t, std::uint32_t>{x, 0});
-            return it != next.end() && it->first == x ? it->second : kNone;
-        };
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+        const CornerList& link = corners_[v];
+        LinkIndex& index = link_index(v);
+        if (index.arcs_known)
+            return index.arcs;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>>& out = index.arcs;
         for (const Corner& e : link) {
-            if (std::binary_search(into.begin(), into.end(), e.first))
+            if (std::binary_search(index.into.begin(), index.into.end(), e.first))
                 continue;
-            std::uint32_t end = step(e.first);
+            std::uint32_t end = link_step(index.next, e.first);
             for (std::size_t steps = 0; end != kNone && steps < link.size(); ++steps) {
-                const std::uint32_t after = step(end);
+                const std::uint32_t after = link_step(index.next, end);
                 if (after == kNone)
                     break;
                 end = after;
             }
             out.push_back({e.first, end});
         }
+        index.arcs_known = true;
         return out;
     }
 
@@ -534,6 +608,8 @@ private:
         const CornerList& link = corners_[v];
         if (link.empty())
             return true;
+        if (link.size() > kLargeLink)
+            return large_link_ok(v, x, y);
         if (is_closed(v))
             return false; // an interior vertex takes no more faces
         // Half-edge uniqueness already guarantees in/out degree <= 1 in the link; the only failure is a
@@ -553,6 +629,29 @@ private:
         }
         if (end != x)
             return true; // no cycle through the new edge
+        return steps == link.size() + 1;
+    }
+
+    // link_ok of a large link, the same tests through its index (O(log d) a step, not O(d)): the
+    // spike vertices of a 40:1 scan-line terrain at tolerance 0 gathered thousands of faces on the way.
+    bool large_link_ok(std::uint32_t v, std::uint32_t x, std::uint32_t y) const
+    {
+        const CornerList& link = corners_[v];
+        if (large_link_arcs(v).empty())
+            return false; // closed (is_closed): every link vertex has a link edge into it
+        const LinkIndex& index = link_index(v);
+        std::uint32_t end = y;
+        std::size_t steps = 1;
+        // As link_ok's walk, which takes the first corner leaving `end` (the only one).
+        while (end != x && steps <= link.size()) { // the bound only guards the invariant (links are paths)
+            const std::uint32_t after = link_step(index.next, end);
+            if (after == kNone)
+                break;
+            end = after;
+            ++steps;
+        }
+        if (end != x)
+            return true;
         return steps == link.size() + 1;
     }
 
@@ -580,6 +679,8 @@ private:
     std::vector<CornerList> corners_; // per vertex
     std::vector<std::uint64_t> changed_;
     std::uint64_t clock_ = 0;
+    // Large links only, see link_index. Const queries fill it: a Surface serves one thread at a time.
+    mutable std::unordered_map<std::uint32_t, LinkIndex> link_index_;
 };
 
 // Angles of points around a centre, counter-clockwise about a normal, from a fixed zero direction:

@@ -247,6 +247,117 @@ TEST(Surface, arcs_of_a_vertex_of_hundreds_of_faces)
     }
 }
 
+// Large links keep sorted copies until their vertex's faces change (Surface::link_index): every query
+// of a 300-face fan's centre, asked between additions, roll-backs, removals and a pinch split (whose
+// relabelling ticks no clock), must answer as a brute force over the live faces does. A stale copy
+// answers for the link as it was.
+TEST(Surface, queries_of_a_large_link_follow_its_changes)
+{
+    constexpr std::uint32_t rim = 300;
+    std::vector<std::uint32_t> order(rim);
+    std::iota(order.begin(), order.end(), 0u);
+    std::mt19937 rng(50);
+    std::shuffle(order.begin(), order.end(), rng);
+    surface_detail::Surface s(rim + 1);
+    // v's link by brute force: next[a] = b for each live face (v, a, b).
+    const auto link_of = [&](std::uint32_t v) {
+        std::map<std::uint32_t, std::uint32_t> next;
+        for (std::uint32_t f = 0; f < s.faces().size(); ++f)
+            for (int k = 0; k < 3; ++k)
+                if (s.alive(f) && s.faces()[f][k] == v)
+                    next[s.faces()[f][(k + 1) % 3]] = s.faces()[f][(k + 2) % 3];
+        return next;
+    };
+    using ArcSet = std::set<std::pair<std::uint32_t, std::uint32_t>>;
+    constexpr std::uint32_t kNone = surface_detail::kNone;
+    std::size_t rounds = 0, refused = 0, accepted = 0;
+    const auto check = [&](std::uint32_t v) {
+        ++rounds;
+        const std::map<std::uint32_t, std::uint32_t> next = link_of(v);
+        std::map<std::uint32_t, std::uint32_t> previous;
+        for (const auto& [a, b] : next)
+            previous[b] = a;
+        ArcSet arcs;
+        for (const auto& [first, second] : next)
+            if (previous.count(first) == 0) {
+                std::uint32_t last = second;
+                for (std::size_t steps = 0; next.count(last) > 0 && steps <= next.size(); ++steps)
+                    last = next.at(last);
+                arcs.insert({first, last});
+            }
+        const auto listed = s.arcs(v);
+        const ArcSet found(listed.begin(), listed.end());
+        EXPECT_EQ(found, arcs) << rounds;
+        EXPECT_EQ(s.arc_count(v), arcs.size()) << rounds;
+        const bool closed = !next.empty() && arcs.empty();
+        for (std::uint32_t x = 1; x <= rim; ++x) {
+            std::uint32_t end = kNone, start = kNone;
+            for (const auto& [first, last] : arcs) {
+                end = first == x ? last : end;
+                start = last == x ? first : start;
+            }
+            ASSERT_EQ(s.arc_end(v, x), end) << rounds << " " << x;
+            ASSERT_EQ(s.arc_start(v, x), start) << rounds << " " << x;
+            ASSERT_EQ(s.link_enters(v, x), previous.count(x) > 0) << rounds << " " << x;
+            ASSERT_EQ(s.link_leaves(v, x), next.count(x) > 0) << rounds << " " << x;
+        }
+        // A face (v, x, y) on the rim: its link edge x -> y must leave v's link paths, or close them into
+        // one cycle (the other corners of a rim face have short links, checked the same way).
+        for (int k = 0; k < 40; ++k) {
+            const std::uint32_t x = 1 + static_cast<std::uint32_t>(rng() % rim);
+            const std::uint32_t y = 1 + x % rim;
+            bool ok = !closed && next.count(x) == 0 && previous.count(y) == 0;
+            if (ok) {
+                std::uint32_t end = y;
+                std::size_t steps = 1;
+                while (end != x && next.count(end) > 0) {
+                    end = next.at(end);
+                    ++steps;
+                }
+                ok = end != x || steps == next.size() + 1;
+            }
+            ok = ok && !s.has_halfedge(x, y) && !s.has_halfedge(y, v); // the rim vertices' own links: a fan's
+            if (ok != s.can_add(v, x, y))                             // edges only, whose twins are absent
+                ADD_FAILURE() << rounds << " face (" << v << ", " << x << ", " << y << ")";
+            (ok ? accepted : refused) += 1;
+        }
+    };
+    // First a run of 60 faces that stays (after the pinch split, vertex 0 keeps it: still a large link),
+    // then a random four fifths of the others but the last three (so that the run starts an arc).
+    constexpr std::uint32_t kRun = 60;
+    for (std::uint32_t i = 0; i < kRun; ++i)
+        s.add(0, 1 + i, 2 + i, 0);
+    std::size_t added = 0;
+    for (const std::uint32_t i : order) {
+        if (i < kRun || i + 3 >= rim || rng() % 5 == 0)
+            continue;
+        s.add(0, 1 + i, 1 + (i + 1) % rim, 0);
+        if (++added % 37 == 0)
+            check(0); // asked between changes: each answer is kept until the next one
+    }
+    check(0);
+    s.pop_n(25); // a roll-back
+    check(0);
+    for (std::uint32_t f = kRun; f < s.faces().size(); f += 9)
+        if (s.alive(f))
+            s.remove(f);
+    check(0);
+    for (std::uint32_t f = 0; f < s.faces().size() && f < 120; ++f) // a run of faces closed back
+        if (!s.alive(f) && s.can_add(s.faces()[f][0], s.faces()[f][1], s.faces()[f][2]))
+            s.add(s.faces()[f][0], s.faces()[f][1], s.faces()[f][2], 0);
+    check(0);
+    ASSERT_GT(s.arc_count(0), 10u);
+    // One copy of vertex 0 per fan: the centre keeps one fan, the copies take the others by relabelling.
+    const std::vector<std::uint32_t> origin = s.split_pinches();
+    ASSERT_FALSE(origin.empty());
+    EXPECT_EQ(s.arc_count(0), 1u);
+    EXPECT_GE(s.arc_end(0, 1), 1 + kRun); // the run (and what joined it) is the fan vertex 0 keeps
+    check(0);
+    EXPECT_GT(rounds, 6u);
+    EXPECT_GT(refused, 0u);
+    EXPECT_GT(accepted, 0u);
+}
+
 TEST(Surface, sphere_is_closed_genus_0_outward)
 {
     const testing::FlatCut fc = testing::kmeans_cut(shapes::sphere(20000), 400);
