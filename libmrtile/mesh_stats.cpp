@@ -749,17 +749,19 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const std::vector<Vec3>& 
     return summarize(squared, diagonal);
 }
 
-DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const std::vector<Vec3>& points)
+std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const std::vector<Vec3>& points, const std::vector<Vec3>& queries,
+                                                    std::size_t threads, const std::vector<double>* near_enough)
 {
-    const Soup soup = mesh_to_soup(mesh);
-    if (soup.positions.empty())
+    if (near_enough && near_enough->size() != queries.size())
+        throw InvalidInput("squared_nearest_point_distances: " + std::to_string(near_enough->size()) + " near-enough bounds for " +
+                           std::to_string(queries.size()) + " queries");
+    if (points.size() != h.cloud.size() || (h.nodes.empty() && !points.empty()))
+        throw InvalidInput("squared_nearest_point_distances: " + std::to_string(points.size()) + " points given for a hierarchy of " +
+                           std::to_string(h.cloud.size()) + "; pass its own points (cloud or raw_positions)");
+    if (queries.empty())
         return {};
     if (points.empty())
-        throw InvalidInput("mesh_to_point_distance: no points given to measure the mesh against");
-    if (points.size() != h.cloud.size() || h.nodes.empty())
-        throw InvalidInput("mesh_to_point_distance: " + std::to_string(points.size()) + " points given for a hierarchy of " +
-                           std::to_string(h.cloud.size()) + "; pass its own points (cloud or raw_positions)");
-    const double diagonal = checked_diagonal(points, "mesh_to_point_distance");
+        throw InvalidInput("squared_nearest_point_distances: no points to search");
     // Each node's box around `points` (the stored boxes are of the cloud's positions, and raw ones can
     // lie outside them). Parents come before children, so backwards every child is done first.
     std::vector<BoundingBox> box(h.nodes.size());
@@ -779,12 +781,12 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
             b = {min(l.min, r.min), max(l.max, r.max)};
         }
     }
-    const std::vector<Vec3> samples = mesh_samples(soup);
-    std::vector<double> squared(samples.size());
-    run_parallel_ranges(samples.size(), 256, 0, [&](std::size_t begin, std::size_t end) {
+    std::vector<double> squared(queries.size());
+    run_parallel_ranges(queries.size(), 256, threads, [&](std::size_t begin, std::size_t end) {
         std::vector<std::int32_t> stack;
         for (std::size_t s = begin; s < end; ++s) {
-            const Vec3& q = samples[s];
+            const Vec3& q = queries[s];
+            const double enough = near_enough ? (*near_enough)[s] : -1.0;
             double best = std::numeric_limits<double>::infinity();
             stack.assign(1, 0);
             while (!stack.empty()) {
@@ -798,6 +800,8 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
                         const Vec3 d = points[i] - q;
                         best = std::min(best, d.x * d.x + d.y * d.y + d.z * d.z);
                     }
+                    if (best <= enough)
+                        break;
                     continue;
                 }
                 // The nearer child on top, searched first: its points bound the other's.
@@ -809,6 +813,21 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
             squared[s] = best;
         }
     });
+    return squared;
+}
+
+DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const std::vector<Vec3>& points)
+{
+    const Soup soup = mesh_to_soup(mesh);
+    if (soup.positions.empty())
+        return {};
+    if (points.empty())
+        throw InvalidInput("mesh_to_point_distance: no points given to measure the mesh against");
+    if (points.size() != h.cloud.size() || h.nodes.empty())
+        throw InvalidInput("mesh_to_point_distance: " + std::to_string(points.size()) + " points given for a hierarchy of " +
+                           std::to_string(h.cloud.size()) + "; pass its own points (cloud or raw_positions)");
+    const double diagonal = checked_diagonal(points, "mesh_to_point_distance");
+    const std::vector<double> squared = squared_nearest_point_distances(h, points, mesh_samples(soup), 0);
     return summarize(squared, diagonal);
 }
 

@@ -118,6 +118,18 @@ struct Hierarchy;
 //! \throw InvalidInput as above, or if `points` does not have one position per point of `h`.
 DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const std::vector<Vec3>& points);
 
+//! \brief The squared distance from each of `queries` to the nearest of `points`, searched through the
+//! hierarchy as mesh_to_point_distance does (`points` in its tree order). Deterministic; `threads`
+//! workers (0 = one per hardware thread) give the same result. With `near_enough` (one squared
+//! distance per query), a query's search ends at the first leaf that holds a point within it: its
+//! result is then at most that bound, not necessarily the nearest (for callers that only ask how far
+//! beyond a bound a query lies; most queries end at their first leaf).
+//! \throw InvalidInput if `points` does not have one position per point of `h`, or is empty while
+//! `queries` is not, or if `near_enough` does not have one bound per query.
+std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const std::vector<Vec3>& points,
+                                                    const std::vector<Vec3>& queries, std::size_t threads = 0,
+                                                    const std::vector<double>* near_enough = nullptr);
+
 //! \brief Pairs of faces (handle indices, smaller first, sorted) whose triangles intersect other than in
 //! the vertices and edges they share: geometric self-intersections of a combinatorially valid mesh (CGAL's
 //! Polygon_mesh_processing::self_intersections). With `among`, only pairs of faces both in that list.

@@ -384,6 +384,26 @@ TEST(LodSet, thread_count_does_not_change_the_result)
 // surface whose roughness varies (a sphere with one rippled cap) tiles of the smooth part are below
 // their level's worst, so a client refines them later; with the level's error on every tile (as
 // before) they refined as early as the roughest.
+// By brute force: each vertex of a level mesh with the cut node it stands for (its cluster id) and how
+// far beyond two of that node's point spacings it lies from the nearest sample point (vertex_deviation
+// in lod_set.cpp; negative within reach).
+std::vector<std::pair<std::int32_t, double>> stand_off(const Hierarchy& h, const Mesh& mesh)
+{
+    std::vector<std::pair<std::int32_t, double>> out;
+    OpenMesh::VPropHandleT<int> cluster;
+    if (!mesh.get_property_handle(cluster, kVertexCluster))
+        return out;
+    for (const auto v : mesh.vertices()) {
+        const auto& q = mesh.point(v);
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Vec3& p : h.cloud.positions)
+            nearest = std::min(nearest, squared_norm(p - Vec3{q[0], q[1], q[2]}));
+        const int node = mesh.property(cluster, v);
+        out.push_back({node, std::sqrt(nearest) - 2.0 * node_spacing(h.nodes[static_cast<std::size_t>(node)])});
+    }
+    return out;
+}
+
 TEST(LodSet, tiles_carry_their_own_geometric_error)
 {
     PointCloud bumpy = shapes::sphere(30000);
@@ -399,6 +419,14 @@ TEST(LodSet, tiles_carry_their_own_geometric_error)
     for (const LodTile& p : set.tiles)
         for (std::size_t c : p.children)
             parent_error[c] = p.geometric_error;
+    // Per level (the finest aside) and cut node: the farthest of its vertices off the sample.
+    std::vector<std::vector<double>> deviation(set.levels.size(), std::vector<double>(h.nodes.size(), 0.0));
+    for (std::size_t l = 0; l + 1 < set.levels.size(); ++l) {
+        const auto off = stand_off(h, set.levels[l].mesh);
+        ASSERT_FALSE(off.empty());
+        for (const auto& [node, d] : off)
+            deviation[l][static_cast<std::size_t>(node)] = std::max(deviation[l][static_cast<std::size_t>(node)], d);
+    }
     std::size_t smoother = 0;
     for (std::size_t k = 0; k < set.tiles.size(); ++k) {
         const LodTile& t = set.tiles[k];
@@ -408,7 +436,7 @@ TEST(LodSet, tiles_carry_their_own_geometric_error)
         for (std::int32_t id : level.cut) {
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
             if (n.begin >= region.begin && n.end <= region.end)
-                own = std::max(own, node_error(n));
+                own = std::max({own, node_error(n), deviation[t.level][static_cast<std::size_t>(id)]});
         }
         const bool finest = t.level + 1 == set.levels.size();
         const double expected = finest ? 0.0 : std::min({own, level.geometric_error, parent_error[k]});
@@ -417,6 +445,65 @@ TEST(LodSet, tiles_carry_their_own_geometric_error)
             ++smoother;
     }
     EXPECT_GT(smoother, 0u);
+}
+
+// A tile's geometric error is at least how far its level's vertices stand off the sample (QA round 57:
+// a corridor 200 x 2 x 3 m sampled on its floor, ceiling and walls; its 1,000-triangle tileset's level 0
+// has a dozen faces whose fitted vertices lie metres from the walls, while its node errors, points
+// against their tile planes, gave about 1 m). Checked by brute force on every tile of a coarse level,
+// where its parent's error leaves room; the corridor's root must exceed its node errors.
+TEST(LodSet, tile_errors_cover_how_far_their_vertices_stand_off_the_sample)
+{
+    std::mt19937 rng(57);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    PointCloud corridor;
+    for (int i = 0; i < 60000; ++i) {
+        const double side = u(rng), x = 200.0 * u(rng), a = u(rng);
+        corridor.positions.push_back(side < 0.25   ? Vec3{x, 2.0 * a, 0.0}
+                                     : side < 0.5  ? Vec3{x, 2.0 * a, 3.0}
+                                     : side < 0.75 ? Vec3{x, 0.0, 3.0 * a}
+                                                   : Vec3{x, 2.0, 3.0 * a});
+    }
+    const Hierarchy h = build_hierarchy(corridor);
+    LodSetOptions o;
+    o.max_tile_triangles = 1000;
+    const LodSet set = make_lod_set(h, o);
+    ASSERT_GT(set.levels.size(), 2u);
+    // Per level: each vertex's distance off the sample, with the cut node it stands for.
+    std::vector<std::vector<std::pair<std::int32_t, double>>> off(set.levels.size());
+    for (std::size_t l = 0; l + 1 < set.levels.size(); ++l)
+        off[l] = stand_off(h, set.levels[l].mesh);
+    double node_errors = 0.0, root_off = 0.0;
+    for (const std::int32_t id : set.levels[0].cut)
+        node_errors = std::max(node_errors, node_error(h.nodes[static_cast<std::size_t>(id)]));
+    for (const auto& [node, d] : off[0])
+        root_off = std::max(root_off, d);
+    EXPECT_GT(root_off, 1.5 * node_errors); // the case: node errors alone understate the root
+    EXPECT_GE(set.tiles[0].geometric_error, root_off);
+    EXPECT_GE(set.levels[0].geometric_error, root_off);
+    std::vector<double> parent_error(set.tiles.size(), std::numeric_limits<double>::infinity());
+    for (const LodTile& p : set.tiles)
+        for (std::size_t c : p.children)
+            parent_error[c] = p.geometric_error;
+    std::size_t checked = 0;
+    for (std::size_t k = 0; k < set.tiles.size(); ++k) {
+        const LodTile& t = set.tiles[k];
+        if (t.level + 1 == set.levels.size())
+            continue;
+        // The vertices of the level that stand for nodes in the tile's region (its content, skirts aside).
+        const Node& region = h.nodes[static_cast<std::size_t>(t.region)];
+        double farthest = 0.0;
+        for (const auto& [node, d] : off[t.level]) {
+            const Node& n = h.nodes[static_cast<std::size_t>(node)];
+            if (region.begin <= n.begin && n.end <= region.end)
+                farthest = std::max(farthest, d);
+        }
+        EXPECT_GE(t.geometric_error, std::min(farthest, parent_error[k])) << k;
+        ++checked;
+    }
+    EXPECT_GT(checked, 3u);
+    for (std::size_t l = 1; l < set.levels.size(); ++l)
+        EXPECT_LE(set.levels[l].geometric_error, set.levels[l - 1].geometric_error);
 }
 
 // The tile tree: budgets honoured, errors non-increasing, boxes nested, children's regions partition

@@ -712,13 +712,9 @@ TEST(Distance, mesh_to_points_matches_brute_force)
     expect_stats_of(mesh_to_point_distance(mesh, points), brute_force_nearest(samples, points));
 }
 
-TEST(Distance, mesh_to_points_through_a_hierarchy_matches_brute_force)
+// 3,000 points near the unit sphere and scattered around it, in a hierarchy of leaves of a few points.
+Hierarchy sphere_and_scatter(std::mt19937& rng)
 {
-    const Soup s = bumpy_sphere(17);
-    const Mesh mesh = to_mesh(s);
-    const std::vector<Vec3> samples = samples_of(s);
-    // Points near the sphere and scattered around it, in a hierarchy of leaves of a few points.
-    std::mt19937 rng(23);
     std::uniform_real_distribution<double> u(-1.4, 1.4);
     PointCloud cloud;
     for (int i = 0; i < 3000; ++i) {
@@ -727,7 +723,17 @@ TEST(Distance, mesh_to_points_through_a_hierarchy_matches_brute_force)
     }
     BuildOptions options;
     options.denoise = BuildOptions::Denoise::Off;
-    const Hierarchy h = build_hierarchy(cloud, options);
+    return build_hierarchy(cloud, options);
+}
+
+TEST(Distance, mesh_to_points_through_a_hierarchy_matches_brute_force)
+{
+    const Soup s = bumpy_sphere(17);
+    const Mesh mesh = to_mesh(s);
+    const std::vector<Vec3> samples = samples_of(s);
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> u(-1.4, 1.4);
+    const Hierarchy h = sphere_and_scatter(rng);
     ASSERT_GT(h.nodes.size(), 100u);
     expect_stats_of(mesh_to_point_distance(mesh, h, h.cloud.positions), brute_force_nearest(samples, h.cloud.positions));
     // Other positions of the same points (as raw_positions are), moved out of the stored boxes: the
@@ -737,6 +743,40 @@ TEST(Distance, mesh_to_points_through_a_hierarchy_matches_brute_force)
         p = p * 1.3 + Vec3{0.2 * u(rng), 0.0, 0.0};
     expect_stats_of(mesh_to_point_distance(mesh, h, moved), brute_force_nearest(samples, moved));
     EXPECT_THROW(mesh_to_point_distance(mesh, h, std::vector<Vec3>(moved.begin(), moved.end() - 1)), InvalidInput);
+}
+
+// squared_nearest_point_distances, per query: the nearest point's squared distance (brute force);
+// with a near-enough bound, any point's within it where the nearest lies within it, and the nearest's
+// exactly where it does not (the tile-error floor of lod_set.cpp reads only how far beyond a bound).
+TEST(Distance, nearest_points_through_a_hierarchy_with_and_without_a_bound)
+{
+    std::mt19937 rng(50);
+    std::uniform_real_distribution<double> u(-1.4, 1.4);
+    const Hierarchy h = sphere_and_scatter(rng);
+    std::vector<Vec3> queries(500);
+    for (Vec3& q : queries)
+        q = Vec3{u(rng), u(rng), u(rng)} * 1.5;
+    const std::vector<double> exact = brute_force_nearest(queries, h.cloud.positions);
+    EXPECT_EQ(squared_nearest_point_distances(h, h.cloud.positions, queries, 1), exact);
+    EXPECT_EQ(squared_nearest_point_distances(h, h.cloud.positions, queries, 3), exact);
+    std::vector<double> bound(queries.size());
+    for (std::size_t k = 0; k < queries.size(); ++k)
+        bound[k] = exact[k] * (k % 2 == 0 ? 3.0 : 0.5); // half within reach, half beyond
+    const std::vector<double> bounded = squared_nearest_point_distances(h, h.cloud.positions, queries, 2, &bound);
+    std::size_t early = 0;
+    for (std::size_t k = 0; k < queries.size(); ++k) {
+        if (exact[k] <= bound[k]) {
+            EXPECT_LE(bounded[k], bound[k]) << k;
+            EXPECT_GE(bounded[k], exact[k]) << k;
+            early += bounded[k] > exact[k] ? 1 : 0;
+        } else {
+            EXPECT_EQ(bounded[k], exact[k]) << k;
+        }
+    }
+    EXPECT_GT(early, 0u); // some searches did end before the nearest point
+    const std::vector<double> short_bound(queries.size() - 1, 1.0);
+    EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &short_bound), InvalidInput);
+    EXPECT_THROW(squared_nearest_point_distances(h, std::vector<Vec3>(3), queries), InvalidInput);
 }
 
 TEST(Distance, degenerate_input)
