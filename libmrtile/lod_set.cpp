@@ -84,8 +84,8 @@ double cut_tolerance(const Hierarchy& h, const Cut& cut)
     return side > 0 ? m / side : 0.0;
 }
 
-// The largest distance from a level mesh's vertices to the nearest sample point, by the cut node each
-// vertex stands for (its cluster id; 0 for other nodes). Node errors measure the points against their
+// How far a level mesh's vertices lie from the nearest sample point beyond kSampleReach point spacings,
+// the largest by the cut node each vertex stands for (its cluster id; 0 for other nodes). Node errors measure the points against their
 // tiles' planes, not the mesh against the points: where a coarse cut's fitted vertices stand off the
 // sample (QA round 57: a corridor's 12-face level 0, its vertices up to 2.87 m from the walls, whose
 // node errors gave 1.0 m), a tile's geometric error takes this instead, so that a client does not
@@ -118,7 +118,8 @@ std::vector<double> vertex_deviation(const Hierarchy& h, const Mesh& mesh, std::
         const double r = kSampleReach * node_spacing(h.nodes[static_cast<std::size_t>(node)]);
         reach.push_back(r * r);
     }
-    // Searches end at the first point within reach (nearly every vertex): 5x faster on a 1M-point torus.
+    // A search ends at the first point within reach, as nearly every vertex has one (the 1M torus's
+    // tile tree: 1.16 s CPU with the full nearest-point searches, 1.01 s so, 0.60 s without either).
     const std::vector<double> squared = squared_nearest_point_distances(h, h.cloud.positions, queries, threads, &reach);
     for (std::size_t k = 0; k < squared.size(); ++k) {
         const auto node = static_cast<std::size_t>(owner[k]);
