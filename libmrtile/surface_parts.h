@@ -335,18 +335,11 @@ public:
     std::uint32_t arc_end(std::uint32_t v, std::uint32_t first) const
     {
         const CornerList& link = corners_[v];
-        if (link.size() > kLargeLink) {
-            const LinkIndex& index = link_index(v);
-            if (std::binary_search(index.into.begin(), index.into.end(), first))
-                return kNone;
-            std::uint32_t end = link_step(index.next, first);
-            for (std::size_t steps = 0; end != kNone && steps < link.size(); ++steps) {
-                const std::uint32_t after = link_step(index.next, end);
-                if (after == kNone)
-                    break;
-                end = after;
-            }
-            return end;
+        if (link.size() > kLargeLink) { // its arcs are kept (large_link_arcs): look it up
+            for (const auto& [arc_first, arc_last] : large_link_arcs(v))
+                if (arc_first == first)
+                    return arc_last;
+            return kNone;
         }
         if (has_link_edge_into(link, first))
             return kNone;
@@ -377,17 +370,10 @@ public:
     {
         const CornerList& link = corners_[v];
         if (link.size() > kLargeLink) {
-            const LinkIndex& index = link_index(v);
-            std::uint32_t start = link_step(index.previous, last);
-            if (start == kNone || link_step(index.next, last) != kNone)
-                return kNone;
-            for (std::size_t steps = 0; steps < link.size(); ++steps) {
-                const std::uint32_t before = link_step(index.previous, start);
-                if (before == kNone)
-                    break;
-                start = before;
-            }
-            return start;
+            for (const auto& [arc_first, arc_last] : large_link_arcs(v))
+                if (arc_last == last)
+                    return arc_first;
+            return kNone;
         }
         std::uint32_t start = kNone;
         for (const Corner& e : link)
@@ -512,13 +498,12 @@ private:
     // quarter of the meshing (QA round 61).
     static constexpr std::size_t kLargeLink = 24;
 
-    // A large link's edges sorted three ways, kept until the vertex's faces change (clock: when they
-    // were sorted): the front asks about one spike vertex for each candidate around it, and sorting its
-    // link on every question was half of meshing a spiky terrain at tolerance 0.
+    // A large link's edges sorted two ways, and its arcs, kept until the vertex's faces change (clock:
+    // when they were sorted): the front asks about one spike vertex for each candidate around it, and
+    // sorting its link on every question was half of meshing a spiky terrain at tolerance 0.
     struct LinkIndex
     {
         std::vector<std::pair<std::uint32_t, std::uint32_t>> next;     // (first, second), by first
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> previous; // (second, first), by second
         std::vector<std::uint32_t> into;                               // the seconds, sorted
         std::vector<std::pair<std::uint32_t, std::uint32_t>> arcs;     // arcs(), once asked for
         bool arcs_known = false;
@@ -531,23 +516,20 @@ private:
             return index;
         const CornerList& link = corners_[v];
         index.next.clear();
-        index.previous.clear();
         index.into.clear();
         for (const Corner& e : link) {
             index.next.push_back({e.first, e.second});
-            index.previous.push_back({e.second, e.first});
             index.into.push_back(e.second);
         }
         std::sort(index.next.begin(), index.next.end());
-        std::sort(index.previous.begin(), index.previous.end());
         std::sort(index.into.begin(), index.into.end());
         index.arcs.clear();
         index.arcs_known = false;
         index.clock = std::max<std::uint64_t>(clock_, 1);
         return index;
     }
-    //! The link vertex after x in `steps` (the second of the link edge from x; with `previous`, the one
-    //! before x), or kNone. At most one link edge leaves or enters a vertex (half-edge uniqueness).
+    //! The link vertex after x (the second of the link edge from x in `steps`, LinkIndex::next), or
+    //! kNone. At most one link edge leaves a vertex (half-edge uniqueness).
     static std::uint32_t link_step(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& steps, std::uint32_t x)
     {
         const auto it = std::lower_bound(steps.begin(), steps.end(), std::pair<std::uint32_t, std::uint32_t>{x, 0});
