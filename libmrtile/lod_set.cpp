@@ -634,12 +634,11 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         tile.region = p.region;
         tile.level = p.level;
         // The tile's own error: the largest of its cut nodes' (a smooth part of a level refines later
-        // than a rough one), never above its parent's or its level's; the finest level's are 0.
+        // than a rough one), never above its level's; the finest level's are 0. Parents are raised to
+        // their children's below, once the tree stands.
         tile.geometric_error = p.level == last ? 0.0
                                                : std::min(set.levels[p.level].geometric_error,
                                                           index[p.level].error_below[static_cast<std::size_t>(p.region)]);
-        if (p.parent >= 0)
-            tile.geometric_error = std::min(tile.geometric_error, set.tiles[static_cast<std::size_t>(p.parent)].geometric_error);
         tile.box = region.box;
         const std::size_t id = set.tiles.size();
         if (p.parent >= 0)
@@ -676,6 +675,15 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         for (std::int32_t c : children)
             queue.push_back({c, p.level + 1, static_cast<std::ptrdiff_t>(id)});
     }
+    // A parent's error is at least its children's: REPLACE refinement needs errors that fall down the
+    // tree, and where a finer level's vertices stand farther off the sample than the coarser's in the
+    // same region, lowering the child to its parent's error (as until QA round 62) understated what the
+    // child shows (a sphere with a sparse cap: tiles of levels 1-3 at the root's 0.036, their vertices
+    // up to 0.089 off). Raising the parent instead errs on the side of refining early. Children come
+    // after their parents in `tiles`, so one backward pass carries a raise up the whole chain.
+    for (std::size_t k = set.tiles.size(); k-- > 0;)
+        for (const std::size_t c : set.tiles[k].children)
+            set.tiles[k].geometric_error = std::max(set.tiles[k].geometric_error, set.tiles[c].geometric_error);
     // The tree above needs only the level indices, so the tiles' meshes (most of the time of an export
     // from stored levels) are cut afterwards, each on its own: the same meshes on any number of threads.
     run_parallel(set.tiles.size(), o.threads, [&](std::size_t k) {

@@ -18,7 +18,8 @@
 //! Geometric error of a level = the largest node_error (cut.h: distance of a point to its tile plane,
 //! or the tile's coverage gap) over the level's cut (model units), forced non-increasing with the
 //! level. A tile's = the largest node_error of the level's cut nodes in its region, never above its
-//! parent tile's or its level's (a smooth region refines later than a rough one of the same level);
+//! level's (a smooth region refines later than a rough one of the same level), and a parent's raised
+//! to its children's (errors fall down the tree; a child is not lowered to understate what it shows);
 //! the finest level's tiles get 0, and a tile whose error is 0 at a coarser level has no children (a
 //! client never refines it). Errors, plane distances and boxes count only the cut nodes that the
 //! level's mesh shows (a vertex names them): stray points the surface leaves out set none of them.
