@@ -8,6 +8,7 @@
 #include "libmrtile/fit_vertices.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/median.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/parallel.h"
 #include "libmrtile/point_cloud.h"
@@ -306,17 +307,71 @@ std::vector<ClosestPoint> nearby_closest_points(const Mesh& mesh, const std::vec
     return out;
 }
 
+// Which points are strays (FitOptions::stray_reach): farther from the plane of their closest face than
+// kStrayResiduals times the median distance of the points on that face and its neighbours (at least
+// kStrayFloor of its longest edge, so that exactly planar parts, whose median is 0, keep every point
+// within a fraction of an edge), or than stray_reach times its longest edge. The median is local: a
+// coarse mesh stands off a curved part or a sharp edge by much of an edge, and all the points there
+// with it.
+constexpr double kStrayResiduals = 8.0;
+constexpr double kStrayFloor = 0.1;
+
+std::vector<char> stray_points(const Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest,
+                               double stray_reach)
+{
+    if (!(stray_reach > 0.0))
+        return {};
+    const std::size_t faces = mesh.n_faces();
+    std::vector<Vec3> normal(faces);
+    std::vector<double> longest(faces, 0.0);
+    for (const auto f : mesh.faces()) {
+        std::array<Vec3, 3> p;
+        int k = 0;
+        for (const auto vh : mesh.fv_range(f))
+            p[static_cast<std::size_t>(k++)] = to_vec3(mesh.point(vh));
+        const Vec3 area_normal = cross(p[1] - p[0], p[2] - p[0]);
+        normal[static_cast<std::size_t>(f.idx())] = squared_norm(area_normal) > 0.0 ? normalized(area_normal) : Vec3{};
+        longest[static_cast<std::size_t>(f.idx())] =
+            std::sqrt(std::max({squared_norm(p[1] - p[0]), squared_norm(p[2] - p[1]), squared_norm(p[0] - p[2])}));
+    }
+    std::vector<double> off(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        off[i] = std::abs(dot(normal[static_cast<std::size_t>(closest[i].face)], closest[i].point - points[i]));
+    const PointsByFace on_face(faces, closest);
+    std::vector<char> stray(points.size(), 0);
+    std::vector<double> near;
+    for (const auto f : mesh.faces()) {
+        const auto fi = static_cast<std::size_t>(f.idx());
+        if (on_face.on(fi).empty())
+            continue;
+        near.clear();
+        for (const std::uint32_t i : on_face.on(fi))
+            near.push_back(off[i]);
+        for (const auto g : mesh.ff_range(f))
+            for (const std::uint32_t i : on_face.on(static_cast<std::size_t>(g.idx())))
+                near.push_back(off[i]);
+        const double typical = std::max(upper_median_in_place(near), kStrayFloor * longest[fi]);
+        const double reach = std::min(stray_reach * longest[fi], kStrayResiduals * typical);
+        for (const std::uint32_t i : on_face.on(fi))
+            stray[i] = off[i] > reach;
+    }
+    return stray;
+}
+
 // The damped least-squares system over the vertex heights t (one per vertex, along `direction`): each
 // point adds the square of its signed distance to the plane of its closest face, linear in the heights
 // of that face's corners through the barycentric coordinates of its closest point (point-to-plane, as in
-// ICP). Damping: a fraction of the mean diagonal on every vertex. False if no point constrains anything.
+// ICP); strays (stray_points) add nothing. Damping: a fraction of the mean diagonal on every vertex.
+// False if no point constrains anything.
 bool normal_equations(const Mesh& mesh, const std::vector<Vec3>& points, const std::vector<ClosestPoint>& closest,
-                      const std::vector<Vec3>& direction, double damping, Csr& m, std::vector<double>& b)
+                      const std::vector<Vec3>& direction, double damping, const std::vector<char>& stray, Csr& m, std::vector<double>& b)
 {
     const std::size_t n = mesh.n_vertices();
     m = vertex_graph(mesh);
     b.assign(n, 0.0);
     for (std::size_t i = 0; i < points.size(); ++i) {
+        if (!stray.empty() && stray[i])
+            continue;
         const Mesh::FaceHandle f(closest[i].face);
         std::array<int, 3> v{};
         std::array<Vec3, 3> p;
@@ -509,9 +564,10 @@ void check_fit_options(const FitOptions& options)
     // max_flip_angle_degrees too: a NaN or negative limit was taken without a word (NaN refused no cap).
     if (options.rounds < 0 || options.rounds > kMaxFitRounds || !(options.damping > 0.0) || !(options.max_move >= 0.0) || !std::isfinite(options.damping) ||
         !std::isfinite(options.max_move) || (options.vertical && !(squared_norm(options.axis) > 0.0)) ||
-        !(options.max_flip_angle_degrees >= 0.0 && options.max_flip_angle_degrees <= 180.0))
+        !(options.max_flip_angle_degrees >= 0.0 && options.max_flip_angle_degrees <= 180.0) ||
+        !(options.stray_reach >= 0.0) || !std::isfinite(options.stray_reach))
         throw InvalidInput("fit_vertices: rounds must be in [0, " + std::to_string(kMaxFitRounds) + "], damping > 0, max_move >= 0 (finite), "
-                           "max_flip_angle_degrees in [0, 180], and a vertical fit needs a non-zero axis");
+                           "max_flip_angle_degrees in [0, 180], stray_reach >= 0 (finite), and a vertical fit needs a non-zero axis");
     // The relaxation runs inside every round: checked here, not only once a round relaxes.
     check_relax_options(options.relax);
 }
@@ -561,7 +617,8 @@ FitStats fit_vertices(Mesh& mesh, const std::vector<Vec3>& points, const FitOpti
         const std::vector<Vec3> direction = move_directions(mesh, options.vertical, normalized(options.axis));
         Csr system;
         std::vector<double> rhs;
-        if (!normal_equations(mesh, used, closest, direction, options.damping, system, rhs))
+        const std::vector<char> stray = stray_points(mesh, used, closest, options.stray_reach);
+        if (!normal_equations(mesh, used, closest, direction, options.damping, stray, system, rhs))
             break; // no point constrains any vertex
         const std::vector<double> heights = solve(system, rhs);
         move_vertices(mesh, heights, direction, options.max_move, start_shortest, stats, moved_sum, moved_count);

@@ -51,6 +51,13 @@ struct FitOptions
     //! of a vertex needs a few dozen points, and a fine sample under a coarse mesh would cost time
     //! without changing the result much. 0 = every point.
     std::size_t points_per_vertex = 16;
+    //! Strays do not count: points farther from the plane of their closest face than this many times
+    //! that face's longest edge, or than 8 times the median distance of the points on that face and
+    //! its neighbours (at least a tenth of the edge). A bird over a terrain, in least squares, one
+    //! point 13 m off, outweighed the dozen under a vertex and lifted it 6 m off the ground (QA round
+    //! 60). The median is local, so that where a coarse mesh stands off a curved part or a sharp edge,
+    //! the points there, all off by much the same, still pull. 0 = every point counts.
+    double stray_reach = 2.0;
     //! After each round's moves, flip the edges whose two faces fit their points better the other way
     //! round (and do not fold). Changes the connectivity, never the topology.
     bool flip_edges = true;

@@ -26,6 +26,7 @@
 #include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/gabriel_graph.h"
+#include "libmrtile/median.h"
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
@@ -61,6 +62,20 @@ constexpr double kSameFacingDegrees = 30.0;
 
 // At most this many hull points make a tile's outline (see thinned_hull).
 constexpr std::size_t kMaxHullPoints = 128;
+
+// A point of a tile lying farther off the tile's plane than this many times the robust spread of the
+// tile's heights (1.4826 × their median absolute deviation, at least the node's point spacing), among at
+// most kStrayShare of the tile's points, is a stray: it neither shapes the outline nor lifts the apex
+// (see drop_strays).
+constexpr double kStrayHeightFactor = 10.0;
+constexpr double kStrayShare = 0.02;
+
+// A hull point of a tile farther from every other point of the tile than this many times the tile's
+// mean spacing (the square root of its hull's area per point) is a stray too (see
+// drop_isolated_hull_points). Small tiles only, of 8 points or more: a median distance between nearest
+// points as the spacing of fewer (session 51) dropped real points of range scans and CAD vertices
+// (bun000 at 0.002: largest distance 9x).
+constexpr double kStrayIsolation = 6.0;
 
 struct Projected
 {
@@ -237,6 +252,91 @@ Vec3 unit_plane_axis(const TileOptions& options)
     return squared_norm(a) > 0.0 ? normalized(a) : Vec3{0, 0, 0};
 }
 
+// `pts` without the strays far off the tile's plane (kStrayHeightFactor): a bird over a terrain, a
+// mixed pixel, a stray return. The pseudo tile maps its hull points back to where they were sampled, so
+// a stray on the hull of a coarse tile was a fan corner metres off the surface (QA round 60: a 100 m
+// terrain with birds 5-50 m over it had tents and spikes up to 46 m at tolerance 0.02, and its tileset's
+// root, one fan, a corner 39 m up). Only a few points may go, so that two surfaces in one coarse tile
+// (a wall over a floor, the two halves of a step) both stay: their heights spread the deviation; and
+// only points apart from the rest (see below).
+void drop_strays(std::vector<Projected>& pts, const Hierarchy& h, const Tile& t, const Node& n)
+{
+    if (pts.size() < 8)
+        return;
+    std::vector<double> heights(pts.size());
+    for (std::size_t k = 0; k < pts.size(); ++k)
+        heights[k] = dot(h.cloud.positions[pts[k].index] - t.centre, t.normal);
+    std::vector<double> deviations = heights;
+    const double middle = upper_median_in_place(deviations);
+    for (double& d : deviations)
+        d = std::abs(d - middle);
+    const double spread = std::max(1.4826 * upper_median_in_place(deviations), node_spacing(n));
+    const double reach = kStrayHeightFactor * spread;
+    // Strays stand apart: with any point between half the reach and the reach, the heights run on
+    // (a tile reaching round a tight bend, the tip of an elongated ellipsoid) and none is dropped.
+    std::size_t strays = 0;
+    for (const double z : heights) {
+        const double off = std::abs(z - middle);
+        if (off > 0.5 * reach && !(off > reach))
+            return;
+        strays += off > reach;
+    }
+    // The share of the points the tile stands for: a large node's tile is built from a sample that
+    // holds all its hull points, and strays are hull points far more often than the rest (QA round 60's
+    // birds: 3% of a border tile's sample, 0.2% of its points).
+    const double represented = std::max(static_cast<double>(pts.size()), static_cast<double>(n.count()));
+    if (strays == 0 || static_cast<double>(strays) > kStrayShare * represented)
+        return;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < pts.size(); ++k)
+        if (!(std::abs(heights[k] - middle) > reach))
+            pts[kept++] = pts[k];
+    pts.resize(kept);
+}
+
+// `pts` without the hull points that stand apart from all the others (kStrayIsolation). A small tile
+// that took in a bird leans to it: the bird lies on the tile's plane, so the height test of drop_strays
+// does not see it, but it is a hull point metres from any other (QA round 60's birds at tolerance
+// 0.005: a chain of fan corners and split points up to a bird 7 m over the ground).
+void drop_isolated_hull_points(std::vector<Projected>& pts, const Hierarchy& h, const Tile& t, std::size_t max_points)
+{
+    // Only a node's own points, and only a node whose points are all there: in the sample of a larger
+    // node (TileOptions::max_points) a point at a thin part's tip is far from the other sampled points
+    // (bun000 at 0.02 lost one so, its largest distance +70%).
+    const Node& n = h.nodes[static_cast<std::size_t>(t.node)];
+    if (pts.size() < 8 || sample_stride(n.count(), max_points) > 1)
+        return;
+    std::vector<Projected> sorted = pts;
+    const std::vector<std::uint32_t> hull = convex_hull(sorted, 0.0);
+    if (hull.size() < 3)
+        return;
+    double twice_area = 0.0;
+    for (std::size_t k = 0; k < hull.size(); ++k) {
+        const Vec3 a = h.cloud.positions[hull[k]] - t.centre, b = h.cloud.positions[hull[(k + 1) % hull.size()]] - t.centre;
+        twice_area += dot(a, t.axis_u) * dot(b, t.axis_v) - dot(a, t.axis_v) * dot(b, t.axis_u);
+    }
+    const double spacing2 = 0.5 * twice_area / static_cast<double>(pts.size());
+    const double reach2 = kStrayIsolation * kStrayIsolation * spacing2;
+    std::vector<std::uint32_t> strays;
+    for (const std::uint32_t i : hull) {
+        if (i < n.begin || i >= n.end)
+            continue;
+        const Vec3& p = h.cloud.positions[i];
+        bool alone = true;
+        for (std::size_t k = 0; k < pts.size() && alone; ++k)
+            alone = pts[k].index == i || squared_norm(h.cloud.positions[pts[k].index] - p) > reach2;
+        if (alone)
+            strays.push_back(i);
+    }
+    // One stray may go from a small tile (15 points, one of them a bird), more only as from drop_strays.
+    if (strays.empty() || static_cast<double>(strays.size()) > std::max(1.0, kStrayShare * static_cast<double>(pts.size())))
+        return;
+    std::sort(strays.begin(), strays.end());
+    pts.erase(std::remove_if(pts.begin(), pts.end(),
+                             [&](const Projected& q) { return std::binary_search(strays.begin(), strays.end(), q.index); }),
+              pts.end());
+}
+
 // The tile of `node` built from the points `indices` (into h.cloud.positions).
 Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t* indices, std::size_t count,
                       const TileOptions& options)
@@ -244,19 +344,22 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
     const Node& n = h.nodes[static_cast<std::size_t>(node)];
     Tile t;
     t.node = node;
-    t.centre = n.moments.mean;
-    t.normal = n.frame.vectors[0];
-    t.axis_u = n.frame.vectors[2];
-    if (const Vec3 axis = unit_plane_axis(options); squared_norm(axis) > 0.0) {
-        // The given plane, its normal on the side of the PCA normal (which keeps its sign convention).
-        t.normal = dot(axis, t.normal) < 0.0 ? -axis : axis;
-        // The largest PCA axis laid into the plane, so that a tile whose own plane is that plane (a
-        // flat one) keeps its frame exactly; a helper axis where it stands on the plane.
-        const Vec3 along = t.axis_u - t.normal * dot(t.axis_u, t.normal);
-        t.axis_u = squared_norm(along) > 1e-6 ? normalized(along) : perpendicular_axis(t.normal);
-    }
-    // Right-handed plane basis so that counter-clockwise in (u, v) is counter-clockwise seen from normal.
-    t.axis_v = cross(t.normal, t.axis_u);
+    const auto set_frame = [&](const Vec3& centre, const Eigen3x3& frame) {
+        t.centre = centre;
+        t.normal = frame.vectors[0];
+        t.axis_u = frame.vectors[2];
+        if (const Vec3 axis = unit_plane_axis(options); squared_norm(axis) > 0.0) {
+            // The given plane, its normal on the side of the PCA normal (which keeps its sign convention).
+            t.normal = dot(axis, t.normal) < 0.0 ? -axis : axis;
+            // The largest PCA axis laid into the plane, so that a tile whose own plane is that plane (a
+            // flat one) keeps its frame exactly; a helper axis where it stands on the plane.
+            const Vec3 along = t.axis_u - t.normal * dot(t.axis_u, t.normal);
+            t.axis_u = squared_norm(along) > 1e-6 ? normalized(along) : perpendicular_axis(t.normal);
+        }
+        // Right-handed plane basis so that counter-clockwise in (u, v) is counter-clockwise seen from normal.
+        t.axis_v = cross(t.normal, t.axis_u);
+    };
+    set_frame(n.moments.mean, n.frame);
     t.points = static_cast<std::uint32_t>(count);
     std::vector<Projected> pts;
     pts.reserve(count);
@@ -264,13 +367,29 @@ Tile tile_from_points(const Hierarchy& h, std::int32_t node, const std::uint32_t
     for (std::size_t k = 0; k < count; ++k) {
         const Vec3 d = h.cloud.positions[indices[k]] - t.centre;
         pts.push_back({dot(d, t.axis_u), dot(d, t.axis_v), indices[k]});
-        sum_r2 += pts.back().x * pts.back().x + pts.back().y * pts.back().y;
     }
+    drop_strays(pts, h, t, n);
+    drop_isolated_hull_points(pts, h, t, options.max_points);
+    if (pts.size() < count) {
+        // The plane of the points without the strays: a small tile leant to its stray (a plane through
+        // a bird and the ground), and the ground alone would project to a sliver of it.
+        Moments kept;
+        for (const Projected& q : pts)
+            kept.add(h.cloud.positions[q.index]);
+        set_frame(kept.mean, eigen_decomposition(kept));
+        for (Projected& q : pts) {
+            const Vec3 d = h.cloud.positions[q.index] - t.centre;
+            q.x = dot(d, t.axis_u);
+            q.y = dot(d, t.axis_v);
+        }
+    }
+    for (const Projected& q : pts)
+        sum_r2 += q.x * q.x + q.y * q.y;
     // Apex: the mean height over the points within half the RMS radius of the centre (for a disc, the
     // inner quarter of the area); all points if there are too few there.
     t.apex = t.centre;
-    if (count > 0) {
-        const double inner = 0.25 * sum_r2 / static_cast<double>(count);
+    if (!pts.empty()) {
+        const double inner = 0.25 * sum_r2 / static_cast<double>(pts.size());
         double height = 0.0;
         std::size_t used = 0;
         for (const Projected& q : pts)

@@ -542,7 +542,7 @@ TEST(Cli, lods_with_far_strays_go_on_to_the_finest_level)
 TEST(Cli, lods_compares_levels_over_the_same_points_and_goes_past_a_worse_one)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    for (const std::uint32_t seed : {3u, 1u}) {
+    for (const std::uint32_t seed : {3u, 2u}) {
         PointCloud cloud = shapes::sphere(20000, 1.0, seed);
         shapes::add_noise(cloud, 0.001, seed + 100);
         std::string text;
@@ -576,8 +576,10 @@ TEST(Cli, lods_compares_levels_over_the_same_points_and_goes_past_a_worse_one)
             }
         }
         EXPECT_GT(levels.back()["faces"].get<std::size_t>(), 10000u) << r.out; // the chain reaches the fine cuts
-        if (seed == 1) { // its level of tolerance 7.3e-4 measures worse than the one of 1.0e-3
-            EXPECT_NE(r.out.find("left out 1 of 4 levels"), std::string::npos) << r.out;
+        // Its level of tolerance 4.6e-4 measures worse than the one before (seed 1's of 7.3e-4 did until
+        // session 51, whose stray handling changed its meshes).
+        if (seed == 2) {
+            EXPECT_NE(r.out.find("left out 1 of 5 levels"), std::string::npos) << r.out;
         }
     }
 }

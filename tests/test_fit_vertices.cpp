@@ -109,18 +109,50 @@ TEST(FitVertices, the_move_limit_does_not_grow_with_the_moves)
         EXPECT_LE(distance(after[i], before[i]), (o.rounds * o.max_move + 0.5) * shortest[i]) << "vertex " << i;
 }
 
-// Points exactly on a plane under a flat grid mesh: nothing to fit, every vertex stays on the plane.
-TEST(FitVertices, planar_sample_stays_planar)
+// 5,000 seeded points on the plane z = 0.5 over [0, 4]², under the tests' flat grid meshes.
+std::vector<Vec3> points_on_a_plane(unsigned seed)
 {
-    std::mt19937 rng(7);
+    std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 4.0);
     std::vector<Vec3> points(5000);
     for (Vec3& p : points)
         p = {u(rng), u(rng), 0.5};
+    return points;
+}
+
+// Points exactly on a plane under a flat grid mesh: nothing to fit, every vertex stays on the plane.
+TEST(FitVertices, planar_sample_stays_planar)
+{
+    const std::vector<Vec3> points = points_on_a_plane(7);
     Mesh mesh = testing::grid_mesh(8, 8, 0.0, 0.0, 0.5, [](double, double) { return 0.5; });
     fit_vertices(mesh, points);
     for (const Vec3& p : positions(mesh))
         EXPECT_NEAR(p.z, 0.5, 1e-12);
+}
+
+// Strays over a planar sample (birds over flat ground) do not lift the mesh: in least squares one point
+// far off outweighed the dozen under a vertex (QA round 60: ground vertices lifted 6 m toward birds 13 m
+// away). Strays at 1 (within twice an edge of their face: the local median rule) and 3 (beyond it) over
+// a mesh of 0.5 cells; with stray_reach 0 they pull.
+TEST(FitVertices, strays_over_a_plane_do_not_lift_it)
+{
+    std::vector<Vec3> points = points_on_a_plane(60);
+    for (const double height : {1.0, 3.0})
+        for (int k = 0; k < 5; ++k)
+            points.push_back({0.4 + 0.8 * k, 0.6 + 0.7 * k, 0.5 + height});
+    const auto highest = [&](double stray_reach) {
+        Mesh mesh = testing::grid_mesh(8, 8, 0.0, 0.0, 0.5, [](double, double) { return 0.5; });
+        FitOptions o;
+        o.points_per_vertex = 0; // every point, strays included
+        o.stray_reach = stray_reach;
+        fit_vertices(mesh, points, o);
+        double z = -std::numeric_limits<double>::infinity();
+        for (const Vec3& p : positions(mesh))
+            z = std::max(z, p.z);
+        return z;
+    };
+    EXPECT_NEAR(highest(FitOptions{}.stray_reach), 0.5, 1e-12);
+    EXPECT_GT(highest(0.0), 0.52);
 }
 
 // Points on a tilted plane under a flat mesh: both diagonals of every quad fit them exactly, so their
@@ -282,6 +314,11 @@ TEST(FitVertices, bad_options_are_refused_and_empty_input_is_a_no_op)
     o = {};
     o.max_move = std::nan("");
     EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput);
+    for (const double reach : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+        o = {};
+        o.stray_reach = reach;
+        EXPECT_THROW(fit_vertices(mesh, points, o), InvalidInput) << reach;
+    }
     const std::vector<Vec3> before = positions(mesh);
     EXPECT_EQ(fit_vertices(mesh, {}).rounds, 0);
     EXPECT_EQ(positions(mesh), before);

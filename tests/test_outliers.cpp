@@ -196,8 +196,10 @@ TEST(Outliers, a_scan_with_stray_points_meshes_like_the_clean_scan)
         return static_cast<double>(far) / static_cast<double>(vertices.size());
     };
     // 4.1% since session 48 (the vertex fit no longer follows strays the surface leaves out in clusters
-    // of their own); the strays that join tiles still make spikes.
-    EXPECT_GT(far_vertices(noisy), 0.03);
+    // of their own), 1.6% since session 51 (strays far off a tile's plane or apart from its other points
+    // shape no outline, and the fit leaves out points far off their faces); the strays that tiles take
+    // in still make spikes.
+    EXPECT_GT(far_vertices(noisy), 0.012);
     const std::size_t removed = remove_outliers(noisy);
     EXPECT_GT(removed, clean.size() / 100 * 3 / 4);
     EXPECT_LT(far_vertices(noisy), 0.01);

@@ -415,6 +415,59 @@ TEST(Tiles, sampled_tile_keeps_the_border_of_its_node)
     EXPECT_NEAR(a.area, 1.0, 1e-12);
 }
 
+// A stray far off a tile's plane (a bird over a terrain) does not shape its outline: the pseudo tile
+// maps hull points back to where they were sampled, so a stray on the hull was a fan corner far off the
+// surface (QA round 60: spikes and tents up to 46 m over a 100 m terrain at tolerance 0.02). Points
+// whose heights run on from the rest (a ridge) or too many to be strays (two ledges) keep their place.
+TEST(Tiles, a_stray_far_off_the_plane_does_not_shape_the_outline)
+{
+    std::vector<Vec3> plane;
+    for (int i = 0; i <= 30; ++i)
+        for (int j = 0; j <= 30; ++j)
+            plane.push_back({i / 30.0, j / 30.0, 0.0});
+    const auto highest_hull_point = [](const std::vector<Vec3>& points) {
+        const Hierarchy h = single_node(points);
+        TileOptions every_point;
+        every_point.max_points = 0;
+        const Tile t = make_tiles(h, {0}, every_point).front();
+        double highest = -std::numeric_limits<double>::infinity();
+        for (const std::uint32_t i : t.boundary)
+            highest = std::max(highest, h.cloud.positions[i].z);
+        return std::pair{highest, t};
+    };
+    // The stray lies outside the plane's square, so that it is on the hull of the projected points.
+    std::vector<Vec3> with_stray = plane;
+    with_stray.push_back({1.3, 0.5, 0.6});
+    const auto [stray_height, stray_tile] = highest_hull_point(with_stray);
+    EXPECT_LT(stray_height, 0.05);
+    EXPECT_EQ(stray_tile.boundary.size(), 4u);
+    EXPECT_GT(stray_tile.area, 0.99);
+    EXPECT_LT(std::abs(dot(stray_tile.apex - stray_tile.centre, stray_tile.normal)), 0.01);
+    // A small tile (a 4 x 3 patch) that took in a bird: one point in 13 is too many for the height test,
+    // but the bird stands apart from every other point (a small tile leans to it, QA round 60 at 0.005).
+    std::vector<Vec3> patch;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 3; ++j)
+            patch.push_back({0.5 * i, 0.5 * j, 0.0});
+    patch.push_back({2.5, 0.5, 3.0});
+    const auto [patch_height, patch_tile] = highest_hull_point(patch);
+    EXPECT_EQ(patch_height, 0.0);
+    EXPECT_EQ(patch_tile.boundary.size(), 4u);
+    // A ridge of 15 points (1.5%) running on from the plane up to the same height: no gap in the heights.
+    std::vector<Vec3> ridge = plane;
+    for (int i = 1; i <= 15; ++i)
+        ridge.push_back({1.0 + i / 50.0, 0.5, 0.6 * i / 15.0});
+    EXPECT_GT(highest_hull_point(ridge).first, 0.5);
+    // Two ledges of 20 points each (4% in all), 0.6 up on either side: too many to be strays.
+    std::vector<Vec3> ledges = plane;
+    for (int i = 1; i <= 4; ++i)
+        for (int j = 0; j < 5; ++j) {
+            ledges.push_back({-i / 30.0, 0.4 + j / 30.0, 0.6});
+            ledges.push_back({1.0 + i / 30.0, 0.4 + j / 30.0, 0.6});
+        }
+    EXPECT_GT(highest_hull_point(ledges).first, 0.5);
+}
+
 // QA round qa3: TileOptions::plane_axis of any non-zero length is the axis. One of 1e-300 (its squared
 // norm underflows) was taken for none, one of 1e300 (its norm overflows) made NaN planes and mesh_cut
 // blamed the cut; an infinite collinear_tolerance dropped every hull point the same way.
