@@ -65,8 +65,8 @@ constexpr std::size_t kMaxHullPoints = 128;
 
 // A point of a tile lying farther off the tile's plane than this many times the robust spread of the
 // tile's heights (1.4826 × their median absolute deviation, at least the node's point spacing), among at
-// most kStrayShare of the tile's points, is a stray: it neither shapes the outline nor lifts the apex
-// (see drop_strays).
+// most kStrayShare of the points the tile stands for, is a stray: it neither shapes the outline nor
+// lifts the apex (see drop_strays).
 constexpr double kStrayHeightFactor = 10.0;
 constexpr double kStrayShare = 0.02;
 
@@ -328,7 +328,7 @@ void drop_isolated_hull_points(std::vector<Projected>& pts, const Hierarchy& h, 
         if (alone)
             strays.push_back(i);
     }
-    // One stray may go from a small tile (15 points, one of them a bird), more only as from drop_strays.
+    // One stray may go from a small tile (15 points, one of them a bird), more only within kStrayShare.
     if (strays.empty() || static_cast<double>(strays.size()) > std::max(1.0, kStrayShare * static_cast<double>(pts.size())))
         return;
     std::sort(strays.begin(), strays.end());

@@ -76,7 +76,9 @@ struct TileOptions
 struct Tile
 {
     std::int32_t node = -1; //!< hierarchy node id
-    Vec3 centre;            //!< node mean (paper §4.3 T1's fan centre; used for all tile geometry)
+    //! Node mean (paper §4.3 T1's fan centre; used for all tile geometry); where strays far off were
+    //! left out of the tile (tiles.cpp: drop_strays), the mean of the rest, with the plane fitted to them.
+    Vec3 centre;
     //! Where the fan's centre vertex is placed: `centre` moved along the normal to the height that fits
     //! the fan to the tile's points in least squares (TileOptions::fit_apex; otherwise the mean height
     //! of the points near the centre). The mean of a curved patch lies below it by about two thirds of
