@@ -598,22 +598,25 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         }
     LodSet set;
     set.levels = std::move(levels);
-    if (!o.tileset)
-        return set;
 
-    // Tile errors (error_below) and the levels' are floored by how far each level's vertices stand off
-    // the sample (vertex_deviation), coarser levels raised to the finer ones' floors so that errors
-    // still fall level by level; the finest level's stay 0.
+    // The levels' errors (and below, the tiles', error_below) are floored by how far each level's
+    // vertices stand off the sample (vertex_deviation), coarser levels raised to the finer ones' floors
+    // so that errors still fall level by level; the finest level's stay 0. With or without the tile
+    // tree: `lods` writes the levels' errors too (until session 51 its lods.json kept the node errors).
     const std::size_t last = set.levels.size() - 1;
-    std::vector<LevelIndex> index;
-    for (std::size_t k = 0; k < set.levels.size(); ++k) {
-        const std::vector<double> deviation = k == last ? std::vector<double>{} : vertex_deviation(h, set.levels[k].mesh, o.threads);
-        index.push_back(index_level(h, set.levels[k], deviation));
-        const double farthest = deviation.empty() ? 0.0 : *std::max_element(deviation.begin(), deviation.end());
+    std::vector<std::vector<double>> deviation(set.levels.size());
+    for (std::size_t k = 0; k < last; ++k) {
+        deviation[k] = vertex_deviation(h, set.levels[k].mesh, o.threads);
+        const double farthest = deviation[k].empty() ? 0.0 : *std::max_element(deviation[k].begin(), deviation[k].end());
         set.levels[k].geometric_error = std::max(set.levels[k].geometric_error, farthest);
     }
     for (std::size_t k = last; k-- > 0;)
         set.levels[k].geometric_error = std::max(set.levels[k].geometric_error, set.levels[k + 1].geometric_error);
+    if (!o.tileset)
+        return set;
+    std::vector<LevelIndex> index;
+    for (std::size_t k = 0; k < set.levels.size(); ++k)
+        index.push_back(index_level(h, set.levels[k], deviation[k]));
     // Regions are chosen within three quarters of the budget (room for skirts), and with their skirts
     // within all of it: a small region's skirt can outgrow the quarter (QA round 28b: at 256, a quarter
     // of the bunny's tiles were over, up to 343 faces).

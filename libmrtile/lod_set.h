@@ -23,11 +23,12 @@
 //! the finest level's tiles get 0, and a tile whose error is 0 at a coarser level has no children (a
 //! client never refines it). Errors, plane distances and boxes count only the cut nodes that the
 //! level's mesh shows (a vertex names them): stray points the surface leaves out set none of them.
-//! With the tile tree (make_lod_tiles), node errors are floored by what the mesh shows: a cut node's
-//! error is at least how far its vertices lie from the nearest sample point beyond two point spacings
-//! (node_spacing), and a level's error at least its largest (raised level by level from the finest, so
-//! errors still fall): a coarse level whose fitted vertices stand off the sample is not shown from
-//! where that is plain (QA round 57: a corridor's 12-face root, 2.87 m off, had error 1.0 m; now 2.64).
+//! In make_lod_tiles (with or without the tile tree), node errors are floored by what the mesh shows:
+//! a cut node's error is at least how far its vertices lie from the nearest sample point beyond two
+//! point spacings (node_spacing), and a level's error at least its largest (raised level by level
+//! from the finest, so errors still fall): a coarse level whose fitted vertices stand off the sample
+//! is not shown from where that is plain (QA round 57: a corridor's 12-face root, 2.87 m off, had
+//! error 1.0 m; now 2.64).
 //! A tile's box is that of its content and its descendants' (the region's when it has none).
 
 #include "libmrtile/cut.h"

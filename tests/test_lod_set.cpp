@@ -468,7 +468,7 @@ TEST(LodSet, tiles_carry_their_own_geometric_error)
 // has a dozen faces whose fitted vertices lie metres from the walls, while its node errors, points
 // against their tile planes, gave about 1 m). Checked by brute force on every tile of a coarse level
 // (parents raised to their children's since QA round 62, so no parent's error caps it); the
-// corridor's root must exceed its node errors.
+// corridor's root must exceed its node errors, with or without the tile tree.
 // Every tile of a level but the finest claims at least the farthest stand-off (`off`, per level) of the
 // vertices that stand for cut nodes in its region (its content, skirts aside). Returns the tiles checked.
 std::size_t expect_errors_cover_stand_off(const Hierarchy& h, const LodSet& set,
@@ -507,8 +507,16 @@ TEST(LodSet, tile_errors_cover_how_far_their_vertices_stand_off_the_sample)
     const Hierarchy h = build_hierarchy(corridor);
     LodSetOptions o;
     o.max_tile_triangles = 1000;
-    const LodSet set = make_lod_set(h, o);
+    const std::vector<LodLevel> levels = make_lod_levels(h, o);
+    const LodSet set = make_lod_tiles(h, levels, o);
     ASSERT_GT(set.levels.size(), 2u);
+    // Without the tile tree (as `mrtile lods` asks) the levels carry the same floored errors.
+    LodSetOptions bare = o;
+    bare.tileset = false;
+    const LodSet levels_only = make_lod_tiles(h, levels, bare);
+    ASSERT_EQ(levels_only.levels.size(), set.levels.size());
+    for (std::size_t l = 0; l < set.levels.size(); ++l)
+        EXPECT_EQ(levels_only.levels[l].geometric_error, set.levels[l].geometric_error) << l;
     // Per level: each vertex's distance off the sample, with the cut node it stands for.
     std::vector<std::vector<std::pair<std::int32_t, double>>> off(set.levels.size());
     for (std::size_t l = 0; l + 1 < set.levels.size(); ++l)
