@@ -294,10 +294,11 @@ void drop_strays(std::vector<Projected>& pts, const Hierarchy& h, const Tile& t,
     pts.resize(kept);
 }
 
-// `pts` without the hull points that stand apart from all the others (kStrayIsolation). A small tile
-// that took in a bird leans to it: the bird lies on the tile's plane, so the height test of drop_strays
-// does not see it, but it is a hull point metres from any other (QA round 60's birds at tolerance
-// 0.005: a chain of fan corners and split points up to a bird 7 m over the ground).
+// `pts` without the hull points that stand apart from all the others (kStrayIsolation) and off the
+// plane of the rest. A small tile that took in a bird leans to it: the bird lies on the tile's plane,
+// so the height test of drop_strays does not see it, but it is a hull point metres from any other and
+// off the plane of the ground (QA round 60's birds at tolerance 0.005: a chain of fan corners and split
+// points up to a bird 7 m over the ground).
 void drop_isolated_hull_points(std::vector<Projected>& pts, const Hierarchy& h, const Tile& t, std::size_t max_points)
 {
     // Only a node's own points, and only a node whose points are all there: in the sample of a larger
@@ -317,15 +318,28 @@ void drop_isolated_hull_points(std::vector<Projected>& pts, const Hierarchy& h, 
     }
     const double spacing2 = 0.5 * twice_area / static_cast<double>(pts.size());
     const double reach2 = kStrayIsolation * kStrayIsolation * spacing2;
+    Moments all;
+    for (const Projected& q : pts)
+        all.add(h.cloud.positions[q.index]);
     std::vector<std::uint32_t> strays;
     for (const std::uint32_t i : hull) {
         if (i < n.begin || i >= n.end)
             continue;
         const Vec3& p = h.cloud.positions[i];
-        bool alone = true;
-        for (std::size_t k = 0; k < pts.size() && alone; ++k)
-            alone = pts[k].index == i || squared_norm(h.cloud.positions[pts[k].index] - p) > reach2;
-        if (alone)
+        double nearest2 = std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < pts.size() && nearest2 > reach2; ++k)
+            if (pts[k].index != i)
+                nearest2 = std::min(nearest2, squared_norm(h.cloud.positions[pts[k].index] - p));
+        if (!(nearest2 > reach2))
+            continue;
+        // And off the plane of the rest by half its distance to them or more: a point far out on the
+        // plane of the others is a sparse sample of the same surface (the far end of a scan line), not
+        // a stray (QA round 63: one point of a 20-point plane, 2.5 units out, was left out).
+        Moments rest = all;
+        rest.remove(p);
+        const Vec3 normal = eigen_decomposition(rest).vectors[0];
+        const double off = dot(p - rest.mean, normal);
+        if (4.0 * off * off >= nearest2)
             strays.push_back(i);
     }
     // One stray may go from a small tile (15 points, one of them a bird), more only within kStrayShare.

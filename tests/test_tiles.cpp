@@ -430,16 +430,19 @@ TEST(Tiles, a_stray_far_off_the_plane_does_not_shape_the_outline)
         TileOptions every_point;
         every_point.max_points = 0;
         const Tile t = make_tiles(h, {0}, every_point).front();
-        double highest = -std::numeric_limits<double>::infinity();
-        for (const std::uint32_t i : t.boundary)
-            highest = std::max(highest, h.cloud.positions[i].z);
-        return std::pair{highest, t};
+        double highest = -std::numeric_limits<double>::infinity(), farthest = 0.0;
+        for (const std::uint32_t i : t.boundary) {
+            highest = std::max(highest, h.cloud.positions[i].z + h.cloud.origin.z);
+            farthest = std::max(farthest, h.cloud.positions[i].x + h.cloud.origin.x);
+        }
+        return std::tuple{highest, t, farthest};
     };
     // The stray lies outside the plane's square, so that it is on the hull of the projected points.
     std::vector<Vec3> with_stray = plane;
     with_stray.push_back({1.3, 0.5, 0.6});
-    const auto [stray_height, stray_tile] = highest_hull_point(with_stray);
+    const auto [stray_height, stray_tile, stray_x] = highest_hull_point(with_stray);
     EXPECT_LT(stray_height, 0.05);
+    EXPECT_EQ(stray_x, 1.0);
     EXPECT_EQ(stray_tile.boundary.size(), 4u);
     EXPECT_GT(stray_tile.area, 0.99);
     EXPECT_LT(std::abs(dot(stray_tile.apex - stray_tile.centre, stray_tile.normal)), 0.01);
@@ -450,14 +453,20 @@ TEST(Tiles, a_stray_far_off_the_plane_does_not_shape_the_outline)
         for (int j = 0; j < 3; ++j)
             patch.push_back({0.5 * i, 0.5 * j, 0.0});
     patch.push_back({2.5, 0.5, 3.0});
-    const auto [patch_height, patch_tile] = highest_hull_point(patch);
+    const auto [patch_height, patch_tile, patch_x] = highest_hull_point(patch);
     EXPECT_EQ(patch_height, 0.0);
     EXPECT_EQ(patch_tile.boundary.size(), 4u);
+    EXPECT_EQ(patch_x, 1.5);
+    // The same patch with a point as far out on its plane: a sparse sample of the surface, kept (QA
+    // round 63).
+    std::vector<Vec3> far_on_the_plane = patch;
+    far_on_the_plane.back() = {4.5, 0.5, 0.0};
+    EXPECT_EQ(std::get<2>(highest_hull_point(far_on_the_plane)), 4.5);
     // A ridge of 15 points (1.5%) running on from the plane up to the same height: no gap in the heights.
     std::vector<Vec3> ridge = plane;
     for (int i = 1; i <= 15; ++i)
         ridge.push_back({1.0 + i / 50.0, 0.5, 0.6 * i / 15.0});
-    EXPECT_GT(highest_hull_point(ridge).first, 0.5);
+    EXPECT_GT(std::get<0>(highest_hull_point(ridge)), 0.5);
     // Two ledges of 20 points each (4% in all), 0.6 up on either side: too many to be strays.
     std::vector<Vec3> ledges = plane;
     for (int i = 1; i <= 4; ++i)
@@ -465,7 +474,7 @@ TEST(Tiles, a_stray_far_off_the_plane_does_not_shape_the_outline)
             ledges.push_back({-i / 30.0, 0.4 + j / 30.0, 0.6});
             ledges.push_back({1.0 + i / 30.0, 0.4 + j / 30.0, 0.6});
         }
-    EXPECT_GT(highest_hull_point(ledges).first, 0.5);
+    EXPECT_GT(std::get<0>(highest_hull_point(ledges)), 0.5);
 }
 
 // QA round qa3: TileOptions::plane_axis of any non-zero length is the axis. One of 1e-300 (its squared
