@@ -89,8 +89,9 @@ double cut_tolerance(const Hierarchy& h, const Cut& cut)
 // Node errors measure the points against their tiles' planes, not the mesh against the points: where
 // a coarse cut's fitted vertices stand off the sample (QA round 57: a corridor's 12-face level 0, its
 // vertices up to 2.87 m from the walls, whose node errors gave 1.0 m), a tile's geometric error takes
-// this instead, so that a client does not show it from where its error is plain. A lower bound of the mesh's deviation (a face spanning a
-// concave corner between vertices on the sample is not seen), found in a search through the hierarchy.
+// this instead, so that a client does not show it from where its error is plain. A lower bound of the
+// mesh's deviation (a face spanning a concave corner between vertices on the sample is not seen), found
+// in a search through the hierarchy.
 // A vertex on the sampled surface but between samples (a fan centre, a split point) is up to about a
 // point spacing from the nearest, so only what lies beyond kSampleReach spacings (the node's,
 // node_spacing) counts: a box's exactly planar tiles keep error 0 and end their branch.

@@ -207,16 +207,23 @@ TEST(Surface, arc_walks_agree_with_the_arcs)
     EXPECT_GT(checked, 50u);
 }
 
+// The rim vertices 0 .. rim - 1 of a fan in a random order, for faces added out of turn.
+std::vector<std::uint32_t> shuffled_rim(std::uint32_t rim, std::mt19937& rng)
+{
+    std::vector<std::uint32_t> order(rim);
+    std::iota(order.begin(), order.end(), 0u);
+    std::shuffle(order.begin(), order.end(), rng);
+    return order;
+}
+
 // A vertex of hundreds of faces (a spike of a terrain scan joined to every tile around it, QA round 61)
 // has its arcs found through sorted copies of its link, not by scans per corner: the same arcs, in the
 // same order (that of its faces), with a random quarter of a 300-face fan left out.
 TEST(Surface, arcs_of_a_vertex_of_hundreds_of_faces)
 {
     constexpr std::uint32_t rim = 300;
-    std::vector<std::uint32_t> order(rim);
-    std::iota(order.begin(), order.end(), 0u);
     std::mt19937 rng(61);
-    std::shuffle(order.begin(), order.end(), rng);
+    const std::vector<std::uint32_t> order = shuffled_rim(rim, rng);
     surface_detail::Surface s(rim + 1);
     for (const std::uint32_t i : order)
         if (rng() % 4 != 0)
@@ -254,10 +261,8 @@ TEST(Surface, arcs_of_a_vertex_of_hundreds_of_faces)
 TEST(Surface, queries_of_a_large_link_follow_its_changes)
 {
     constexpr std::uint32_t rim = 300;
-    std::vector<std::uint32_t> order(rim);
-    std::iota(order.begin(), order.end(), 0u);
     std::mt19937 rng(50);
-    std::shuffle(order.begin(), order.end(), rng);
+    const std::vector<std::uint32_t> order = shuffled_rim(rim, rng);
     surface_detail::Surface s(rim + 1);
     // v's link by brute force: next[a] = b for each live face (v, a, b).
     const auto link_of = [&](std::uint32_t v) {
