@@ -705,6 +705,8 @@ bool has_normal(const Node& n)
     return spread.across > kLineWidthSpacings * spread.spacing_along;
 }
 
+} // namespace
+
 // Two children whose boxes lie apart: the node's tile would span the space between them. Counted
 // when wider than a quarter of the node's box diagonal (so that a node split across a little empty
 // space is not) and than twice min_radius_spacings (two objects far apart in one cloud; two scan lines
@@ -738,8 +740,6 @@ double children_separation(const Hierarchy& h, const Node& n, const CoverageOpti
     const double holes = (facing ? 1.0 : 2.0) * options.min_radius_spacings * spacing;
     return d > std::max(holes, kMinShare * n.box.diagonal()) ? d : 0.0;
 }
-
-} // namespace
 
 void set_coverage_gaps(Hierarchy& h, std::size_t threads, const CoverageOptions& options)
 {

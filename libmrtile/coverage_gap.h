@@ -122,6 +122,13 @@ private:
 //! Every how many points to judge out of `count` (1 up to options.max_points).
 std::size_t coverage_stride(std::size_t count, const CoverageOptions& options = {});
 
+//! \brief A node's own gap from its children alone (what set_coverage_gaps adds to its own judged gap):
+//! the distance between its children's boxes when that exceeds a quarter of its box's diagonal and 8
+//! of its point spacings, 4 where the children face each other across it; else 0 (also for a leaf).
+//! lod_set.cpp asks it to tell which nodes' gaps stray points far off made (a bird split off the
+//! ground is a child 45 m from its sibling).
+double children_separation(const Hierarchy& h, const Node& n, const CoverageOptions& options = {});
+
 //! \brief Sets every node's Node::coverage_gap: its own gap in its PCA plane (judged from a regular
 //! sample of options.max_points of its points), with the points of other nodes within its largest
 //! plane distance of that plane filling the grid, or, if larger, the distance between its children's

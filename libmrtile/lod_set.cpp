@@ -9,6 +9,7 @@
 //    along the surface normal from the region's border hides the crack (the standard terrain remedy).
 #include "libmrtile/lod_set.h"
 
+#include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/face_sequence.h"
 #include "libmrtile/mesh_stats.h"
@@ -129,8 +130,392 @@ std::vector<double> vertex_deviation(const Hierarchy& h, const Mesh& mesh, std::
     return deviation;
 }
 
+// The tile (hierarchy node) owning a face of a level mesh: its own, or for a gap face (tile -1) the tile
+// of its smallest-index vertex (deterministic).
+int face_owner(const Mesh& mesh, OpenMesh::FPropHandleT<int> tile, OpenMesh::VPropHandleT<int> cluster, Mesh::FaceHandle f)
+{
+    int owner = mesh.property(tile, f);
+    if (owner < 0) {
+        int smallest = -1;
+        for (const auto v : mesh.fv_range(f))
+            if (smallest < 0 || v.idx() < smallest) {
+                smallest = v.idx();
+                owner = mesh.property(cluster, v);
+            }
+    }
+    return owner;
+}
+
+// The finest level's faces by the hierarchy node that owns them (its tile, or for a gap face the tile
+// of its smallest vertex, as index_level), with the box of the faces in each node's subtree: a search
+// down the hierarchy, pruned by the boxes, finds where a line through a point crosses the finest
+// surface. The few points the errors below ask about need no search structure over the whole mesh (a
+// CGAL AABB tree over a 1M-point model's finest level was 0.35 s of a 1.8 s export).
+class FinestFaces
+{
+public:
+    FinestFaces(const Hierarchy& h, const Mesh& mesh) : h_(h), mesh_(mesh)
+    {
+        OpenMesh::FPropHandleT<int> tile;
+        OpenMesh::VPropHandleT<int> cluster;
+        if (!mesh.get_property_handle(tile, kFaceTile) || !mesh.get_property_handle(cluster, kVertexCluster))
+            throw InvalidInput("lods: level mesh lacks the tile/cluster properties");
+        const std::size_t nodes = h.nodes.size();
+        std::vector<std::int32_t> owner(mesh.n_faces(), -1);
+        first_.assign(nodes + 1, 0);
+        box_.assign(nodes, BoundingBox{});
+        has_box_.assign(nodes, 0);
+        for (const auto f : mesh.faces()) {
+            const int o = face_owner(mesh, tile, cluster, f);
+            if (o < 0 || static_cast<std::size_t>(o) >= nodes)
+                continue;
+            owner[static_cast<std::size_t>(f.idx())] = o;
+            ++first_[static_cast<std::size_t>(o) + 1];
+            for (const auto v : mesh.fv_range(f))
+                grow(static_cast<std::size_t>(o), to_vec(mesh.point(v)));
+        }
+        for (std::size_t k = 0; k < nodes; ++k)
+            first_[k + 1] += first_[k];
+        faces_.resize(first_[nodes]);
+        std::vector<std::uint32_t> next(first_.begin(), first_.end() - 1);
+        for (std::size_t f = 0; f < owner.size(); ++f)
+            if (owner[f] >= 0)
+                faces_[next[static_cast<std::size_t>(owner[f])]++] = static_cast<std::uint32_t>(f);
+        for (std::size_t k = nodes; k-- > 1;) // children come after their parents
+            if (has_box_[k]) {
+                const std::size_t parent = static_cast<std::size_t>(h.nodes[k].parent);
+                grow(parent, box_[k].min);
+                grow(parent, box_[k].max);
+            }
+    }
+
+    struct Closest
+    {
+        double distance = std::numeric_limits<double>::infinity();
+        bool on_border = false; //!< the closest point lies on a border edge or vertex of the surface
+    };
+
+    //! The closest point of the finest surface to q (exact; ties: the first face found).
+    Closest closest(const Vec3& q) const
+    {
+        Closest best;
+        if (h_.nodes.empty() || !has_box_[0])
+            return best;
+        std::uint32_t best_face = 0;
+        Vec3 at = q;
+        std::vector<std::pair<double, std::size_t>> stack{{box_distance(0, q), 0}};
+        while (!stack.empty()) {
+            const auto [bound, k] = stack.back();
+            stack.pop_back();
+            if (!(bound < best.distance))
+                continue;
+            for (std::uint32_t i = first_[k]; i < first_[k + 1]; ++i) {
+                const std::array<Vec3, 3> c = corners(faces_[i]);
+                const Vec3 p = closest_point_on_triangle(q, c[0], c[1], c[2]);
+                const double d = norm(q - p);
+                if (d < best.distance) {
+                    best.distance = d;
+                    best_face = faces_[i];
+                    at = p;
+                }
+            }
+            const Node& n = h_.nodes[k];
+            if (n.is_leaf())
+                continue;
+            std::array<std::pair<double, std::size_t>, 2> children;
+            std::size_t count = 0;
+            for (const std::int32_t c : {n.left, n.right})
+                if (has_box_[static_cast<std::size_t>(c)])
+                    children[count++] = {box_distance(static_cast<std::size_t>(c), q), static_cast<std::size_t>(c)};
+            if (count == 2 && children[0].first < children[1].first)
+                std::swap(children[0], children[1]); // the nearer is searched first: pushed last
+            for (std::size_t c = 0; c < count; ++c)
+                if (children[c].first < best.distance)
+                    stack.push_back(children[c]);
+        }
+        if (best.distance < std::numeric_limits<double>::infinity())
+            best.on_border = on_border(best_face, at);
+        return best;
+    }
+
+    //! How far q stands off the finest surface: its distance to it, where its closest point is no point
+    //! of the surface's border; else 0. Across a hole of the finest level (a coarse vertex between the
+    //! strips of a patchy finest level, scan lines 5 m apart) there is no surface for q to stand off,
+    //! only metres to the nearest strip's border (QA round 65: a clean terrain's root 2.3 -> 26 m with
+    //! the distance alone); a bird's tent stands over the inside of the ground.
+    double off_surface(const Vec3& q) const
+    {
+        const Closest c = closest(q);
+        return c.on_border ? 0.0 : c.distance;
+    }
+
+private:
+    static Vec3 to_vec(const Mesh::Point& p) { return {p[0], p[1], p[2]}; }
+
+    void grow(std::size_t k, const Vec3& p)
+    {
+        if (!has_box_[k]) {
+            box_[k] = {p, p};
+            has_box_[k] = 1;
+        } else {
+            box_[k].min = min(box_[k].min, p);
+            box_[k].max = max(box_[k].max, p);
+        }
+    }
+
+    std::array<Vec3, 3> corners(std::uint32_t face) const
+    {
+        std::array<Vec3, 3> c;
+        std::size_t n = 0;
+        for (const auto v : mesh_.fv_range(mesh_.face_handle(static_cast<int>(face))))
+            c[n++] = to_vec(mesh_.point(v));
+        return c;
+    }
+
+    // Whether point p of the face lies on one of its edges (within a millionth of the edge's length)
+    // that is a border of the mesh, or at a corner that is a border vertex.
+    bool on_border(std::uint32_t face, const Vec3& p) const
+    {
+        const auto f = mesh_.face_handle(static_cast<int>(face));
+        for (const auto he : mesh_.fh_range(f)) {
+            const auto from = mesh_.from_vertex_handle(he), to = mesh_.to_vertex_handle(he);
+            const Vec3 a = to_vec(mesh_.point(from)), b = to_vec(mesh_.point(to));
+            const double length = norm(b - a);
+            const bool at_edge = point_segment_distance(p, a, b) <= 1e-6 * length;
+            if (!at_edge)
+                continue;
+            if (mesh_.is_boundary(mesh_.edge_handle(he)))
+                return true;
+            for (const auto v : {from, to})
+                if (norm(p - to_vec(mesh_.point(v))) <= 1e-6 * length && mesh_.is_boundary(v))
+                    return true;
+        }
+        return false;
+    }
+
+    static double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b)
+    {
+        const Vec3 ab = b - a;
+        const double l2 = dot(ab, ab);
+        const double t = l2 > 0.0 ? std::clamp(dot(p - a, ab) / l2, 0.0, 1.0) : 0.0;
+        return norm(p - (a + ab * t));
+    }
+
+    double box_distance(std::size_t k, const Vec3& q) const
+    {
+        const Vec3 below = box_[k].min - q, above = q - box_[k].max;
+        return norm(Vec3{std::max({0.0, below.x, above.x}), std::max({0.0, below.y, above.y}), std::max({0.0, below.z, above.z})});
+    }
+
+    const Hierarchy& h_;
+    const Mesh& mesh_;
+    std::vector<std::uint32_t> first_; // faces_[first_[k], first_[k + 1]) are node k's own
+    std::vector<std::uint32_t> faces_;
+    std::vector<BoundingBox> box_;      // of the faces in node k's subtree
+    std::vector<char> has_box_;
+};
+
+// Node errors measure every point of a cut node against its tile plane, strays the surface leaves out
+// too: birds 5-50 m over a terrain gave its levels 0-2 errors of 50, 47 and 15 m where their meshes lie
+// within a metre of the ground (QA round 63, L4), so a client refined them from kilometres away. A
+// level's error is what a client sees change when it refines to the finest level, and a point that
+// the finest mesh does not show (off its surface, the plane of the nearest finest face, by more than
+// kShownReach spacings of the level's cut node) shows that change only as far as the finest surface
+// near it stands off the tile plane: at least its plane distance less its distance off the finest
+// surface (a real pole or wall that the finest level shows keeps its full height). Only the tail of a
+// node's plane distances is looked at (beyond kHeavyTail of its RMS: a few points far out, where a
+// clean sample's curvature and noise give at most about 4), so a clean sample costs a scan of its
+// heavy-tailed nodes' points and keeps its errors bit for bit (their tails lie on the finest mesh).
+constexpr double kHeavyTail = 4.0;
+constexpr double kShownReach = 2.0;
+
+// Per cut node of a level, sorted by node: the largest plane distance that its points show, for the
+// nodes where a point the finest level does not show changed it (others keep max_plane_distance).
+using ShownPlaneDistances = std::vector<std::pair<std::int32_t, double>>;
+
+double plane_distance(const Hierarchy& h, const Node& n, std::uint32_t point)
+{
+    return std::abs(dot(h.cloud.positions[point] - n.centre(), n.frame.vectors[0]));
+}
+
+bool heavy_tailed(const Node& n) { return n.max_plane_distance > kHeavyTail * n.rms_plane_distance; }
+
+// For every level but the finest (whose tiles have error 0); `shown[k]`: nodes_in_mesh of level k.
+std::vector<ShownPlaneDistances> shown_plane_distances(const Hierarchy& h, const std::vector<LodLevel>& levels,
+                                                       const std::vector<std::vector<char>>& shown, const FinestFaces& finest,
+                                                       std::size_t threads)
+{
+    std::vector<ShownPlaneDistances> out(levels.size());
+    const std::size_t last = levels.size() - 1;
+    if (last == 0 || levels[last].mesh.n_faces() == 0)
+        return out;
+    for (std::size_t k = 0; k < last; ++k) {
+        std::vector<std::int32_t> tailed; // the level's shown heavy-tailed cut nodes
+        for (const std::int32_t id : levels[k].cut)
+            if (shown[k][static_cast<std::size_t>(id)] && heavy_tailed(h.nodes[static_cast<std::size_t>(id)]))
+                tailed.push_back(id);
+        std::vector<double> largest(tailed.size(), 0.0);
+        std::vector<char> unshown(tailed.size(), 0);
+        run_parallel(tailed.size(), threads, [&](std::size_t t) {
+            const Node& n = h.nodes[static_cast<std::size_t>(tailed[t])];
+            const double reach = kShownReach * node_spacing(n);
+            for (std::uint32_t i = n.begin; i < n.end; ++i) {
+                double d = plane_distance(h, n, i);
+                if (d > kHeavyTail * n.rms_plane_distance) {
+                    const Vec3& p = h.cloud.positions[i];
+                    const double off = finest.closest(p).distance;
+                    if (off > reach) {
+                        d = std::max(0.0, d - off);
+                        unshown[t] = 1;
+                    }
+                }
+                largest[t] = std::max(largest[t], d);
+            }
+        });
+        for (std::size_t t = 0; t < tailed.size(); ++t)
+            if (unshown[t])
+                out[k].push_back({tailed[t], largest[t]});
+        std::sort(out[k].begin(), out[k].end());
+    }
+    return out;
+}
+
+// Coverage gaps carry stray points far off too: a node whose children lie apart has the space between
+// them as its own gap (children_separation), and every ancestor has the largest of its subtree's, so
+// one bird split off from the ground under it gave every coarse node of a terrain a gap of 45 m (QA
+// round 63, L4). Per node: its gap with the separations from a child whose subtree the finest level
+// does not show at all left out. A node's own gap is known only where it exceeds its children's (the
+// gaps are stored as maxima); where it does not and nothing below was left out, the node keeps its
+// stored gap, so a sample without such strays keeps every gap bit for bit.
+// `shown_below` is set to one flag per node: whether the finest level shows a tile of its points.
+std::vector<double> shown_coverage_gaps(const Hierarchy& h, const LodLevel& finest, const std::vector<char>& finest_shown,
+                                        std::vector<char>& shown_below)
+{
+    const std::size_t count = h.nodes.size();
+    std::vector<char> in_cut(count, 0), at_or_below_cut(count, 0);
+    shown_below.assign(count, 0);
+    for (const std::int32_t id : finest.cut)
+        in_cut[static_cast<std::size_t>(id)] = 1;
+    for (std::size_t k = 0; k < count; ++k) { // parents come first
+        const std::int32_t parent = h.nodes[k].parent;
+        if (in_cut[k]) {
+            at_or_below_cut[k] = 1;
+            shown_below[k] = finest_shown[k];
+        } else if (parent >= 0 && at_or_below_cut[static_cast<std::size_t>(parent)]) {
+            at_or_below_cut[k] = 1;
+            shown_below[k] = shown_below[static_cast<std::size_t>(parent)];
+        }
+    }
+    std::vector<double> gap(count, 0.0);
+    for (std::size_t k = count; k-- > 0;) { // children come after their parents
+        const Node& n = h.nodes[k];
+        if (n.is_leaf()) {
+            gap[k] = n.coverage_gap;
+            continue;
+        }
+        const auto l = static_cast<std::size_t>(n.left), r = static_cast<std::size_t>(n.right);
+        if (!at_or_below_cut[k])
+            shown_below[k] = shown_below[l] || shown_below[r];
+        const double stored_below = std::max(h.nodes[l].coverage_gap, h.nodes[r].coverage_gap);
+        const double below = std::max(gap[l], gap[r]);
+        if (n.coverage_gap > stored_below) { // its own gap, known exactly
+            const bool to_strays = !(shown_below[l] && shown_below[r]) && children_separation(h, n) == n.coverage_gap;
+            gap[k] = to_strays ? below : n.coverage_gap;
+        } else {
+            gap[k] = below == stored_below ? n.coverage_gap : below;
+        }
+    }
+    return gap;
+}
+
+// The node's largest plane distance as its shown points give it (shown_plane_distances).
+double shown_plane_distance(const Node& n, std::int32_t id, const ShownPlaneDistances& shown_plane)
+{
+    const auto it = std::lower_bound(shown_plane.begin(), shown_plane.end(), std::pair<std::int32_t, double>{id, -1.0});
+    return it != shown_plane.end() && it->first == id ? it->second : n.max_plane_distance;
+}
+
+// Per level, sorted by node: the cut nodes whose error strays far off had set (their plane distance or
+// coverage gap), with the error their shown points give (plane distance, gap), and the cut nodes
+// shown at the level whose points the finest level does not show (a cluster of strays that a coarse
+// level meshes: a 4-point tile of birds 24 m over the ground, QA round 63's L3), with node_error. Other
+// nodes keep node_error. `off_finest` is set to how far the level's vertices that stand for either kind
+// lie off the finest surface (the plane of the nearest finest face), by node (as vertex_deviation,
+// which it adds to): an error does not claim less than the level shows where the finest does not.
+using NodeErrors = std::vector<std::pair<std::int32_t, double>>;
+
+// A cut node the finest level does not show counts as strays only when it holds fewer points than this
+// (the build's smallest cluster, BuildOptions::min_cluster): a few birds a coarse level meshes. A larger
+// one is surface the finest level left out (the scan-line pieces of a patchy finest level, QA round 65),
+// whose vertices would be measured across the hole to the nearest piece shown.
+constexpr std::uint32_t kStrayCluster = 16;
+
+std::vector<NodeErrors> adjusted_node_errors(const Hierarchy& h, const std::vector<LodLevel>& levels,
+                                             const std::vector<std::vector<char>>& shown,
+                                             const std::vector<ShownPlaneDistances>& shown_plane,
+                                             const std::vector<double>& gaps, const std::vector<char>& shown_below,
+                                             const FinestFaces& finest, std::size_t threads, std::vector<NodeErrors>& off_finest)
+{
+    std::vector<NodeErrors> out(levels.size());
+    off_finest.assign(levels.size(), {});
+    const std::size_t last = levels.size() - 1;
+    for (std::size_t k = 0; k < last; ++k)
+        for (const std::int32_t id : levels[k].cut) {
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            if (!shown[k][static_cast<std::size_t>(id)])
+                continue;
+            const double error = std::max(shown_plane_distance(n, id, shown_plane[k]), gaps[static_cast<std::size_t>(id)]);
+            if (error < node_error(n) || (!shown_below[static_cast<std::size_t>(id)] && n.count() < kStrayCluster))
+                out[k].push_back({id, std::min(error, node_error(n))});
+        }
+    // The vertices standing for those nodes, all levels at once.
+    std::vector<Vec3> queries;
+    std::vector<std::pair<std::size_t, std::size_t>> asker; // {level, index into out[level]}
+    for (std::size_t k = 0; k < last; ++k) {
+        std::sort(out[k].begin(), out[k].end());
+        if (out[k].empty())
+            continue;
+        OpenMesh::VPropHandleT<int> cluster;
+        if (!levels[k].mesh.get_property_handle(cluster, kVertexCluster))
+            throw InvalidInput("lods: level mesh lacks the cluster property");
+        for (const auto v : levels[k].mesh.vertices()) {
+            const std::int32_t id = levels[k].mesh.property(cluster, v);
+            const auto it = std::lower_bound(out[k].begin(), out[k].end(), std::pair<std::int32_t, double>{id, -1.0});
+            if (it == out[k].end() || it->first != id)
+                continue;
+            const auto& p = levels[k].mesh.point(v);
+            queries.push_back({p[0], p[1], p[2]});
+            asker.push_back({k, static_cast<std::size_t>(it - out[k].begin())});
+        }
+    }
+    if (queries.empty())
+        return out;
+    for (std::size_t k = 0; k < last; ++k)
+        for (const auto& [id, error] : out[k])
+            off_finest[k].push_back({id, 0.0});
+    // Off the finest surface, not across a hole of it: where the finest level is patchy (scan lines 5 m
+    // apart, whose finest tiles cover strips), a coarse vertex between its strips is no farther off the
+    // surface for being metres from the nearest strip (QA round 65: a terrain's root 2.3 -> 26 m).
+    std::vector<double> off_surface(queries.size());
+    run_parallel(queries.size(), threads, [&](std::size_t q) { off_surface[q] = finest.off_surface(queries[q]); });
+    for (std::size_t q = 0; q < queries.size(); ++q) {
+        double& off = off_finest[asker[q].first][asker[q].second].second;
+        off = std::max(off, off_surface[q]);
+    }
+    return out;
+}
+
+// node_error, or the adjusted one (adjusted_node_errors).
+double shown_node_error(const Node& n, std::int32_t id, const NodeErrors& adjusted)
+{
+    const auto it = std::lower_bound(adjusted.begin(), adjusted.end(), std::pair<std::int32_t, double>{id, -1.0});
+    return it != adjusted.end() && it->first == id ? it->second : node_error(n);
+}
+
 // `deviation`: vertex_deviation of the level, or empty (the finest level, whose tiles have error 0).
-LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vector<double>& deviation)
+// `shown`: nodes_in_mesh of the level; `shown_plane`: its shown_plane_distances.
+LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vector<double>& deviation,
+                       const std::vector<char>& shown, const NodeErrors& adjusted)
 {
     LevelIndex index;
     const Mesh& mesh = level.mesh;
@@ -144,16 +529,7 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
         throw InvalidInput("lods: level mesh lacks the tile/cluster properties");
     index.face_owner.assign(mesh.n_faces(), -1);
     for (const auto f : mesh.faces()) {
-        int owner = mesh.property(tile, f);
-        if (owner < 0) {
-            // Gap face: owned by the tile of its smallest-index vertex (deterministic).
-            int best_vertex = -1;
-            for (const auto v : mesh.fv_range(f))
-                if (best_vertex < 0 || v.idx() < best_vertex) {
-                    best_vertex = v.idx();
-                    owner = mesh.property(cluster, v);
-                }
-        }
+        const int owner = face_owner(mesh, tile, cluster, f);
         index.face_owner[static_cast<std::size_t>(f.idx())] = owner;
         if (owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size())
             ++index.faces_below[static_cast<std::size_t>(owner)];
@@ -170,12 +546,11 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     for (const std::uint64_t key : keys)
         index.faces_by_owner.push_back(static_cast<std::uint32_t>(key & 0xffffffffu));
     index.error_below.assign(h.nodes.size(), 0.0);
-    const std::vector<char> shown = nodes_in_mesh(h, mesh);
     for (std::int32_t id : level.cut) {
         index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
         if (shown[static_cast<std::size_t>(id)])
             index.error_below[static_cast<std::size_t>(id)] =
-                std::max(node_error(h.nodes[static_cast<std::size_t>(id)]),
+                std::max(shown_node_error(h.nodes[static_cast<std::size_t>(id)], id, adjusted),
                          deviation.empty() ? 0.0 : deviation[static_cast<std::size_t>(id)]);
     }
     // Skirts: an edge between faces owned by cut nodes a and b (or b none) is a region border of a
@@ -605,9 +980,39 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     // so that errors still fall level by level; the finest level's stay 0. With or without the tile
     // tree: `lods` writes the levels' errors too (until session 51 its lods.json kept the node errors).
     const std::size_t last = set.levels.size() - 1;
+    std::vector<std::vector<char>> shown(set.levels.size());
+    for (std::size_t k = 0; k < set.levels.size(); ++k)
+        shown[k] = nodes_in_mesh(h, set.levels[k].mesh);
+    // First the errors of the nodes as their shown points give them (shown_plane_distances), each level
+    // at most the coarser one's as in make_lod_levels (equal to its errors where no stray far off sets
+    // a node's); the skirts hang by the shown plane distances too.
+    const FinestFaces finest(h, set.levels.back().mesh);
+    const std::vector<ShownPlaneDistances> shown_plane = shown_plane_distances(h, set.levels, shown, finest, o.threads);
+    std::vector<char> shown_below;
+    const std::vector<double> gaps = shown_coverage_gaps(h, set.levels.back(), shown.back(), shown_below);
+    std::vector<NodeErrors> off_finest;
+    const std::vector<NodeErrors> adjusted = adjusted_node_errors(h, set.levels, shown, shown_plane, gaps, shown_below, finest, o.threads, off_finest);
+    std::vector<double> skirt_depth(set.levels.size());
+    double coarser = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < set.levels.size(); ++k) {
+        double error = 0.0, plane = 0.0;
+        for (const std::int32_t id : set.levels[k].cut) {
+            if (!shown[k][static_cast<std::size_t>(id)])
+                continue;
+            const Node& n = h.nodes[static_cast<std::size_t>(id)];
+            error = std::max(error, shown_node_error(n, id, adjusted[k]));
+            plane = std::max(plane, shown_plane_distance(n, id, shown_plane[k]));
+        }
+        skirt_depth[k] = 2.0 * plane;
+        if (k < last)
+            set.levels[k].geometric_error = std::min(coarser, error);
+        coarser = set.levels[k].geometric_error;
+    }
     std::vector<std::vector<double>> deviation(set.levels.size());
     for (std::size_t k = 0; k < last; ++k) {
         deviation[k] = vertex_deviation(h, set.levels[k].mesh, o.threads);
+        for (const auto& [id, off] : off_finest[k])
+            deviation[k][static_cast<std::size_t>(id)] = std::max(deviation[k][static_cast<std::size_t>(id)], off);
         const double farthest = deviation[k].empty() ? 0.0 : *std::max_element(deviation[k].begin(), deviation[k].end());
         set.levels[k].geometric_error = std::max(set.levels[k].geometric_error, farthest);
     }
@@ -617,7 +1022,7 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         return set;
     std::vector<LevelIndex> index;
     for (std::size_t k = 0; k < set.levels.size(); ++k)
-        index.push_back(index_level(h, set.levels[k], deviation[k]));
+        index.push_back(index_level(h, set.levels[k], deviation[k], shown[k], adjusted[k]));
     // Regions are chosen within three quarters of the budget (room for skirts), and with their skirts
     // within all of it: a small region's skirt can outgrow the quarter (QA round 28b: at 256, a quarter
     // of the bunny's tiles were over, up to 343 faces).
@@ -694,7 +1099,7 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         LodTile& tile = set.tiles[k];
         const LodLevel& level = set.levels[tile.level];
         const Node& region = h.nodes[static_cast<std::size_t>(tile.region)];
-        extract_region(h, level, index[tile.level], region, 2.0 * level.max_plane_distance, o.skirts, tile.mesh,
+        extract_region(h, level, index[tile.level], region, skirt_depth[tile.level], o.skirts, tile.mesh,
                        &tile.skirt_faces);
         // The content's box (not the region's points': strays the mesh leaves out made a bunny's root
         // box 17 times its size, QA round 57); empty for a tile without content.

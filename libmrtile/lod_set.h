@@ -29,6 +29,14 @@
 //! from the finest, so errors still fall): a coarse level whose fitted vertices stand off the sample
 //! is not shown from where that is plain (QA round 57: a corridor's 12-face root, 2.87 m off, had
 //! error 1.0 m; now 2.64).
+//! Strays far off that the finest level does not show (birds over a terrain) set no error: a level's
+//! error is how far it can differ from the finest level, so in make_lod_tiles a point farther than two
+//! spacings from the finest mesh counts in its node's plane distance only as that less its distance to
+//! the finest mesh (checked only in the tail of a node's plane distances: a clean sample keeps its
+//! errors bit for bit), a coverage gap that is the space between a node's children, one of which no
+//! finest tile shows, is not carried up, and the vertices standing for such nodes (or for nodes of
+//! fewer than 16 points that the finest level does not show) floor their node's error by their
+//! distance to the finest surface (0 across a hole of it).
 //! A tile's box is that of its content and its descendants' (the region's when it has none).
 
 #include "libmrtile/cut.h"

@@ -405,7 +405,8 @@ TEST(Cli, loops_along_sharp_edges_are_noted)
     // Crossing faces left are noted with their count (QA round 43: they were in the JSON only).
     const auto crossings = nlohmann::json::parse(slurp(dir / "b.json"))["self_intersections"].get<std::size_t>();
     ASSERT_GT(crossings, 0u); // the ear tip's fold at the default cut (README: Known limits)
-    EXPECT_NE(r.out.find("note: " + std::to_string(crossings) + " pairs of faces cross each other"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("note: " + std::to_string(crossings) + (crossings == 1 ? " pair" : " pairs") + " of faces cross each other"),
+              std::string::npos) << r.out;
 }
 
 // testing::sampled_tetrahedron written as an XYZ text file.
@@ -1914,7 +1915,8 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
         EXPECT_NE(r.out.find("level " + std::to_string(l) + ": tolerance"), std::string::npos) << r.out;
         // Each level's pieces on the console too (QA round 50: in lods.json only).
         const std::size_t pieces = index[l]["components"].get<std::size_t>();
-        EXPECT_NE(r.out.find(std::to_string(index[l]["boundary_loops"].get<std::size_t>()) + " boundary loops, " +
+        const std::size_t loops = index[l]["boundary_loops"].get<std::size_t>();
+        EXPECT_NE(r.out.find(std::to_string(loops) + (loops == 1 ? " boundary loop, " : " boundary loops, ") +
                              std::to_string(pieces) + (pieces == 1 ? " component, genus " : " components, genus ")),
                   std::string::npos)
             << r.out;

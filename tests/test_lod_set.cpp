@@ -405,7 +405,7 @@ std::vector<std::pair<std::int32_t, double>> stand_off(const Hierarchy& h, const
 }
 
 // Each tile's expected error by brute force: its own (the largest node_error and stand-off of its
-// level's cut nodes in its region, at most its level's; 0 at the finest level) and that raised to its
+// level's cut nodes in its region that the level's mesh shows, at most its level's; 0 at the finest level) and that raised to its
 // children's (children come after their parents, so from the last tile back).
 struct ExpectedTileErrors
 {
@@ -427,10 +427,11 @@ ExpectedTileErrors expected_tile_errors(const Hierarchy& h, const LodSet& set)
         const LodTile& t = set.tiles[k];
         const LodLevel& level = set.levels[t.level];
         const Node& region = h.nodes[static_cast<std::size_t>(t.region)];
+        const std::vector<char> shown = nodes_in_mesh(h, level.mesh); // tiles the surface left out count not
         double own = 0.0;
         for (std::int32_t id : level.cut) {
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
-            if (n.begin >= region.begin && n.end <= region.end)
+            if (shown[static_cast<std::size_t>(id)] && n.begin >= region.begin && n.end <= region.end)
                 own = std::max({own, node_error(n), deviation[t.level][static_cast<std::size_t>(id)]});
         }
         e.own[k] = t.level + 1 == set.levels.size() ? 0.0 : std::min(own, level.geometric_error);
@@ -567,6 +568,84 @@ TEST(LodSet, a_parent_is_raised_to_its_childrens_error_not_the_children_lowered)
         EXPECT_GT(expect_errors_cover_stand_off(h, set, off), 3u);
     }
     EXPECT_GT(raised, 0u);
+}
+
+// Strays far off that the finest level does not show set no level's error (QA round 63, L4: birds 5-50 m
+// over a terrain gave levels 0-2 errors of 50, 47 and 15 m where their meshes lie within a metre of the
+// ground, so a client refined from kilometres away; the points' plane distances and the coverage gaps
+// of bird clusters split off the ground carried them up the tree). A level's error is how far it can
+// differ from the finest level: the ground's own error, what the finest shows of the birds, and what
+// the level or a finer one shows of them (here a coarse level's 24 m tent up to a bird). A building
+// that the finest level shows keeps at least every error its points give (the brute-force errors).
+TEST(LodSet, strays_the_finest_level_leaves_out_set_no_error_a_building_does)
+{
+    const auto ground = [](double x, double y) {
+        return 3.0 * std::sin(x / 15.0) + 2.0 * std::cos(y / 11.0) + 0.5 * std::sin((x + y) / 5.0);
+    };
+    std::mt19937 rng(60);
+    std::uniform_real_distribution<double> u(0.0, 100.0), up(5.0, 50.0), unit(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.03);
+    PointCloud terrain;
+    for (int i = 0; i < 40000; ++i) {
+        const double x = u(rng), y = u(rng);
+        terrain.positions.push_back({x, y, ground(x, y) + noise(rng)});
+    }
+    PointCloud birds = terrain;
+    for (int i = 0; i < 100; ++i) {
+        const double x = u(rng), y = u(rng);
+        birds.positions.push_back({x, y, ground(x, y) + up(rng)});
+    }
+    // A 10 x 10 x 15 m block standing on the ground at (60, 60), its walls and roof sampled as densely.
+    PointCloud building = terrain;
+    const double base = ground(60.0, 60.0) - 3.0;
+    for (int i = 0; i < 7000; ++i) {
+        const double a = 10.0 * unit(rng), b = 15.0 * unit(rng), side = unit(rng);
+        building.positions.push_back(side < 0.15   ? Vec3{60.0 + a, 60.0, base + b}
+                                     : side < 0.3  ? Vec3{60.0 + a, 70.0, base + b}
+                                     : side < 0.45 ? Vec3{60.0, 60.0 + a, base + b}
+                                     : side < 0.6  ? Vec3{70.0, 60.0 + a, base + b}
+                                                   : Vec3{60.0 + a, 60.0 + 10.0 * unit(rng), base + 15.0});
+    }
+    LodSetOptions o;
+    o.max_tile_triangles = 1000;
+    const LodSet clean = make_lod_set(build_hierarchy(terrain), o);
+    const Hierarchy hb = build_hierarchy(birds), hh = build_hierarchy(building);
+    const LodSet with_birds = make_lod_set(hb, o), with_building = make_lod_set(hh, o);
+    const std::size_t last = with_birds.levels.size() - 1;
+    ASSERT_GT(last, 1u);
+    const auto farthest_off_ground = [&](const Mesh& m) {
+        double off = 0.0;
+        for (const auto v : m.vertices()) {
+            const auto& p = m.point(v);
+            off = std::max(off, std::abs(p[2] - ground(p[0], p[1])));
+        }
+        return off;
+    };
+    std::vector<double> shows(last + 1);
+    for (std::size_t l = 0; l <= last; ++l)
+        shows[l] = farthest_off_ground(with_birds.levels[l].mesh);
+    EXPECT_LT(shows[last], 10.0);
+    const double ground_error = clean.levels[0].geometric_error;
+    EXPECT_LT(ground_error, 5.0); // the coarsest plane over a 10 m relief
+    for (std::size_t l = 0; l < last; ++l) {
+        const double e = with_birds.levels[l].geometric_error;
+        const double finer_show = *std::max_element(shows.begin() + static_cast<std::ptrdiff_t>(l), shows.end() - 1);
+        EXPECT_LT(e, ground_error + shows[last] + finer_show) << "level " << l;
+        EXPECT_GE(e, shows[l] - shows[last] - ground_error) << "level " << l;
+    }
+    EXPECT_LT(with_birds.tiles[0].geometric_error, 30.0);
+    // What the coarse levels show still counts: every tile covers its vertices' stand-off.
+    std::vector<std::vector<std::pair<std::int32_t, double>>> off(last + 1);
+    for (std::size_t l = 0; l < last; ++l)
+        off[l] = stand_off(hb, with_birds.levels[l].mesh);
+    EXPECT_GT(expect_errors_cover_stand_off(hb, with_birds, off), 3u);
+    // The building is shown: no error is below what its points give (the brute-force errors; a small
+    // piece of wall that a coarse level meshes and the finest leaves out can raise one).
+    const ExpectedTileErrors expected = expected_tile_errors(hh, with_building);
+    ASSERT_EQ(expected.raised.size(), with_building.tiles.size());
+    for (std::size_t k = 0; k < with_building.tiles.size(); ++k)
+        EXPECT_GE(with_building.tiles[k].geometric_error, expected.raised[k]) << "tile " << k;
+    EXPECT_GT(with_building.tiles[0].geometric_error, 2.0 * ground_error); // the block stands out
 }
 
 // The tile tree: budgets honoured, errors non-increasing, boxes nested, children's regions partition

@@ -44,6 +44,12 @@
 
 namespace {
 
+// "1 tile", "2 tiles": counts as a reader says them (QA round 64: "1 levels", "1 boundary loops").
+std::string count_of(std::size_t n, const char* one, const char* many)
+{
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
 // CLI11's PositiveNumber / NonNegativeNumber print the whole double range when they fail; these say
 // what is wanted in a few words.
 CLI::Validator number_check(bool allow_zero)
@@ -735,16 +741,16 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
 
 void print_mesh_report(const nlohmann::json& j, const fs::path& out)
 {
-    std::printf("wrote %s: %zu tiles, %zu vertices, %zu faces", out.string().c_str(), j["tiles"].get<std::size_t>(),
+    std::printf("wrote %s: %s, %zu vertices, %zu faces", out.string().c_str(), count_of(j["tiles"].get<std::size_t>(), "tile", "tiles").c_str(),
                 j["vertices"].get<std::size_t>(), j["faces"].get<std::size_t>());
     if (j.contains("genus") && j["e_rms"].is_null())
-        std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices",
-                    j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
+        std::printf(", %s, genus %d, %zu non-manifold edges, %zu non-manifold vertices",
+                    count_of(j["boundary_loops"].get<std::size_t>(), "boundary loop", "boundary loops").c_str(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
                     j["nonmanifold_vertices"].get<std::size_t>());
     else if (j.contains("genus"))
-        std::printf(", %zu boundary loops, genus %d, %zu non-manifold edges, %zu non-manifold vertices, E_RMS %.3g, "
+        std::printf(", %s, genus %d, %zu non-manifold edges, %zu non-manifold vertices, E_RMS %.3g, "
                     "mean/max distance %.3g/%.3g of the diagonal (mesh to points: max %.3g)",
-                    j["boundary_loops"].get<std::size_t>(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
+                    count_of(j["boundary_loops"].get<std::size_t>(), "boundary loop", "boundary loops").c_str(), j["genus"].get<int>(), j["nonmanifold_edges"].get<std::size_t>(),
                     j["nonmanifold_vertices"].get<std::size_t>(), j["e_rms"].get<double>(), j["mean_distance"].get<double>(),
                     j["max_distance"].get<double>(), j["mesh_to_points_max"].get<double>());
     if (j.contains("genus") && !j["e_rms"].is_null() && j.value("distances_to", "") == "denoised points")
@@ -774,9 +780,9 @@ void print_mesh_report(const nlohmann::json& j, const fs::path& out)
     // Crossing faces were counted in the stats only (QA round 43: 207 pairs on a sampled fandisk, on
     // the console not a word).
     if (j.contains("self_intersections") && j["self_intersections"].is_number() && j["self_intersections"].get<std::size_t>() > 0)
-        std::printf("note: %zu pairs of faces cross each other, left after untangling (a fold at a thin tip or a sharp "
+        std::printf("note: %s of faces cross each other, left after untangling (a fold at a thin tip or a sharp "
                     "edge; README: Known limits)\n",
-                    j["self_intersections"].get<std::size_t>());
+                    count_of(j["self_intersections"].get<std::size_t>(), "pair", "pairs").c_str());
     // Points along a curve (a helix of 20,000 points made 49 ribbons without a word; QA round 6).
     if (j.contains("line_points") && j["line_points"].is_number() && j["points"].is_number()) {
         const auto lines = j["line_points"].get<std::size_t>(), points = j["points"].get<std::size_t>();
@@ -1250,7 +1256,7 @@ struct LevelStore
         hierarchy->cloud.crs = export_crs;
         levels = std::move(kept.levels);
         stored = levels.size();
-        std::printf("stored the %zu levels in %s: exports with the same options reuse them\n", stored,
+        std::printf("stored the %s in %s: exports with the same options reuse them\n", count_of(stored, "level", "levels").c_str(),
                     model.string().c_str());
     }
 };
@@ -1272,7 +1278,7 @@ std::vector<LodLevel> lod_levels(const Hierarchy& h, LodSetOptions options, cons
     std::vector<LodLevel> levels;
     StoredLevels& stored = store.from_model;
     if (!stored.levels.empty() && stored.recipe == recipe) {
-        std::printf("using the %zu levels stored in the model (no meshing)\n", stored.levels.size());
+        std::printf("using the %s stored in the model (no meshing)\n", count_of(stored.levels.size(), "level", "levels").c_str());
         levels = std::move(stored.levels);
     } else {
         if (!stored.levels.empty())
@@ -1394,8 +1400,9 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         std::printf("note: %s: %zu of %zu tiles hold more than --max-tile-triangles %zu (up to %zu): regions their level cannot "
                     "split (a cut node's faces stay together; a coarse level cut finer where it was in pieces)\n",
                     dir.string().c_str(), over, contents, options.max_tile_triangles, largest);
-    std::printf("wrote %s: %zu levels, %zu tiles with content, %zu triangles in all%s (%.2f s)\n",
-                (dir / "tileset.json").lexically_normal().string().c_str(), set.levels.size(), contents, triangles, o.draco ? ", Draco" : "", seconds_since(start));
+    std::printf("wrote %s: %s, %s with content, %zu triangles in all%s (%.2f s)\n",
+                (dir / "tileset.json").lexically_normal().string().c_str(), count_of(set.levels.size(), "level", "levels").c_str(),
+                count_of(contents, "tile", "tiles").c_str(), triangles, o.draco ? ", Draco" : "", seconds_since(start));
 }
 
 // One .glb holding every level (MSFT_lod), for viewers without 3D Tiles.
@@ -1418,7 +1425,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     write_glb_lods(fine_to_coarse, h.cloud.origin, out, lod_options);
     if (o.draco)
         note_coarse_quantization(set.levels.back().mesh, o.quantize, out);
-    std::printf("wrote %s: %zu levels in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), set.levels.size(),
+    std::printf("wrote %s: %s in one file (MSFT_lod) (%.2f s)\n", out.string().c_str(), count_of(set.levels.size(), "level", "levels").c_str(),
                 seconds_since(start));
 }
 
@@ -1494,9 +1501,10 @@ void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, cons
         const std::string far = q.point_to_mesh.far == 0 ? std::string()
                                                           : " (" + std::to_string(q.point_to_mesh.far) +
                                                                 " points far from the finest level, strays or pieces left out: in the max, not the mean)";
-        std::printf("level %zu: tolerance %.3g, %zu tiles, %zu faces, %zu boundary loops, %zu %s, genus %d, mean/max distance %.3g/%.3g%s\n",
-                    level, l.tolerance, l.cut.size(), static_cast<std::size_t>(l.mesh.n_faces()), q.topology.boundary_loops,
-                    q.topology.components, q.topology.components == 1 ? "component" : "components", q.topology.genus,
+        std::printf("level %zu: tolerance %.3g, %s, %zu faces, %s, %s, genus %d, mean/max distance %.3g/%.3g%s\n",
+                    level, l.tolerance, count_of(l.cut.size(), "tile", "tiles").c_str(), static_cast<std::size_t>(l.mesh.n_faces()),
+                    count_of(q.topology.boundary_loops, "boundary loop", "boundary loops").c_str(),
+                    count_of(q.topology.components, "component", "components").c_str(), q.topology.genus,
                     q.point_to_mesh.near_mean, q.point_to_mesh.max, far.c_str());
     }
     if (!left_out.empty()) {

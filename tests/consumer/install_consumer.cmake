@@ -6,7 +6,8 @@
 # More programs to build and run against the installed package, one executable per file (named after
 # the file), e.g. the README's example: list(APPEND MRTILE_CONSUMER_EXTRA_SOURCES <absolute path>).
 set(MRTILE_CONSUMER_EXTRA_SOURCES "")
-list(APPEND MRTILE_CONSUMER_EXTRA_SOURCES ${CMAKE_CURRENT_LIST_DIR}/readme_example.cpp)
+list(APPEND MRTILE_CONSUMER_EXTRA_SOURCES ${CMAKE_CURRENT_LIST_DIR}/readme_example.cpp
+     ${CMAKE_CURRENT_LIST_DIR}/readme_api.cpp)
 
 string(REPLACE ";" "|" _mrtile_consumer_extra "${MRTILE_CONSUMER_EXTRA_SOURCES}")
 set(_mrtile_consumer_flags "")
@@ -26,3 +27,9 @@ add_test(NAME install_consumer
                  -DEXTRA_FLAGS=${_mrtile_consumer_flags}
                  -P ${CMAKE_CURRENT_LIST_DIR}/run_consumer.cmake)
 set_tests_properties(install_consumer PROPERTIES TIMEOUT 900)
+
+# readme_api.cpp runs the README's main API example; this keeps the two the same text (QA round 64: the
+# example was true but unguarded).
+add_test(NAME readme_api_in_sync
+         COMMAND ${CMAKE_COMMAND} -DREADME=${PROJECT_SOURCE_DIR}/README.md
+                 -DSOURCE=${CMAKE_CURRENT_LIST_DIR}/readme_api.cpp -P ${CMAKE_CURRENT_LIST_DIR}/readme_sync.cmake)
