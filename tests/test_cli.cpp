@@ -328,6 +328,9 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {a + " --thin-walls=3", "--thin-walls is a flag"},
         {a + " --thin-walls=0", "--thin-walls is a flag"},
         {"--quiet=1 info " + (dir / "a.mrt").string(), "--quiet is a flag"},
+        // In the order typed (QA round 64: CLI11 said "not expected: 3 --levels", and "-=1" for -q=1).
+        {a + " --levels 3", "unexpected arguments '--levels' '3'"},
+        {"-q=1 info " + (dir / "a.mrt").string(), "-q is a flag"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);

@@ -2186,6 +2186,24 @@ int run(int argc, char** argv)
                          what.substr(0, what.find(' ')).c_str());
             return 2;
         }
+        // CLI11 lists unexpected arguments last first ("not expected: 3 --levels", QA round 64): name
+        // them in the order they were typed.
+        if (dynamic_cast<const CLI::ExtrasError*>(&e) && !unknown.empty()) {
+            // A short flag given a value ("-q=1") reaches CLI11 as "-=1": say what --quiet=1 says.
+            const bool mangled = std::any_of(unknown.begin(), unknown.end(), [](const std::string& a) { return a.rfind("-=", 0) == 0; });
+            for (int k = 1; mangled && k < argc; ++k)
+                if (const std::string arg = argv[k]; arg.size() > 2 && arg[0] == '-' && std::isalpha(static_cast<unsigned char>(arg[1])) &&
+                                                      arg[2] == '=') {
+                    std::fprintf(stderr, "mrtile: usage error: -%c is a flag and takes no value (see --help)\n", arg[1]);
+                    return 2;
+                }
+            std::string list;
+            for (const std::string& arg : unknown)
+                list += (list.empty() ? "'" : " '") + arg + "'";
+            std::fprintf(stderr, "mrtile: usage error: unexpected argument%s %s (see --help)\n", unknown.size() == 1 ? "" : "s",
+                         list.c_str());
+            return 2;
+        }
         const int code = app.exit(e);
         return code == 0 ? 0 : 2;
     }
