@@ -135,19 +135,25 @@ std::vector<double> vertex_deviation(const Hierarchy& h, const Mesh& mesh, std::
 // too: birds 5-50 m over a terrain gave its levels 0-2 errors of 50, 47 and 15 m where their meshes lie
 // within a metre of the ground (QA round 63, L4), so a client refined them from kilometres away. A
 // level's error is what a client sees change when it refines to the finest level, and a point that
-// the finest mesh does not show (off its surface, the plane of the nearest finest face, by more than
-// kShownReach spacings of the level's cut node) shows that change only as far as the finest surface
-// near it stands off the tile plane: at least its plane distance less its distance off the finest
-// surface (a real pole or wall that the finest level shows keeps its full height). Only the tail of a
+// the finest mesh does not show (farther from it than kShownReach spacings of the level's cut node)
+// shows that change only as far as the finest surface near it stands off the tile plane: at least its
+// plane distance less its distance to the finest mesh (a real pole or wall that the finest level shows
+// keeps its full height). Only the tail of a
 // node's plane distances is looked at (beyond kHeavyTail of its RMS: a few points far out, where a
 // clean sample's curvature and noise give at most about 4), so a clean sample costs a scan of its
 // heavy-tailed nodes' points and keeps its errors bit for bit (their tails lie on the finest mesh).
 constexpr double kHeavyTail = 4.0;
 constexpr double kShownReach = 2.0;
 
-// Per cut node of a level, sorted by node: the largest plane distance that its points show, for the
-// nodes where a point the finest level does not show changed it (others keep max_plane_distance).
-using ShownPlaneDistances = std::vector<std::pair<std::int32_t, double>>;
+// Values for some cut nodes of a level, sorted by node (the nodes a rule below changed; the others
+// keep the node's own value), and the value of one of them.
+using NodeValues = std::vector<std::pair<std::int32_t, double>>;
+
+double value_or(const NodeValues& values, std::int32_t id, double otherwise)
+{
+    const auto it = std::lower_bound(values.begin(), values.end(), std::pair<std::int32_t, double>{id, -1.0});
+    return it != values.end() && it->first == id ? it->second : otherwise;
+}
 
 double plane_distance(const Hierarchy& h, const Node& n, std::uint32_t point)
 {
@@ -156,12 +162,14 @@ double plane_distance(const Hierarchy& h, const Node& n, std::uint32_t point)
 
 bool heavy_tailed(const Node& n) { return n.max_plane_distance > kHeavyTail * n.rms_plane_distance; }
 
-// For every level but the finest (whose tiles have error 0); `shown[k]`: nodes_in_mesh of level k.
-std::vector<ShownPlaneDistances> shown_plane_distances(const Hierarchy& h, const std::vector<LodLevel>& levels,
+// Per level: the largest plane distance that the points of a cut node show, for the nodes where a
+// point the finest level does not show changed it (others keep max_plane_distance); for every level
+// but the finest (whose tiles have error 0). `shown[k]`: nodes_in_mesh of level k.
+std::vector<NodeValues> shown_plane_distances(const Hierarchy& h, const std::vector<LodLevel>& levels,
                                                        const std::vector<std::vector<char>>& shown, const NodeFaceIndex& finest,
                                                        std::size_t threads)
 {
-    std::vector<ShownPlaneDistances> out(levels.size());
+    std::vector<NodeValues> out(levels.size());
     const std::size_t last = levels.size() - 1;
     if (last == 0 || levels[last].mesh.n_faces() == 0)
         return out;
@@ -244,21 +252,13 @@ std::vector<double> shown_coverage_gaps(const Hierarchy& h, const LodLevel& fine
     return gap;
 }
 
-// The node's largest plane distance as its shown points give it (shown_plane_distances).
-double shown_plane_distance(const Node& n, std::int32_t id, const ShownPlaneDistances& shown_plane)
-{
-    const auto it = std::lower_bound(shown_plane.begin(), shown_plane.end(), std::pair<std::int32_t, double>{id, -1.0});
-    return it != shown_plane.end() && it->first == id ? it->second : n.max_plane_distance;
-}
-
 // Per level, sorted by node: the cut nodes whose error strays far off had set (their plane distance or
 // coverage gap), with the error their shown points give (plane distance, gap), and the cut nodes
 // shown at the level whose points the finest level does not show (a cluster of strays that a coarse
 // level meshes: a 4-point tile of birds 24 m over the ground, QA round 63's L3), with node_error. Other
 // nodes keep node_error. `off_finest` is set to how far the level's vertices that stand for either kind
-// lie off the finest surface (the plane of the nearest finest face), by node (as vertex_deviation,
-// which it adds to): an error does not claim less than the level shows where the finest does not.
-using NodeErrors = std::vector<std::pair<std::int32_t, double>>;
+// lie off the finest surface (NodeFaceIndex::off_surface), by node (as vertex_deviation, which it adds
+// to): an error does not claim less than the level shows where the finest does not.
 
 // A cut node the finest level does not show counts as strays only when it holds fewer points than this
 // (the build's smallest cluster, BuildOptions::min_cluster): a few birds a coarse level meshes. A larger
@@ -266,13 +266,13 @@ using NodeErrors = std::vector<std::pair<std::int32_t, double>>;
 // whose vertices would be measured across the hole to the nearest piece shown.
 constexpr std::uint32_t kStrayCluster = 16;
 
-std::vector<NodeErrors> adjusted_node_errors(const Hierarchy& h, const std::vector<LodLevel>& levels,
+std::vector<NodeValues> adjusted_node_errors(const Hierarchy& h, const std::vector<LodLevel>& levels,
                                              const std::vector<std::vector<char>>& shown,
-                                             const std::vector<ShownPlaneDistances>& shown_plane,
+                                             const std::vector<NodeValues>& shown_plane,
                                              const std::vector<double>& gaps, const std::vector<char>& shown_below,
-                                             const NodeFaceIndex& finest, std::size_t threads, std::vector<NodeErrors>& off_finest)
+                                             const NodeFaceIndex& finest, std::size_t threads, std::vector<NodeValues>& off_finest)
 {
-    std::vector<NodeErrors> out(levels.size());
+    std::vector<NodeValues> out(levels.size());
     off_finest.assign(levels.size(), {});
     const std::size_t last = levels.size() - 1;
     for (std::size_t k = 0; k < last; ++k)
@@ -280,7 +280,7 @@ std::vector<NodeErrors> adjusted_node_errors(const Hierarchy& h, const std::vect
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
             if (!shown[k][static_cast<std::size_t>(id)])
                 continue;
-            const double error = std::max(shown_plane_distance(n, id, shown_plane[k]), gaps[static_cast<std::size_t>(id)]);
+            const double error = std::max(value_or(shown_plane[k], id, n.max_plane_distance), gaps[static_cast<std::size_t>(id)]);
             if (error < node_error(n) || (!shown_below[static_cast<std::size_t>(id)] && n.count() < kStrayCluster))
                 out[k].push_back({id, std::min(error, node_error(n))});
         }
@@ -321,17 +321,10 @@ std::vector<NodeErrors> adjusted_node_errors(const Hierarchy& h, const std::vect
     return out;
 }
 
-// node_error, or the adjusted one (adjusted_node_errors).
-double shown_node_error(const Node& n, std::int32_t id, const NodeErrors& adjusted)
-{
-    const auto it = std::lower_bound(adjusted.begin(), adjusted.end(), std::pair<std::int32_t, double>{id, -1.0});
-    return it != adjusted.end() && it->first == id ? it->second : node_error(n);
-}
-
 // `deviation`: vertex_deviation of the level, or empty (the finest level, whose tiles have error 0).
-// `shown`: nodes_in_mesh of the level; `shown_plane`: its shown_plane_distances.
+// `shown`: nodes_in_mesh of the level; `adjusted`: its adjusted_node_errors.
 LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vector<double>& deviation,
-                       const std::vector<char>& shown, const NodeErrors& adjusted)
+                       const std::vector<char>& shown, const NodeValues& adjusted)
 {
     LevelIndex index;
     const Mesh& mesh = level.mesh;
@@ -366,7 +359,7 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
         index.at_or_above_cut[static_cast<std::size_t>(id)] = 1;
         if (shown[static_cast<std::size_t>(id)])
             index.error_below[static_cast<std::size_t>(id)] =
-                std::max(shown_node_error(h.nodes[static_cast<std::size_t>(id)], id, adjusted),
+                std::max(value_or(adjusted, id, node_error(h.nodes[static_cast<std::size_t>(id)])),
                          deviation.empty() ? 0.0 : deviation[static_cast<std::size_t>(id)]);
     }
     // Skirts: an edge between faces owned by cut nodes a and b (or b none) is a region border of a
@@ -803,11 +796,11 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     // at most the coarser one's as in make_lod_levels (equal to its errors where no stray far off sets
     // a node's); the skirts hang by the shown plane distances too.
     const NodeFaceIndex finest(h, set.levels.back().mesh);
-    const std::vector<ShownPlaneDistances> shown_plane = shown_plane_distances(h, set.levels, shown, finest, o.threads);
+    const std::vector<NodeValues> shown_plane = shown_plane_distances(h, set.levels, shown, finest, o.threads);
     std::vector<char> shown_below;
     const std::vector<double> gaps = shown_coverage_gaps(h, set.levels.back(), shown.back(), shown_below);
-    std::vector<NodeErrors> off_finest;
-    const std::vector<NodeErrors> adjusted = adjusted_node_errors(h, set.levels, shown, shown_plane, gaps, shown_below, finest, o.threads, off_finest);
+    std::vector<NodeValues> off_finest;
+    const std::vector<NodeValues> adjusted = adjusted_node_errors(h, set.levels, shown, shown_plane, gaps, shown_below, finest, o.threads, off_finest);
     std::vector<double> skirt_depth(set.levels.size());
     double coarser = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < set.levels.size(); ++k) {
@@ -816,8 +809,8 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
             if (!shown[k][static_cast<std::size_t>(id)])
                 continue;
             const Node& n = h.nodes[static_cast<std::size_t>(id)];
-            error = std::max(error, shown_node_error(n, id, adjusted[k]));
-            plane = std::max(plane, shown_plane_distance(n, id, shown_plane[k]));
+            error = std::max(error, value_or(adjusted[k], id, node_error(n)));
+            plane = std::max(plane, value_or(shown_plane[k], id, n.max_plane_distance));
         }
         skirt_depth[k] = 2.0 * plane;
         if (k < last)

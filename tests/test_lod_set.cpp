@@ -10,6 +10,7 @@
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/shapes.h"
 #include "npm/node_clients.h"
+#include "tests/terrain_fixtures.h"
 #include "tests/test_dir.h"
 
 #include <gtest/gtest.h>
@@ -579,22 +580,12 @@ TEST(LodSet, a_parent_is_raised_to_its_childrens_error_not_the_children_lowered)
 // that the finest level shows keeps at least every error its points give (the brute-force errors).
 TEST(LodSet, strays_the_finest_level_leaves_out_set_no_error_a_building_does)
 {
-    const auto ground = [](double x, double y) {
-        return 3.0 * std::sin(x / 15.0) + 2.0 * std::cos(y / 11.0) + 0.5 * std::sin((x + y) / 5.0);
-    };
+    const auto ground = test::rolling_ground;
     std::mt19937 rng(60);
-    std::uniform_real_distribution<double> u(0.0, 100.0), up(5.0, 50.0), unit(0.0, 1.0);
-    std::normal_distribution<double> noise(0.0, 0.03);
-    PointCloud terrain;
-    for (int i = 0; i < 40000; ++i) {
-        const double x = u(rng), y = u(rng);
-        terrain.positions.push_back({x, y, ground(x, y) + noise(rng)});
-    }
-    PointCloud birds = terrain;
-    for (int i = 0; i < 100; ++i) {
-        const double x = u(rng), y = u(rng);
-        birds.positions.push_back({x, y, ground(x, y) + up(rng)});
-    }
+    const test::TerrainWithBirds scene = test::terrain_with_birds(rng);
+    const PointCloud& terrain = scene.clean;
+    const PointCloud& birds = scene.birds;
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
     // A 10 x 10 x 15 m block standing on the ground at (60, 60), its walls and roof sampled as densely.
     PointCloud building = terrain;
     const double base = ground(60.0, 60.0) - 3.0;

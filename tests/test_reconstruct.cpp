@@ -12,6 +12,7 @@
 #include "mesh_fixtures.h"
 #include "obj_fixture.h"
 #include "tests/error_message.h"
+#include "tests/terrain_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -2346,23 +2347,10 @@ TEST(Reconstruct, mesh_mended_checks_each_steps_cut)
 // coarse tiles' hulls, tiles.cpp) and vertices lifted 6 m at 0.01 (the fit, fit_vertices.cpp).
 TEST(Reconstruct, birds_over_a_terrain_neither_tent_nor_lift_it)
 {
-    const auto ground = [](double x, double y) {
-        return 3.0 * std::sin(x / 15.0) + 2.0 * std::cos(y / 11.0) + 0.5 * std::sin((x + y) / 5.0);
-    };
+    const auto ground = test::rolling_ground;
     std::mt19937 rng(60);
-    std::uniform_real_distribution<double> u(0.0, 100.0), up(5.0, 50.0);
-    std::normal_distribution<double> noise(0.0, 0.03);
-    PointCloud clean;
-    for (int i = 0; i < 40000; ++i) {
-        const double x = u(rng), y = u(rng);
-        clean.positions.push_back({x, y, ground(x, y) + noise(rng)});
-    }
-    PointCloud birds = clean;
-    for (int i = 0; i < 100; ++i) {
-        const double x = u(rng), y = u(rng);
-        birds.positions.push_back({x, y, ground(x, y) + up(rng)});
-    }
-    const Hierarchy hc = build_hierarchy(clean), hb = build_hierarchy(birds);
+    const test::TerrainWithBirds scene = test::terrain_with_birds(rng);
+    const Hierarchy hc = build_hierarchy(scene.clean), hb = build_hierarchy(scene.birds);
     const auto farthest_off_ground = [&](const Hierarchy& h, double tolerance) {
         const MeshResult r = mesh_cut(h, cut_by_tolerance(h, tolerance));
         double off = 0.0;
