@@ -331,10 +331,12 @@ TEST(Cli, outputs_are_checked_before_any_work)
         // In the order typed (QA round 64: CLI11 said "not expected: 3 --levels", and "-=1" for -q=1).
         {a + " --levels 3", "unexpected arguments '--levels' '3'"},
         {"-q=1 info " + (dir / "a.mrt").string(), "-q is a flag"},
+        // CLI11 took "=eq.ply" for the output's name (QA round 64).
+        {"mesh " + (dir / "a.mrt").string() + " -o=" + (dir / "eq.ply").string(), "give the output after a space (-o " + (dir / "eq.ply").string() + ")"},
     };
     for (const auto& [args, needle] : usage_errors)
         expect_code(args, 2, needle);
-    for (const char* name : {"t", "x.glb", "x.txt", "l", "s.json", "x.obj", "s.mrt"})
+    for (const char* name : {"t", "x.glb", "x.txt", "l", "s.json", "x.obj", "s.mrt", "eq.ply"})
         EXPECT_FALSE(fs::exists(dir / name)) << name;
     // What they do apply to still works.
     EXPECT_EQ(mrtile("mesh " + (dir / "a.mrt").string() + " -o " + (dir / "d.glb").string() + " --draco --up y", dir).code, 0);
@@ -1604,6 +1606,22 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
     EXPECT_NE(info.out.find("crs         WGS 84 / UTM zone 33N (EPSG:32633): 3D Tiles are placed on the globe by it"),
               std::string::npos)
         << info.out;
+    // --up y says the input's y is up, the CRS that z is: refused for every glTF output, a single one
+    // too (QA round 64: written on its side), and for the same input with --crs on reconstruct.
+    const std::string model = (dir / "m.mrt").string();
+    for (const std::string& args : {"mesh " + model + " -o " + (dir / "y.glb").string(),
+                                    "export " + model + " -o " + (dir / "y.glb").string() + " --format lod-glb",
+                                    "export " + model + " -o " + (dir / "y").string() + " --format 3dtiles",
+                                    "lods " + model + " -o " + (dir / "y").string() + " --format glb",
+                                    "reconstruct " + (dir / "utm.xyz").string() + " -o " + (dir / "y.glb").string() + " --crs EPSG:32633"}) {
+        const Result up = mrtile(args + " --up y", dir);
+        EXPECT_EQ(up.code, 2) << args;
+        EXPECT_NE(up.err.find("--up y: the model's CRS (WGS 84 / UTM zone 33N (EPSG:32633)) has z up; leave --up out"), std::string::npos)
+            << up.err;
+        EXPECT_FALSE(fs::exists(dir / "y.glb"));
+        EXPECT_FALSE(fs::exists(dir / "y"));
+    }
+    ASSERT_EQ(mrtile("mesh " + model + " -o " + (dir / "y.glb").string(), dir).code, 0);
     // A model built without one is given it at export (the same place as from reconstruct).
     ASSERT_EQ(mrtile("build " + (dir / "utm.xyz").string() + " -o " + (dir / "plain.mrt").string(), dir).code, 0);
     const Result exported = mrtile("export " + (dir / "plain.mrt").string() + " -o " + (dir / "e").string() +

@@ -909,6 +909,8 @@ void note_touching_closed_pieces(const Mesh& mesh)
                     closed.size(), touching);
 }
 
+void check_up_axis(const Hierarchy& h, const OutputArgs& o); // below, with the CRS helpers
+
 // Cut + mesh + measure + write: shared by `mesh`, `reconstruct` and `demo`. The mesh is used where it
 // was made: an OpenMesh mesh has no move constructor, so moving a MeshResult into a variable declared
 // earlier would copy it.
@@ -916,6 +918,7 @@ nlohmann::json mesh_and_write(const Hierarchy& h, const CutArgs& cut_args, const
                               const OutputArgs& out_args, const fs::path& out, const std::vector<AlsoWrite>& also = {})
 {
     const auto start = Clock::now();
+    check_up_axis(h, out_args);
     if (cut_args.triangles > 0) {
         const TriangleCountResult t = mesh_to_triangle_count(h, cut_args.triangles, mesh_args.options());
         if (t.result.mesh.n_faces() > cut_args.triangles)
@@ -1198,6 +1201,18 @@ std::string crs_summary(const std::string& crs)
     return crs_label(crs) + " (not used: " + why + ")";
 }
 
+// Once the model is known: --up y says the input's y is up, where a model's CRS has z up (a single
+// glTF of a georeferenced terrain was written on its side, QA round 64). A tileset placed by --enu
+// instead of the model's CRS takes --up as given.
+void check_up_axis(const Hierarchy& h, const OutputArgs& o)
+{
+    if (o.up != "y" || h.cloud.crs.empty())
+        return;
+    std::string why;
+    const std::optional<ProjectedCrs> crs = usable_crs(h.cloud.crs, why);
+    throw UsageError("--up y: the model's CRS (" + (crs ? crs_label(*crs) : crs_label(h.cloud.crs)) + ") has z up; leave --up out");
+}
+
 // What the levels of a LOD set depend on, in this tool's terms (the level and mesh options, the noise
 // floor switch): levels stored in a model are reused only when an export asks for the same.
 std::string level_recipe(const ExportArgs& e, const MeshArgs& m, const Globals& g)
@@ -1341,7 +1356,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         crs = placement_crs(h);
     }
     if (crs && t.gltf.up_axis != UpAxis::Z)
-        throw UsageError("--up y: the model's CRS (" + crs->name + ") has z up; leave --up out");
+        throw UsageError("--up y: the model's CRS (" + crs_label(*crs) + ") has z up; leave --up out");
     // One cause per message (QA round 57: a finite height without a CRS was told "needs a finite value").
     if (e.geoid_height != 0.0 && !std::isfinite(e.geoid_height))
         throw UsageError("--geoid-height: needs a finite value");
@@ -1410,6 +1425,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
                    LevelStore& stored)
 {
     const auto start = Clock::now();
+    check_up_axis(h, o);
     LodSetOptions options = e.options(m);
     options.tileset = false;
     LodSet set = make_lod_tiles(h, lod_levels(h, options, level_recipe(e, m, g), stored, g), options);
@@ -1432,6 +1448,7 @@ void write_lod_glb(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
 void write_lods(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, const OutputArgs& o, const Globals& g, const fs::path& dir)
 {
     const auto start = Clock::now();
+    check_up_axis(h, o);
     LodSetOptions options = e.options(m);
     options.tileset = false;
     // A LOD chain for renderers starts at a few thousand triangles, not at what fits one 3D Tiles tile.
@@ -2139,6 +2156,14 @@ int run(int argc, char** argv)
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
         return std::string("mrtile: usage error: ") + e.what() + " (see --help)\n";
     });
+    // CLI11 reads "-o=x.ply" as -o with the value "=x.ply", and the mesh went to a file of that name
+    // (QA round 64); --output=x.ply is the form with "=".
+    for (int i = 1; i < argc; ++i)
+        if (const std::string arg = argv[i]; arg.rfind("-o=", 0) == 0) {
+            std::fprintf(stderr, "mrtile: usage error: '%s': give the output after a space (-o %s) or as --output=%s (see --help)\n",
+                         arg.c_str(), arg.substr(3).c_str(), arg.substr(3).c_str());
+            return 2;
+        }
     // A misspelt command would otherwise read "A subcommand is required": name it and the commands.
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
