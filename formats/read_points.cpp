@@ -570,13 +570,15 @@ std::uint64_t physical_memory()
 // refused while it is read, with a message, instead of the build running out of memory and the
 // process being killed (QA round 42: 1.8 MB of gzip held 200M points, 8.9 GB when read).
 constexpr std::uint64_t kBuildBytesPerPoint = 128;
+// MiB are counted as points per MiB (count × 128 wrapped from 2^57 points: "about 0 MiB", QA round 66).
+static_assert((std::uint64_t{1} << 20) % kBuildBytesPerPoint == 0, "whole points per MiB");
 
 void check_memory(const Input& in, std::uint64_t count, const ReadOptions& options)
 {
     const std::uint64_t memory = options.memory_bytes > 0 ? options.memory_bytes : physical_memory();
     if (memory > 0 && count > memory / kBuildBytesPerPoint)
         throw IoError(in.name() + ": " + std::to_string(count) + " points or more, which take about " +
-                           std::to_string(count * kBuildBytesPerPoint >> 20) + " MiB to build (" +
+                           std::to_string(count / ((std::uint64_t{1} << 20) / kBuildBytesPerPoint)) + " MiB to build (" +
                            std::to_string(kBuildBytesPerPoint) + " bytes a point), more than the " +
                            std::to_string(memory >> 20) + " MiB of memory here; read a part of the file");
 }
@@ -1437,11 +1439,18 @@ VertexLayout vertex_layout(const Input& in, const PlyElement& vertex, bool keep_
     VertexLayout layout;
     // Two vertex properties of a name the reader uses (two x): which one holds the coordinate is
     // anyone's guess, and the first was read without a word (QA round 42). Other names may repeat.
-    for (const char* used : {"x", "y", "z", "red", "green", "blue", "alpha", "diffuse_red", "diffuse_green", "diffuse_blue", "diffuse_alpha"})
+    for (const char* used : {"x", "y", "z", "X", "Y", "Z", "red", "green", "blue", "alpha", "diffuse_red", "diffuse_green", "diffuse_blue",
+                             "diffuse_alpha"})
         if (std::count_if(vertex.properties.begin(), vertex.properties.end(),
                           [&](const PlyProperty& p) { return p.name == used; }) > 1)
             throw InvalidInput(in.name() + ": the PLY vertex element has two '" + used + "' properties: the header is ambiguous");
-    const char* axes[3] = {"x", "y", "z"};
+    // Older PDAL wrote X, Y and Z (QA round 66: refused as "no scalar 'x'"); PLY names are case-sensitive,
+    // so capitals are read only where no axis has a small letter.
+    const bool capitals = vertex.find("x") < 0 && vertex.find("y") < 0 && vertex.find("z") < 0 && vertex.find("X") >= 0 &&
+                          vertex.find("Y") >= 0 && vertex.find("Z") >= 0;
+    const char* small_axes[3] = {"x", "y", "z"};
+    const char* capital_axes[3] = {"X", "Y", "Z"};
+    const char* const* axes = capitals ? capital_axes : small_axes;
     for (int i = 0; i < 3; ++i) {
         layout.xyz[i] = vertex.find(axes[i]);
         if (layout.xyz[i] < 0 || vertex.properties[static_cast<std::size_t>(layout.xyz[i])].is_list)

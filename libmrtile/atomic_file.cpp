@@ -5,20 +5,24 @@
 
 #include "libmrtile/errors.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <dirent.h>
 #include <functional>
+#include <mutex>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <string>
 #include <system_error>
 #include <unistd.h>
+#include <vector>
 
 namespace mrt {
 
@@ -132,6 +136,31 @@ void remove_at(int dir, const char* name, int depth)
     }
     ::close(fd);
     ::unlinkat(dir, name, AT_REMOVEDIR);
+}
+
+// The files written while a CommitTogether is alive, renamed by its commit().
+struct Deferred
+{
+    std::filesystem::path path;   // as given (named in messages)
+    std::filesystem::path target; // the file replaced
+    std::filesystem::path temp;
+};
+std::mutex g_deferred_mutex;
+bool g_deferring = false;
+std::vector<Deferred> g_deferred;
+
+// Renames a finished temporary onto its target. A file replaced keeps its permissions (a private
+// model stays private); a new one gets the process's defaults, as the temporary file has them.
+void rename_into_place(const Deferred& d)
+{
+    struct stat existing;
+    if (::stat(d.target.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+        ::chmod(d.temp.c_str(), existing.st_mode & 07777);
+    std::error_code ec;
+    std::filesystem::rename(d.temp, d.target, ec);
+    if (ec)
+        throw IoError(d.path.string() + ": cannot rename temporary file into place (" + ec.message() + ")");
+    forget_temporary(d.temp);
 }
 
 extern "C" void remove_temporaries_and_die(int signal)
@@ -346,17 +375,49 @@ void AtomicFile::commit()
         committed_ = true;
         return;
     }
-    std::error_code ec;
-    // A file replaced keeps its permissions (a private model stays private); a new one gets the
-    // process's defaults, as the temporary file has them.
-    struct stat existing;
-    if (::stat(target_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
-        ::chmod(temp_.c_str(), existing.st_mode & 07777);
-    std::filesystem::rename(temp_, target_, ec);
-    if (ec)
-        throw IoError(path_.string() + ": cannot rename temporary file into place (" + ec.message() + ")");
+    {
+        const std::lock_guard<std::mutex> lock(g_deferred_mutex);
+        if (g_deferring) {
+            // Written twice: the same temporary holds the later contents, renamed once.
+            const bool known = std::any_of(g_deferred.begin(), g_deferred.end(), [&](const Deferred& d) { return d.temp == temp_; });
+            if (!known)
+                g_deferred.push_back({path_, target_, temp_});
+            committed_ = true;
+            return;
+        }
+    }
+    rename_into_place({path_, target_, temp_});
     committed_ = true;
-    forget_temporary(temp_);
+}
+
+CommitTogether::CommitTogether()
+{
+    const std::lock_guard<std::mutex> lock(g_deferred_mutex);
+    assert(!g_deferring && "one CommitTogether at a time");
+    g_deferring = true;
+    g_deferred.clear();
+}
+
+CommitTogether::~CommitTogether()
+{
+    const std::lock_guard<std::mutex> lock(g_deferred_mutex);
+    for (const Deferred& d : g_deferred) {
+        std::error_code ec;
+        std::filesystem::remove(d.temp, ec);
+        forget_temporary(d.temp);
+    }
+    g_deferred.clear();
+    g_deferring = false;
+}
+
+void CommitTogether::commit()
+{
+    const std::lock_guard<std::mutex> lock(g_deferred_mutex);
+    g_deferring = false;
+    while (!g_deferred.empty()) {
+        rename_into_place(g_deferred.front()); // on a throw, the destructor removes the rest
+        g_deferred.erase(g_deferred.begin());
+    }
 }
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& bytes)

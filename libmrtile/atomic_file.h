@@ -42,6 +42,25 @@ private:
     bool direct_ = false; //!< a device or pipe, written as it is (no temporary, no rename)
 };
 
+//! \brief The outputs of one step committed together: while one is alive, AtomicFile::commit() checks
+//! and closes its temporary file but leaves it aside; commit() renames them all into place, in the
+//! order they were written. Destroyed without commit() (an exception), it removes them, and every
+//! target keeps what it held. A mesh and its --stats-json: a disk full on the statistics left the new
+//! mesh written over the old one (QA round 66). Files only: a directory built aside
+//! (TemporaryDirectory) moves when it is done, so none may be written while one is alive. One at a
+//! time per program.
+class CommitTogether
+{
+public:
+    CommitTogether();
+    ~CommitTogether();
+    CommitTogether(const CommitTogether&) = delete;
+    CommitTogether& operator=(const CommitTogether&) = delete;
+
+    //! \throw IoError naming the output whose rename failed (those not yet renamed are removed).
+    void commit();
+};
+
 //! Writes a whole buffer atomically.
 void write_file_atomically(const std::filesystem::path& path, const std::string& bytes);
 

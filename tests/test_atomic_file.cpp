@@ -38,6 +38,44 @@ std::size_t entries(const fs::path& dir)
     return n;
 }
 
+std::string read_text(const fs::path& path)
+{
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Outputs committed together: none is in place before commit(); a throw before it leaves every
+// target as it was and no temporary; commit() puts all in place, a file written twice with its later
+// contents. Without a CommitTogether each commit renames at once.
+TEST(AtomicFile, outputs_committed_together_are_all_or_none)
+{
+    const fs::path dir = testing::fresh_test_dir("atomic_file");
+    write_text(dir / "mesh.ply", "old mesh");
+    try {
+        CommitTogether outputs;
+        write_file_atomically(dir / "mesh.ply", "new mesh");
+        write_file_atomically(dir / "stats.json", "{}");
+        EXPECT_EQ(read_text(dir / "mesh.ply"), "old mesh");
+        EXPECT_FALSE(fs::exists(dir / "stats.json"));
+        throw IoError("stats.json: write failed");
+    } catch (const IoError&) {
+    }
+    EXPECT_EQ(read_text(dir / "mesh.ply"), "old mesh");
+    EXPECT_EQ(entries(dir), 1u);
+    {
+        CommitTogether outputs;
+        write_file_atomically(dir / "mesh.ply", "new mesh");
+        write_file_atomically(dir / "stats.json", "{1}");
+        write_file_atomically(dir / "stats.json", "{2}");
+        outputs.commit();
+    }
+    EXPECT_EQ(read_text(dir / "mesh.ply"), "new mesh");
+    EXPECT_EQ(read_text(dir / "stats.json"), "{2}");
+    EXPECT_EQ(entries(dir), 2u);
+    write_file_atomically(dir / "stats.json", "{3}");
+    EXPECT_EQ(read_text(dir / "stats.json"), "{3}");
+}
+
 // The probe names the path and its cause and leaves nothing behind, whether it passes or fails.
 TEST(AtomicFile, outputs_are_checked_without_a_trace)
 {

@@ -212,6 +212,15 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     EXPECT_NE(err.find("sphere.ply"), std::string::npos) << err;
     EXPECT_TRUE(fs::is_empty(limited));
+
+    // The statistics that cannot be written take the mesh with them, and the old one stays (QA round
+    // 66: a full disk under --stats-json left the new mesh over the old).
+    write_text(limited / "sphere.obj", "old mesh\n");
+    const Result full = mrtile("mesh " + (dir / "s.mrt").string() + " -o " + (limited / "sphere.obj").string() + " --stats-json /dev/full", dir);
+    EXPECT_EQ(full.code, 1);
+    EXPECT_EQ(full.err, "mrtile: error: /dev/full: write failed (disk full or not writable?)\n");
+    EXPECT_EQ(slurp(limited / "sphere.obj"), "old mesh\n");
+    EXPECT_EQ(std::distance(fs::directory_iterator(limited), fs::directory_iterator()), 1);
 }
 
 // Every output is checked before any work, so that a command that cannot write one of its outputs
@@ -1364,6 +1373,15 @@ TEST(Cli, demo_writes_what_it_says)
     EXPECT_EQ(slurp(dir / "mine" / "mesh.ply"), "mine\n");
     EXPECT_FALSE(fs::exists(dir / "mine" / "model.mrt"));
     EXPECT_FALSE(fs::exists(dir / "mine" / "mesh.glb"));
+    // A directory the demo made goes with a failed demo (QA round 66: a full disk left it empty). Past
+    // a file size limit the 1.5 MB model fails like on a full disk.
+    const std::string command = "ulimit -f 64 && " + std::string(MRTILE_CLI) + " demo -o " + (dir / "new" / "demo").string() +
+                                " >/dev/null 2>" + (dir / "err.txt").string();
+    const int status = std::system(command.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1);
+    EXPECT_NE(slurp(dir / "err.txt").find("model.mrt: write failed"), std::string::npos) << slurp(dir / "err.txt");
+    EXPECT_FALSE(fs::exists(dir / "new" / "demo"));
 }
 
 // --remove-outliers: the sphere with ten stray points far outside it keeps its 3,000 points in the

@@ -222,6 +222,20 @@ TEST(ReadPly, every_encoding_and_coordinate_type)
     }
 }
 
+// Older PDAL named the axes X, Y and Z (QA round 66: refused); capitals are read where no axis has a
+// small letter, and a mix stays an error naming the small letter missing.
+TEST(ReadPly, capital_axis_names_as_older_pdal_wrote_them)
+{
+    const fs::path dir = test_dir();
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 2\nproperty double X\nproperty double Y\nproperty double Z\n"
+                               "property float intensity\nend_header\n";
+    expect_points(read_points(write_file(dir / "pdal.ply", header + "1 2 3 9\n5 6 7 9\n")), {{1, 2, 3}, {5, 6, 7}});
+    std::string mixed = header;
+    mixed.replace(mixed.find(" X\n"), 3, " x\n");
+    const fs::path bad = write_file(dir / "mixed.ply", mixed + "1 2 3 9\n5 6 7 9\n");
+    expect_error<InvalidInput>([&] { read_points(bad); }, {bad.string(), "no scalar 'y' property"});
+}
+
 TEST(ReadPly, colours_dropped_on_request_and_absent_without_rgb)
 {
     const fs::path dir = test_dir();
@@ -1680,6 +1694,11 @@ TEST(ReadErrors, clouds_too_large_to_build_here_are_refused_while_read)
     const fs::path ply = write_gz(dir / "declared.ply.gz", make_ply(Encoding::binary_le, "float", kPoints, kColors));
     small.memory_bytes = 3 * 128; // the header declares 4
     expect_error<IoError>([&] { read_points(ply, small); }, {ply.string(), "4 points or more"});
+    // A count whose bytes pass 2^64 is said in MiB all the same (QA round 66: "about 0 MiB").
+    const fs::path huge = write_gz(dir / "huge.ply.gz", "ply\nformat binary_little_endian 1.0\nelement vertex 1152921504606846976\n"
+                                                        "property float x\nproperty float y\nproperty float z\nend_header\n" +
+                                                            std::string(120, '\0'));
+    expect_error<IoError>([&] { read_points(huge, small); }, {huge.string(), "1152921504606846976 points or more", "about 140737488355328 MiB"});
 }
 
 // A file without an extension (a pipe such as <(zcat scan.ply.gz) is /dev/fd/63) is read when its header

@@ -816,6 +816,8 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
     QualityReport q;
     if (!mesh_args.no_quality)
         q = measure_quality(h, r.cut, r.mesh);
+    // All or none: a disk full on the statistics or a further file left the mesh written (QA round 66).
+    CommitTogether outputs;
     write_any_mesh(r.mesh, h.cloud.origin, out, out_args);
     nlohmann::json j = mesh_json(r, mesh_args.no_quality ? nullptr : &q, seconds_since(start));
     // A denoised model loaded has only its moved points to measure against (measure_quality).
@@ -823,6 +825,13 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
     j["distances_to"] = h.info.denoised && h.raw_positions.empty() ? "denoised points" : "input points";
     if (!mesh_args.stats_json.empty())
         write_file_atomically(mesh_args.stats_json, j.dump(2) + "\n");
+    std::vector<double> also_seconds;
+    for (const AlsoWrite& a : also) {
+        const auto again = Clock::now();
+        write_any_mesh(r.mesh, h.cloud.origin, a.path, a.args);
+        also_seconds.push_back(seconds_since(again));
+    }
+    outputs.commit();
     print_mesh_report(j, out);
     // Which loops --close-holes left, and why: the counts must add up to the loops printed (a closed
     // object broken into pieces kept 3 loops, and the note named 2 of them as a view's outline; QA,
@@ -836,11 +845,8 @@ nlohmann::json write_meshed(const Hierarchy& h, const MeshResult& r, const MeshA
                         "or not closable by a manifold cap\n",
                         mesh_args.close_holes, loops, refused, loops - refused, mesh_args.close_holes);
     }
-    for (const AlsoWrite& a : also) {
-        const auto again = Clock::now();
-        write_any_mesh(r.mesh, h.cloud.origin, a.path, a.args);
-        std::printf("wrote %s: the same mesh (%.2f s)\n", a.path.string().c_str(), seconds_since(again));
-    }
+    for (std::size_t k = 0; k < also.size(); ++k)
+        std::printf("wrote %s: the same mesh (%.2f s)\n", also[k].path.string().c_str(), also_seconds[k]);
     return j;
 }
 
@@ -2293,9 +2299,25 @@ int run(int argc, char** argv)
         if (exp_store_levels && exp_args.exp.lod_set())
             check_writable_file(exp_in); // rewritten with the levels: not if read-only
     }
+    // A directory the demo made goes again if the demo fails (QA round 66: a full disk left an empty
+    // out/demo); one that was there keeps what the demo did not write.
+    struct MadeDirectory
+    {
+        fs::path dir;
+        bool keep = false;
+        ~MadeDirectory()
+        {
+            std::error_code ec;
+            if (!dir.empty() && !keep)
+                fs::remove_all(dir, ec);
+        }
+    } made;
     if (*demo) {
         // All five outputs before any work: a directory `tiles` of the user's stopped the demo only after
         // it had replaced model.mrt and mesh.ply there (QA round 34).
+        std::error_code ec;
+        if (!fs::exists(fs::symlink_status(demo_out, ec)))
+            made.dir = demo_out;
         ensure_directory(demo_out);
         check_outputs({}, {{demo_out / "model.mrt", Output::Kind::model},
                            {demo_out / "mesh.ply", Output::Kind::mesh},
@@ -2433,6 +2455,7 @@ int run(int argc, char** argv)
         write_tileset(h, e, m, o, g, demo_out / "tiles", none);
         std::printf("demo done in %.2f s: open %s in a 3D Tiles viewer, or %s in any glTF viewer\n", seconds_since(start),
                     (demo_out / "tiles" / "tileset.json").string().c_str(), (demo_out / "mesh.glb").string().c_str());
+        made.keep = true;
         return 0;
     }
     return 2;
