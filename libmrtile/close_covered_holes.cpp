@@ -129,7 +129,8 @@ public:
     // within reach.
     bool covers(const std::array<Vec3, 3>& t) const
     {
-        return all_triangle_spots(t[0], t[1], t[2], reach_ / 1.5, 200, [&](const Vec3& spot) { return near(spot); });
+        const Vec3* last = nullptr;
+        return all_triangle_spots(t[0], t[1], t[2], reach_ / 1.5, 200, [&](const Vec3& spot) { return near(spot, last); });
     }
 
     // The share of triangle t's area with no point within reach, estimated at the centres of steps²
@@ -141,12 +142,13 @@ public:
         const int steps = std::clamp(static_cast<int>(std::ceil(longest / (reach_ / 3.0))), 1, 200);
         const Vec3 du = (t[1] - t[0]) / static_cast<double>(steps), dv = (t[2] - t[0]) / static_cast<double>(steps);
         std::size_t off = 0;
+        const Vec3* last = nullptr;
         for (int i = 0; i < steps; ++i)
             for (int j = 0; i + j < steps; ++j) {
                 const Vec3 corner = t[0] + du * static_cast<double>(i) + dv * static_cast<double>(j);
-                off += near(corner + (du + dv) / 3.0) ? 0 : 1; // the sub-triangle pointing up
+                off += near(corner + (du + dv) / 3.0, last) ? 0 : 1; // the sub-triangle pointing up
                 if (i + j + 1 < steps)
-                    off += near(corner + (du + dv) * (2.0 / 3.0)) ? 0 : 1; // and the one pointing down
+                    off += near(corner + (du + dv) * (2.0 / 3.0), last) ? 0 : 1; // and the one pointing down
             }
         return static_cast<double>(off) / (static_cast<double>(steps) * static_cast<double>(steps));
     }
@@ -166,18 +168,33 @@ private:
         return (static_cast<std::uint64_t>(c[0]) & 0x1fffff) << 42 | (static_cast<std::uint64_t>(c[1]) & 0x1fffff) << 21 |
                (static_cast<std::uint64_t>(c[2]) & 0x1fffff);
     }
-    bool near(const Vec3& spot) const
+    // Whether a point lies within reach of `spot`. `last`: the point that answered the previous spot
+    // (nullptr at first), tried first: spots come a third of the reach apart, so it mostly answers
+    // this one too, and a dense sample's 27 cells hold thousands of points (the 1.5M-point bunny's
+    // crack checks took a fifth of its meshing, QA round 66). Then the spot's own cell, then the rest.
+    bool near(const Vec3& spot, const Vec3*& last) const
     {
+        const double reach2 = reach_ * reach_;
+        if (last && squared_distance(*last, spot) <= reach2)
+            return true;
         const std::array<std::int64_t, 3> c = cell(spot);
+        const auto in_cell = [&](std::int64_t dx, std::int64_t dy, std::int64_t dz) {
+            const auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
+            if (it != cells_.end())
+                for (const Vec3& p : it->second)
+                    if (squared_distance(p, spot) <= reach2) {
+                        last = &p;
+                        return true;
+                    }
+            return false;
+        };
+        if (in_cell(0, 0, 0))
+            return true;
         for (std::int64_t dx = -1; dx <= 1; ++dx)
             for (std::int64_t dy = -1; dy <= 1; ++dy)
-                for (std::int64_t dz = -1; dz <= 1; ++dz) {
-                    const auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
-                    if (it != cells_.end())
-                        for (const Vec3& p : it->second)
-                            if (squared_distance(p, spot) <= reach_ * reach_)
-                                return true;
-                }
+                for (std::int64_t dz = -1; dz <= 1; ++dz)
+                    if ((dx != 0 || dy != 0 || dz != 0) && in_cell(dx, dy, dz))
+                        return true;
         return false;
     }
 
