@@ -112,7 +112,9 @@ Cut refine_cut(const Hierarchy& h, const Cut& cut, double base_tolerance, const 
 
 //! Incremental coarsening (`cut` a frontier: check_cut): groups of cut nodes are replaced by their highest common ancestor whose box
 //! lies inside `region` and that meets the rule of cut_by_tolerance at `tolerance`.
-//! Nodes not inside the region never change.
+//! Nodes not inside the region never change. So it is no undo of refine_cut with the same region (the
+//! nodes refined for meeting it reach out of it): to move a focus or go back, ask for the cut wanted
+//! (cut_by_regions with the regions left) and give it to update_mesh (refine_mesh.h).
 Cut coarsen_cut(const Hierarchy& h, const Cut& cut, const FocusRegion& region, double tolerance);
 
 //! A pinhole camera for view-dependent cuts (3D Tiles / CesiumJS convention).

@@ -56,15 +56,18 @@ struct LocalRefineOptions
     //! 0.01 to 0.005: 1.77x to 1.32x the mean, the maximum 1.14x to 0.77x; the benchmark's rows 12-25%
     //! nearer (the bunny row 0.000212 to 0.000158 of the diagonal, fresh 0.000139). New faces that then
     //! cross a face beyond the copy get their new corners put back, and every region's new faces are
-    //! tested against all faces near them (no_crossings tests those within two rings of the outline
-    //! only: a terrain in a random run kept 3 crossing faces). Costs 3.5-7x the step's time (the
+    //! tested against all faces near them (as no_crossings now does in every mode; a terrain in a
+    //! random run kept 3 crossing faces when only two rings were tested). Costs 3.5-7x the step's time (the
     //! bunny row 0.12 to 0.44 s), so it is off by default: interaction wants the speed, and mesh_cut of
     //! result.cut gives the fresh mesh at any time.
     bool refit = false;
-    //! Test the new faces of each region against the faces within two rings of its outline, and leave
-    //! the region as it was (or try its fan alone) where one crosses: a region steep in its plane can
-    //! fold over its surroundings (bunny, tolerance 0.01 → 0.002: 30 crossing pairs without it, none
-    //! with it). Takes about 1.6× the time.
+    //! Test the new faces of each region against the faces of the mesh near them (those within two
+    //! rings of its outline, then every face filed in a grid), and leave the region as it was (or try
+    //! its fan alone) where one crosses: a region steep in its plane can fold over its surroundings
+    //! (bunny, tolerance 0.01 → 0.002: 30 crossing pairs without it, none with it), or reach past the
+    //! rings to a thin part's other side (until session 53 only the rings were tested without `refit`:
+    //! the bunny's budget cut 200 → 400 in place kept 27 crossing pairs, QA round 67). Takes about 1.6×
+    //! the time, and the grid a pass over the mesh per call.
     bool no_crossings = true;
     //! How the descendants' pseudo tiles are built (§4.2: node sample, hull, fitted apex).
     TileOptions tiles;

@@ -261,6 +261,17 @@ TEST(RefineMesh, the_bunny_keeps_its_borders)
     MeshResult folded = coarse;
     refine_mesh(h, folded, cut_by_tolerance(h, 0.002), unchecked);
     EXPECT_FALSE(self_intersecting_faces(folded.mesh).empty()); // what the check prevents
+
+    // A region can reach past the two rings of faces around its outline to the other side of a thin
+    // part (an ear): the budget cut 200 -> 400 in place kept 27 crossing pairs when only the rings were
+    // tested (QA round 67). Every face near the new ones is tested now.
+    MeshResult budget = mesh_cut(h, cut_by_budget(h, 200));
+    const std::size_t pairs_before = self_intersecting_faces(budget.mesh).size();
+    const LocalRefineStats doubled = update_mesh(h, budget, cut_by_budget(h, 400));
+    ASSERT_FALSE(doubled.remeshed);
+    EXPECT_GT(doubled.refined, 100u);
+    EXPECT_LE(self_intersecting_faces(budget.mesh).size(), pairs_before);
+    expect_manifold(budget.mesh, topology_stats(budget.mesh).boundary_loops, before.genus);
 }
 
 // Coarsening a region of a fine torus mesh: its tiles merge into their ancestors' tiles, the mesh stays
