@@ -213,6 +213,16 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     EXPECT_NE(err.find("sphere.ply"), std::string::npos) << err;
     EXPECT_TRUE(fs::is_empty(limited));
 
+    // A name with a line break in it is still named on one line (QA round 66: two lines).
+    const Result broken = mrtile("build '" + (dir / "miss\ning.xyz").string() + "' -o " + (dir / "n.mrt").string(), dir);
+    EXPECT_EQ(broken.code, 1);
+    EXPECT_EQ(broken.err, "mrtile: error: " + (dir / "miss?ing.xyz").string() + ": no such file\n");
+    // One point is a point (QA round 66 saw "1 points").
+    write_text(dir / "one.xyz", "1 2 3\n");
+    const Result one = mrtile("build " + (dir / "one.xyz").string() + " -o " + (dir / "one.mrt").string(), dir);
+    EXPECT_EQ(one.code, 0) << one.err;
+    EXPECT_NE(one.out.find(": 1 point, 1 node, 1 leaf, depth 0"), std::string::npos) << one.out;
+
     // The statistics that cannot be written take the mesh with them, and the old one stays (QA round
     // 66: a full disk under --stats-json left the new mesh over the old).
     write_text(limited / "sphere.obj", "old mesh\n");

@@ -50,6 +50,16 @@ std::string count_of(std::size_t n, const char* one, const char* many)
     return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
+// A message printed on one line whatever it holds: a file name or an argument with a line break in it
+// made an error of two lines (QA round 66). Control characters become '?'.
+std::string one_line(std::string text)
+{
+    for (char& c : text)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            c = '?';
+    return text;
+}
+
 // CLI11's PositiveNumber / NonNegativeNumber print the whole double range when they fail; these say
 // what is wanted in a few words.
 CLI::Validator number_check(bool allow_zero)
@@ -1715,14 +1725,15 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
     duplicates += h.info.duplicates_merged;
     if (g.progress())
         std::fprintf(stderr, "\r%60s\r", "");
-    std::printf("read and built %s: %zu points", inputs_name(points).c_str(), n);
+    std::printf("read and built %s: %s", inputs_name(points).c_str(), count_of(n, "point", "points").c_str());
     if (duplicates > 0)
-        std::printf(" (%zu duplicates merged)", duplicates);
+        std::printf(" (%s merged)", count_of(duplicates, "duplicate", "duplicates").c_str());
     if (args.remove_outliers)
-        std::printf(" (%zu outliers removed)", removed);
+        std::printf(" (%s removed)", count_of(removed, "outlier", "outliers").c_str());
     if (h.info.denoised)
         std::printf(args.denoise == "on" ? " (denoised)" : " (noisy: denoised)");
-    std::printf(", %zu nodes, %zu leaves, depth %u (%.2f s)\n", h.nodes.size(), h.leaf_count(), h.max_depth(), seconds_since(start));
+    std::printf(", %s, %s, depth %u (%.2f s)\n", count_of(h.nodes.size(), "node", "nodes").c_str(),
+                count_of(h.leaf_count(), "leaf", "leaves").c_str(), h.max_depth(), seconds_since(start));
     return h;
 }
 
@@ -2160,14 +2171,14 @@ int run(int argc, char** argv)
 
     // One line, like every other error (CLI11's default adds a second "Run with --help" line).
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
-        return std::string("mrtile: usage error: ") + e.what() + " (see --help)\n";
+        return "mrtile: usage error: " + one_line(e.what()) + " (see --help)\n";
     });
     // CLI11 reads "-o=x.ply" as -o with the value "=x.ply", and the mesh went to a file of that name
     // (QA round 64); --output=x.ply is the form with "=".
     for (int i = 1; i < argc; ++i)
         if (const std::string arg = argv[i]; arg.rfind("-o=", 0) == 0) {
             std::fprintf(stderr, "mrtile: usage error: '%s': give the output after a space (-o %s) or as --output=%s (see --help)\n",
-                         arg.c_str(), arg.substr(3).c_str(), arg.substr(3).c_str());
+                         one_line(arg).c_str(), one_line(arg.substr(3)).c_str(), one_line(arg.substr(3)).c_str());
             return 2;
         }
     // A misspelt command would otherwise read "A subcommand is required": name it and the commands.
@@ -2183,7 +2194,7 @@ int run(int argc, char** argv)
             static const char* const own[] = {"-h", "--help", "--version", "-q", "--quiet", "--below-noise", "--threads"};
             if (std::none_of(std::begin(own), std::end(own), [&](const char* o) { return name == o; })) {
                 std::fprintf(stderr, "mrtile: usage error: unknown option '%s' (options before the command: "
-                                     "--help, --version, --quiet, --below-noise, --threads; see --help)\n", name.c_str());
+                                     "--help, --version, --quiet, --below-noise, --threads; see --help)\n", one_line(name).c_str());
                 return 2;
             }
             continue;
@@ -2196,7 +2207,7 @@ int run(int argc, char** argv)
             names += (names.empty() ? "" : ", ") + sub->get_name();
         }
         if (!known) {
-            std::fprintf(stderr, "mrtile: usage error: unknown command '%s' (commands: %s; see --help)\n", arg.c_str(), names.c_str());
+            std::fprintf(stderr, "mrtile: usage error: unknown command '%s' (commands: %s; see --help)\n", one_line(arg).c_str(), names.c_str());
             return 2;
         }
         break;
@@ -2208,7 +2219,7 @@ int run(int argc, char** argv)
         // would say "--output is required": the unknown argument is the likelier mistake, name it.
         const std::vector<std::string> unknown = app.remaining(true);
         if (e.get_exit_code() != 0 && !unknown.empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
-            std::fprintf(stderr, "mrtile: usage error: unknown argument '%s' (see --help)\n", unknown.front().c_str());
+            std::fprintf(stderr, "mrtile: usage error: unknown argument '%s' (see --help)\n", one_line(unknown.front()).c_str());
             return 2;
         }
         if (const std::string what = e.what(); dynamic_cast<const CLI::ArgumentMismatch*>(&e) &&
@@ -2230,7 +2241,7 @@ int run(int argc, char** argv)
                 }
             std::string list;
             for (const std::string& arg : unknown)
-                list += (list.empty() ? "'" : " '") + arg + "'";
+                list += (list.empty() ? "'" : " '") + one_line(arg) + "'";
             std::fprintf(stderr, "mrtile: usage error: unexpected argument%s %s (see --help)\n", unknown.size() == 1 ? "" : "s",
                          list.c_str());
             return 2;
@@ -2470,13 +2481,13 @@ int main(int argc, char** argv)
     try {
         return run(argc, argv);
     } catch (const UsageError& e) {
-        std::fprintf(stderr, "mrtile: usage error: %s\n", e.what());
+        std::fprintf(stderr, "mrtile: usage error: %s\n", one_line(e.what()).c_str());
         return 2;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "mrtile: error: out of memory\n");
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "mrtile: error: %s\n", e.what());
+        std::fprintf(stderr, "mrtile: error: %s\n", one_line(e.what()).c_str());
         return 1;
     }
 }
