@@ -149,10 +149,17 @@ constexpr double kShownReach = 2.0;
 // keep the node's own value), and the value of one of them.
 using NodeValues = std::vector<std::pair<std::int32_t, double>>;
 
-double value_or(const NodeValues& values, std::int32_t id, double otherwise)
+// Where `values` holds node `id`, or end().
+NodeValues::const_iterator find_node(const NodeValues& values, std::int32_t id)
 {
     const auto it = std::lower_bound(values.begin(), values.end(), std::pair<std::int32_t, double>{id, -1.0});
-    return it != values.end() && it->first == id ? it->second : otherwise;
+    return it != values.end() && it->first == id ? it : values.end();
+}
+
+double value_or(const NodeValues& values, std::int32_t id, double otherwise)
+{
+    const auto it = find_node(values, id);
+    return it != values.end() ? it->second : otherwise;
 }
 
 double plane_distance(const Hierarchy& h, const Node& n, std::uint32_t point)
@@ -252,6 +259,12 @@ std::vector<double> shown_coverage_gaps(const Hierarchy& h, const LodLevel& fine
     return gap;
 }
 
+// A cut node the finest level does not show counts as strays only when it holds fewer points than this
+// (the build's smallest cluster, BuildOptions::min_cluster): a few birds a coarse level meshes. A larger
+// one is surface the finest level left out (the scan-line pieces of a patchy finest level, QA round 65),
+// whose vertices would be measured across the hole to the nearest piece shown.
+constexpr std::uint32_t kStrayCluster = 16;
+
 // Per level, sorted by node: the cut nodes whose error strays far off had set (their plane distance or
 // coverage gap), with the error their shown points give (plane distance, gap), and the cut nodes
 // shown at the level whose points the finest level does not show (a cluster of strays that a coarse
@@ -259,13 +272,6 @@ std::vector<double> shown_coverage_gaps(const Hierarchy& h, const LodLevel& fine
 // nodes keep node_error. `off_finest` is set to how far the level's vertices that stand for either kind
 // lie off the finest surface (NodeFaceIndex::off_surface), by node (as vertex_deviation, which it adds
 // to): an error does not claim less than the level shows where the finest does not.
-
-// A cut node the finest level does not show counts as strays only when it holds fewer points than this
-// (the build's smallest cluster, BuildOptions::min_cluster): a few birds a coarse level meshes. A larger
-// one is surface the finest level left out (the scan-line pieces of a patchy finest level, QA round 65),
-// whose vertices would be measured across the hole to the nearest piece shown.
-constexpr std::uint32_t kStrayCluster = 16;
-
 std::vector<NodeValues> adjusted_node_errors(const Hierarchy& h, const std::vector<LodLevel>& levels,
                                              const std::vector<std::vector<char>>& shown,
                                              const std::vector<NodeValues>& shown_plane,
@@ -295,9 +301,8 @@ std::vector<NodeValues> adjusted_node_errors(const Hierarchy& h, const std::vect
         if (!levels[k].mesh.get_property_handle(cluster, kVertexCluster))
             throw InvalidInput("lods: level mesh lacks the cluster property");
         for (const auto v : levels[k].mesh.vertices()) {
-            const std::int32_t id = levels[k].mesh.property(cluster, v);
-            const auto it = std::lower_bound(out[k].begin(), out[k].end(), std::pair<std::int32_t, double>{id, -1.0});
-            if (it == out[k].end() || it->first != id)
+            const auto it = find_node(out[k], levels[k].mesh.property(cluster, v));
+            if (it == out[k].end())
                 continue;
             const auto& p = levels[k].mesh.point(v);
             queries.push_back({p[0], p[1], p[2]});

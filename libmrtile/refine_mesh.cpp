@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -421,13 +422,13 @@ private:
         });
     }
 
-    // Whether a new face crosses a face of all_faces_ (none filed: false). The new faces are marked in
-    // face_stamp_ by crosses_surroundings, which runs first: they are tested against each other by
-    // construction, and the faces it tested are skipped too.
+    // Whether a new face crosses a face of all_faces_ (filed by the constructor whenever
+    // no_crossings asks for this test). The new faces are marked in face_stamp_ by
+    // crosses_surroundings, which runs first: they are tested against each other by construction, and
+    // the faces it tested are skipped too.
     bool crosses_anything(const std::vector<Mesh::FaceHandle>& added)
     {
-        if (!all_faces_)
-            return false;
+        assert(all_faces_);
         return std::any_of(added.begin(), added.end(), [&](Mesh::FaceHandle f) {
             return crosses_a_filed_face(f, [&](Mesh::FaceHandle g) { return face_stamp_[static_cast<std::size_t>(g.idx())] == stamp_; });
         });
