@@ -1155,13 +1155,19 @@ PointCloud read_off(Input& in, const ReadOptions& options)
     // cloud read would be part of the file's, as if it were whole. A face is "n i1 .. in [colour]": a
     // count, then n indices of declared vertices (on the following lines too, as the format allows),
     // then its colour up to the line's end. A vertex line where a face belongs (a coordinate that is no
-    // count or index), a face too many, or any data when no face is declared is refused. Fewer faces
-    // than declared leave the points whole, and read.
+    // count or index), a face too many, or any data when no face is declared is refused. A file that
+    // ends inside its faces, or before the faces it declares, is truncated as a PLY file so cut is,
+    // though its vertices are whole: a copy that stopped early (QA round 66 found the two formats
+    // judged apart).
     if (all_colored && vertex_count > 0)
         cloud.colors = std::move(colors);
-    const std::string declared = std::to_string(vertex_count) + " vertices" +
-                                 (face_count == UINT64_MAX ? "" : " and " + std::to_string(face_count) + " faces");
-    for (std::uint64_t f = 0; next_content_line(in, tokens, token); ++f) {
+    const auto counted = [](std::uint64_t n, const char* one, const char* many) {
+        return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    const std::string declared = counted(vertex_count, "vertex", "vertices") +
+                                 (face_count == UINT64_MAX ? "" : " and " + counted(face_count, "face", "faces"));
+    std::uint64_t f = 0;
+    for (; next_content_line(in, tokens, token); ++f) {
         if (f == face_count)
             fail_line(in, "data after the " + declared + " the header declares: the header does not describe the data");
         const auto face = [&] {
@@ -1173,7 +1179,9 @@ PointCloud read_off(Input& in, const ReadOptions& options)
                               std::to_string(vertex_count) + " vertices)");
         for (std::uint64_t k = 0; k < n; ++k) {
             if (!tokens.next(token) && !next_content_line(in, tokens, token))
-                return cloud; // the file ends inside the faces: the vertices are whole
+                throw IoError(in.name() + ": truncated: file ends at line " + std::to_string(in.line_number()) +
+                              " inside face " + std::to_string(f) + " (after " + std::to_string(k) + " of its " +
+                              std::to_string(n) + " indices)");
             std::uint64_t index = 0;
             if (!parse_count(token, index))
                 fail_line(in, face() + quote_token(token) + " is not a vertex index (a vertex line? the header declares " +
@@ -1183,6 +1191,9 @@ PointCloud read_off(Input& in, const ReadOptions& options)
                                   std::to_string(vertex_count) + " vertices the header declares");
         }
     }
+    if (face_count != UINT64_MAX && f < face_count)
+        throw IoError(in.name() + ": truncated: file ends at line " + std::to_string(in.line_number()) + " after " +
+                      std::to_string(f) + " of the " + counted(face_count, "face", "faces") + " the header declares");
     return cloud;
 }
 

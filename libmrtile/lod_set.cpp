@@ -7,6 +7,10 @@
 //    this region" is a range test, and children regions partition their parent exactly;
 //  - skirts: a neighbour shown at another level has a slightly different border; a strip hanging
 //    along the surface normal from the region's border hides the crack (the standard terrain remedy).
+//    It hangs as deep as the coarsest tile that a viewer can show across that border lies off the
+//    surface: REPLACE refinement puts tiles of any two levels side by side, and a skirt sized by its
+//    own level alone left a clean terrain's finest tiles centimetres of skirt beside a neighbour three
+//    levels coarser and metres off (QA round 68, slivers of sky in CesiumJS and three.js).
 #include "libmrtile/lod_set.h"
 
 #include "libmrtile/coverage_gap.h"
@@ -21,6 +25,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <mutex>
 
@@ -37,6 +42,14 @@ struct LevelIndex
     // between a face owned inside it and one owned outside; at most that, as a skirt face that would
     // not be manifold is left out): what a tile holds besides its faces.
     std::vector<std::size_t> skirts_below;
+    // Overlap faces the region of each node would get at this level (extract_region: faces owned
+    // outside it around a vertex that touches it), each with the skirt faces it can add (two for its
+    // one edge away from the region, when one corner alone touches it): at most that.
+    std::vector<std::size_t> overlap_below;
+    // The cut node of each vertex of the level mesh (kVertexCluster; -1 or past the nodes for none).
+    std::vector<std::int32_t> vertex_cluster;
+    // Vertices with a cluster, ordered by the cluster's first point (then by vertex), as faces_by_owner.
+    std::vector<std::uint32_t> vertices_by_cluster;
     // True for nodes of the cut and their ancestors (regions may not go below the cut).
     std::vector<char> at_or_above_cut;
     // The largest node_error of the cut nodes in each node's subtree (0 for nodes below the cut): a
@@ -326,6 +339,8 @@ std::vector<NodeValues> adjusted_node_errors(const Hierarchy& h, const std::vect
     return out;
 }
 
+bool inside(const Node& region, const Node& node) { return region.begin <= node.begin && node.end <= region.end; }
+
 // `deviation`: vertex_deviation of the level, or empty (the finest level, whose tiles have error 0).
 // `shown`: nodes_in_mesh of the level; `adjusted`: its adjusted_node_errors.
 LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vector<double>& deviation,
@@ -388,6 +403,61 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
             index.skirts_below[static_cast<std::size_t>(n)] += 2;
         }
     }
+    // Overlaps (extract_region): a corner of a face touches its cluster's region and those of the faces
+    // around it, and a face owned by b is an overlap face of every region one of its corners touches,
+    // up to the first that holds b too (each counted once per face: the chains merge). A corner that
+    // touches a region makes the face's two edges at it inner edges of that region's content, so a
+    // face with one such corner has one edge that can carry a skirt (two faces), one with more none.
+    index.vertex_cluster.assign(mesh.n_vertices(), -1);
+    for (const auto v : mesh.vertices())
+        index.vertex_cluster[static_cast<std::size_t>(v.idx())] = mesh.property(cluster, v);
+    const auto node_of = [&](std::int32_t id) -> const Node* {
+        return id >= 0 && static_cast<std::size_t>(id) < h.nodes.size() ? &h.nodes[static_cast<std::size_t>(id)] : nullptr;
+    };
+    index.overlap_below.assign(h.nodes.size(), 0);
+    std::vector<std::uint32_t> stamp(h.nodes.size(), UINT32_MAX);
+    std::array<std::vector<const Node*>, 3> touches;
+    for (const auto f : mesh.faces()) {
+        const Node* owner = node_of(index.face_owner[static_cast<std::size_t>(f.idx())]);
+        std::size_t k = 0;
+        bool all_owner = true;
+        for (const auto v : mesh.fv_range(f)) {
+            std::vector<const Node*>& touch = touches[k++];
+            touch.clear();
+            if (const Node* c = node_of(index.vertex_cluster[static_cast<std::size_t>(v.idx())]))
+                touch.push_back(c);
+            for (const auto g : mesh.vf_range(v))
+                if (const Node* o = node_of(index.face_owner[static_cast<std::size_t>(g.idx())]))
+                    touch.push_back(o);
+            std::sort(touch.begin(), touch.end());
+            touch.erase(std::unique(touch.begin(), touch.end()), touch.end());
+            all_owner = all_owner && touch.size() == 1 && touch[0] == owner;
+        }
+        if (all_owner)
+            continue; // inside its owner's fan: no other region's
+        const auto touching = [&](const Node& region, const std::vector<const Node*>& touch) {
+            return std::any_of(touch.begin(), touch.end(), [&](const Node* t) { return inside(region, *t); });
+        };
+        for (const std::vector<const Node*>& touch : touches)
+            for (const Node* t : touch)
+                for (std::int32_t n = static_cast<std::int32_t>(t - h.nodes.data()); n >= 0; n = h.nodes[static_cast<std::size_t>(n)].parent) {
+                    const Node& region = h.nodes[static_cast<std::size_t>(n)];
+                    if ((owner && inside(region, *owner)) || stamp[static_cast<std::size_t>(n)] == static_cast<std::uint32_t>(f.idx()))
+                        break;
+                    stamp[static_cast<std::size_t>(n)] = static_cast<std::uint32_t>(f.idx());
+                    const auto corners = std::count_if(touches.begin(), touches.end(),
+                                                       [&](const std::vector<const Node*>& c) { return touching(region, c); });
+                    index.overlap_below[static_cast<std::size_t>(n)] += corners == 1 ? 3 : 1;
+                }
+    }
+    keys.clear();
+    for (std::size_t v = 0; v < index.vertex_cluster.size(); ++v)
+        if (const Node* c = node_of(index.vertex_cluster[v]))
+            keys.push_back(std::uint64_t{c->begin} << 32 | v);
+    std::sort(keys.begin(), keys.end());
+    index.vertices_by_cluster.reserve(keys.size());
+    for (const std::uint64_t key : keys)
+        index.vertices_by_cluster.push_back(static_cast<std::uint32_t>(key & 0xffffffffu));
     // Children come after parents: accumulate upwards.
     for (std::size_t k = h.nodes.size(); k-- > 1;) {
         const auto parent = static_cast<std::size_t>(h.nodes[k].parent);
@@ -399,15 +469,17 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     return index;
 }
 
-bool inside(const Node& region, const Node& node) { return region.begin <= node.begin && node.end <= region.end; }
-
-// The content of a tile: the level's faces owned by cut nodes inside the region, with a skirt along
-// every border edge that is not a border of the whole level mesh. Written into `out` (empty), which
+// The content of a tile: the level's faces owned by cut nodes inside the region and, with skirts, the
+// faces around those cut nodes' vertices (the overlap), with a skirt along every border edge of them
+// that is not a border of the whole level mesh, as deep as skirt_depth(the cut node
+// owning the face across; -1 for none) says (a vertex between two skirt edges takes the deeper; an
+// edge of depth 0 gets none: its faces would have no area). Written into `out` (empty), which
 // is the tile's own mesh: an OpenMesh mesh returned and assigned would be copied (it cannot be moved).
 // The faces are added through a FaceSequence (what add_face builds, at a tenth of its cost), each new
 // vertex recorded as the level vertex it copies, and the mesh is filled in once at the end.
 void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
-                    double skirt_depth, bool skirts, Mesh& out, std::size_t* skirt_faces)
+                    const std::function<double(std::int32_t)>& skirt_depth, bool skirts, Mesh& out, std::size_t* skirt_faces,
+                    std::size_t* overlap_faces)
 {
     assert(out.n_vertices() == 0);
     const Mesh& src = level.mesh;
@@ -424,14 +496,54 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         if (inside(region, h.nodes[static_cast<std::size_t>(index.face_owner[*it])]))
             faces.push_back(*it);
     std::sort(faces.begin(), faces.end());
-    // The tile's vertices: the level vertex each copies, and whether it is lowered (a skirt's foot).
+    // A face is the tile's own when its owner is a cut node inside the region (what chose `faces`).
+    auto owned = [&](Mesh::FaceHandle f) {
+        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
+        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
+               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
+    };
+    // With skirts, the faces owned outside around the vertices that touch the region (a vertex of a
+    // cut node inside, or of a face owned inside) overlap the neighbours: which faces a level gives a
+    // region differs from level to level along its border (a face across it is owned by one side),
+    // and where a neighbour is shown at another level, the strip that both levels gave away was a hole
+    // seen from above (QA round 68: 1-2% of a terrain between tiles three levels apart; 0.1% with the
+    // faces around the cut nodes' vertices alone, at corners where three regions meet). Both levels'
+    // faces across the border overlap it instead.
+    std::vector<std::uint32_t> overlap;
+    if (skirts) {
+        auto cluster_begin = [&](std::uint32_t v) {
+            return h.nodes[static_cast<std::size_t>(index.vertex_cluster[v])].begin;
+        };
+        const auto v_begin = std::partition_point(index.vertices_by_cluster.begin(), index.vertices_by_cluster.end(),
+                                                  [&](std::uint32_t v) { return cluster_begin(v) < region.begin; });
+        const auto v_end = std::partition_point(v_begin, index.vertices_by_cluster.end(),
+                                                [&](std::uint32_t v) { return cluster_begin(v) < region.end; });
+        for (auto it = v_begin; it != v_end; ++it) {
+            if (!inside(region, h.nodes[static_cast<std::size_t>(index.vertex_cluster[*it])]))
+                continue;
+            for (const auto f : src.vf_range(Mesh::VertexHandle(static_cast<int>(*it))))
+                if (!owned(f))
+                    overlap.push_back(static_cast<std::uint32_t>(f.idx()));
+        }
+        for (const std::uint32_t fi : faces)
+            for (const auto v : src.fv_range(Mesh::FaceHandle(static_cast<int>(fi))))
+                for (const auto f : src.vf_range(v))
+                    if (!owned(f))
+                        overlap.push_back(static_cast<std::uint32_t>(f.idx()));
+        std::sort(overlap.begin(), overlap.end());
+        overlap.erase(std::unique(overlap.begin(), overlap.end()), overlap.end());
+    }
+    *overlap_faces = overlap.size();
+    faces.insert(faces.end(), overlap.begin(), overlap.end());
+    // The tile's vertices: the level vertex each copies, and how far it is lowered (a skirt's foot; 0
+    // for the others).
     std::vector<int> source;
-    std::vector<char> lowered_copy;
+    std::vector<double> lowered_copy;
     FaceSequence sequence;
     sequence.reserve(faces.size(), faces.size() + faces.size() / 4);
-    auto copy_vertex = [&](int level_vertex, bool lowered) {
+    auto copy_vertex = [&](int level_vertex) {
         source.push_back(level_vertex);
-        lowered_copy.push_back(lowered ? 1 : 0);
+        lowered_copy.push_back(0.0);
         return sequence.add_vertex();
     };
     for (const std::uint32_t fi : faces) {
@@ -441,7 +553,7 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         for (const auto v : src.fv_range(f)) {
             int& m = map[static_cast<std::size_t>(v.idx())];
             if (m < 0)
-                m = copy_vertex(v.idx(), false);
+                m = copy_vertex(v.idx());
             vs[static_cast<std::size_t>(k++)] = m;
         }
         if (sequence.add_face(vs[0], vs[1], vs[2]) < 0) {
@@ -449,26 +561,25 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
             // one vertex only: give this face its own copies of its vertices (same positions, so
             // nothing moves on screen) rather than lose it.
             for (int& v : vs)
-                v = copy_vertex(source[static_cast<std::size_t>(v)], false);
+                v = copy_vertex(source[static_cast<std::size_t>(v)]);
             const int added = sequence.add_face(vs[0], vs[1], vs[2]);
             assert(added >= 0);
             (void)added;
         }
     }
     *skirt_faces = 0;
-    // A face is the tile's when its owner is a cut node inside the region (what chose `faces` above).
     auto selected = [&](Mesh::FaceHandle f) {
-        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
-        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
-               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
+        return owned(f) || std::binary_search(overlap.begin(), overlap.end(), static_cast<std::uint32_t>(f.idx()));
     };
-    if (skirts && skirt_depth > 0) {
+    if (skirts) {
         // Border edges of the region that are interior edges of the level mesh get a skirt quad.
         std::vector<int> lowered(src.n_vertices(), -1);
-        auto lower = [&](Mesh::VertexHandle src_v) {
+        auto lower = [&](Mesh::VertexHandle src_v, double depth) {
             int& l = lowered[static_cast<std::size_t>(src_v.idx())];
             if (l < 0)
-                l = copy_vertex(src_v.idx(), true);
+                l = copy_vertex(src_v.idx());
+            double& by = lowered_copy[static_cast<std::size_t>(l)];
+            by = std::max(by, depth);
             return l;
         };
         // The half-edges of the selected faces in face order, each face's from its first corner: an
@@ -486,10 +597,13 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
                 continue; // a border of the surface itself: nothing shows through
             if (!selected(f) || selected(g))
                 continue;
+            const double depth = skirt_depth(index.face_owner[static_cast<std::size_t>(g.idx())]);
+            if (!(depth > 0))
+                continue;
             // he runs a → b inside the selected face f; the skirt quad runs b → a on top, consistently.
             const auto a = src.from_vertex_handle(he), b = src.to_vertex_handle(he);
             const int ta = map[static_cast<std::size_t>(a.idx())], tb = map[static_cast<std::size_t>(b.idx())];
-            const int la = lower(a), lb = lower(b);
+            const int la = lower(a, depth), lb = lower(b, depth);
             if (sequence.add_face(tb, ta, la) >= 0)
                 ++*skirt_faces;
             if (sequence.add_face(tb, la, lb) >= 0)
@@ -503,7 +617,7 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     for (std::size_t k = 0; k < source.size(); ++k) {
         const Mesh::VertexHandle from(source[k]), to(static_cast<int>(k));
         const OpenMesh::Vec3d n = src.normal(from);
-        out.set_point(to, lowered_copy[k] ? OpenMesh::Vec3d(src.point(from) - n * skirt_depth) : src.point(from));
+        out.set_point(to, lowered_copy[k] > 0 ? OpenMesh::Vec3d(src.point(from) - n * lowered_copy[k]) : src.point(from));
         out.set_normal(to, n);
         if (colored)
             out.set_color(to, src.color(from));
@@ -883,7 +997,9 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
             stack.pop_back();
             const Node& n = h.nodes[static_cast<std::size_t>(id_q)];
             const std::size_t faces = next.faces_below[static_cast<std::size_t>(id_q)];
-            const std::size_t skirt = o.skirts ? next.skirts_below[static_cast<std::size_t>(id_q)] : 0;
+            const std::size_t skirt = o.skirts ? next.skirts_below[static_cast<std::size_t>(id_q)] +
+                                                     next.overlap_below[static_cast<std::size_t>(id_q)]
+                                               : 0;
             const bool fits = faces <= face_budget && faces + skirt <= o.max_tile_triangles;
             const bool stop = n.is_leaf() || fits ||
                               !next.at_or_above_cut[static_cast<std::size_t>(n.left)] ||
@@ -907,14 +1023,48 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     for (std::size_t k = set.tiles.size(); k-- > 0;)
         for (const std::size_t c : set.tiles[k].children)
             set.tiles[k].geometric_error = std::max(set.tiles[k].geometric_error, set.tiles[c].geometric_error);
+    std::vector<std::size_t> parent(set.tiles.size(), 0);
+    for (std::size_t k = 0; k < set.tiles.size(); ++k)
+        for (const std::size_t c : set.tiles[k].children)
+            parent[c] = k;
+    // Skirt depths. Across a border of tile B (level L), a viewer can show any tile that holds the cut
+    // node owning the face across and is no ancestor of B: of each level from the first at which B's
+    // ancestor no longer holds that node. The crack between B and such a tile is at most how far each
+    // lies off the surface there, so B's skirt hangs twice the largest error of the cut nodes of those
+    // levels that hold the node across (node_error, or how far its vertices stand off: the errors the
+    // tiles take theirs from, but where the border is, not a tile's worst), and at least twice its
+    // level's plane distances (the depth before QA round 68 for every edge).
     // The tree above needs only the level indices, so the tiles' meshes (most of the time of an export
     // from stored levels) are cut afterwards, each on its own: the same meshes on any number of threads.
     run_parallel(set.tiles.size(), o.threads, [&](std::size_t k) {
         LodTile& tile = set.tiles[k];
         const LodLevel& level = set.levels[tile.level];
         const Node& region = h.nodes[static_cast<std::size_t>(tile.region)];
-        extract_region(h, level, index[tile.level], region, skirt_depth[tile.level], o.skirts, tile.mesh,
-                       &tile.skirt_faces);
+        std::vector<std::size_t> chain(tile.level + 1); // the tile's ancestors by level, itself last
+        for (std::size_t t = k, l = tile.level + 1; l-- > 0; t = parent[t])
+            chain[l] = t;
+        const double least = skirt_depth[tile.level];
+        const auto depth = [&](std::int32_t across) {
+            if (across < 0 || static_cast<std::size_t>(across) >= h.nodes.size())
+                return least;
+            const Node& node = h.nodes[static_cast<std::size_t>(across)];
+            std::size_t first = tile.level;
+            for (std::size_t l = 1; l < tile.level && first == tile.level; ++l)
+                if (!inside(h.nodes[static_cast<std::size_t>(set.tiles[chain[l]].region)], node))
+                    first = l;
+            double off = 0.0;
+            for (std::size_t l = first; l < tile.level; ++l) {
+                // The level's cut node holding the node across: its first ancestor at or above that cut.
+                std::int32_t n = across;
+                while (n >= 0 && !index[l].at_or_above_cut[static_cast<std::size_t>(n)])
+                    n = h.nodes[static_cast<std::size_t>(n)].parent;
+                if (n >= 0)
+                    off = std::max(off, index[l].error_below[static_cast<std::size_t>(n)]);
+            }
+            return std::max(least, 2.0 * off);
+        };
+        extract_region(h, level, index[tile.level], region, depth, o.skirts, tile.mesh, &tile.skirt_faces,
+                       &tile.overlap_faces);
         // The content's box (not the region's points': strays the mesh leaves out made a bunny's root
         // box 17 times its size, QA round 57); empty for a tile without content.
         tile.box = mesh_box(tile.mesh);
@@ -922,10 +1072,6 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     nest_tile_boxes(set.tiles);
     // A tile with no content at any level below (its points all left out) takes its parent's box (a
     // bounding volume must be a box, and lie inside its parent's), the root its region's.
-    std::vector<std::size_t> parent(set.tiles.size(), 0);
-    for (std::size_t k = 0; k < set.tiles.size(); ++k)
-        for (const std::size_t c : set.tiles[k].children)
-            parent[c] = k;
     for (std::size_t k = 0; k < set.tiles.size(); ++k) // parents come first
         if (!(set.tiles[k].box.min.x <= set.tiles[k].box.max.x))
             set.tiles[k].box = k == 0 ? h.nodes[static_cast<std::size_t>(set.tiles[k].region)].box : set.tiles[parent[k]].box;

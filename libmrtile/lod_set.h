@@ -12,9 +12,13 @@
 //! Tiles: a tile is a hierarchy node (its region) at a level. Its content is the level's faces owned
 //! by the cut nodes inside the region. Its children are the largest regions below it whose content at
 //! the next level fits `max_tile_triangles` (REPLACE refinement: the children together cover exactly
-//! the parent's points). Where a tile meets a tile of another level (a neighbour not yet refined),
-//! borders differ slightly; every tile carries a skirt (a strip hanging from its region borders along
-//! the surface normal, as deep as twice the level's largest plane distance) that hides those cracks.
+//! the parent's points). Where a tile meets a tile of another level (a neighbour not yet refined, of
+//! any level), borders differ: each level gives the faces across a border to one side or the other.
+//! So a tile also holds the faces around its vertices that its neighbours own (LodTile::overlap_faces:
+//! both levels' faces across the border overlap it), and carries a skirt (a strip hanging from the
+//! borders of all that along the surface normal) as deep as twice the larger of its level's plane
+//! distances and the errors, where the border is, of every coarser level a viewer can show across it
+//! (from the first level at which the tile's ancestor no longer holds the neighbour's points).
 //! Geometric error of a level = the largest node_error (cut.h: distance of a point to its tile plane,
 //! or the tile's coverage gap) over the level's cut (model units), forced non-increasing with the
 //! level. A tile's = the largest node_error of the level's cut nodes in its region, never above its
@@ -74,7 +78,7 @@ struct LodSetOptions
     std::vector<double> tolerances;
     //! Build the 3D Tiles tile tree (false: levels only, for `mrtile lods`).
     bool tileset = true;
-    //! Add skirts to tiles (3D Tiles only).
+    //! Add skirts and overlaps to tiles (3D Tiles only).
     bool skirts = true;
     //! How every level is meshed (mesh_cut's options; defaults as there).
     MeshOptions mesh;
@@ -105,7 +109,8 @@ struct LodTile
     BoundingBox box;              //!< contains the content and every descendant's box
     double geometric_error = 0.0;
     std::vector<std::size_t> children;
-    std::size_t skirt_faces = 0;
+    std::size_t skirt_faces = 0;  //!< of the content's faces, those of its skirts
+    std::size_t overlap_faces = 0; //!< of the content's faces, those owned by neighbours (see the file comment)
 };
 
 struct LodSet

@@ -217,6 +217,10 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     const Result broken = mrtile("build '" + (dir / "miss\ning.xyz").string() + "' -o " + (dir / "n.mrt").string(), dir);
     EXPECT_EQ(broken.code, 1);
     EXPECT_EQ(broken.err, "mrtile: error: " + (dir / "miss?ing.xyz").string() + ": no such file\n");
+    // A byte that is no UTF-8 (a Latin-1 name) prints as '?'; UTF-8 prints as it is.
+    const Result latin1 = mrtile("build '" + (dir / "caf\xE9_\xC3\xA9.xyz").string() + "' -o " + (dir / "n.mrt").string(), dir);
+    EXPECT_EQ(latin1.code, 1);
+    EXPECT_EQ(latin1.err, "mrtile: error: " + (dir / "caf?_\xC3\xA9.xyz").string() + ": no such file\n");
     // One point is a point (QA round 66 saw "1 points").
     write_text(dir / "one.xyz", "1 2 3\n");
     const Result one = mrtile("build " + (dir / "one.xyz").string() + " -o " + (dir / "one.mrt").string(), dir);
@@ -316,7 +320,12 @@ TEST(Cli, outputs_are_checked_before_any_work)
         {glb + " --enu 7,45,0", "no effect"},
         {glb + " --format ply", "does not match"},
         {glb + " --quantize 12", "add --draco"},
-        {glb + " --draco --quantize 25", "not in range 1 to 24"}, // 30 bits took 4.2 GB (QA round 38)
+        {glb + " --draco --quantize 25", "--quantize: '25' is not a whole number from 1 to 24"}, // 30 bits took 4.2 GB (QA round 38)
+        // Counts worded as every other whole-number option's (CLI11's Range said "Value 101 not in range
+        // 0 to 100", and "Value abc not in range" for a word: QA round 64).
+        {a + " --fit-rounds 101", "--fit-rounds: '101' is not a whole number from 0 to 100"},
+        {a + " --crack-rounds two", "--crack-rounds: 'two' is not a whole number from 0 to "},
+        {a + " --close-holes 2001", "--close-holes: '2001' is not a whole number from 0 to 2000"},
         {"lods " + (dir / "a.mrt").string() + " -o " + (dir / "l").string() + " --format 3dtiles", "3dtiles not in"},
         // Options the output would ignore (session 15 QA: all were accepted).
         {a + " --draco", "a .ply file has no Draco"},
@@ -1677,7 +1686,8 @@ TEST(Cli, tileset_placed_on_the_globe_by_its_crs)
 
 // QA round qa-fuzz: a model whose CRS came from a .prj (or a LAS WKT record) in Latin-1 could not be
 // described as JSON: `info --json` failed with "[json.exception.type_error.316] invalid UTF-8 byte". The
-// CRS is written with such bytes as U+FFFD; `info` and the placement are unchanged.
+// CRS is written with such bytes as U+FFFD; the placement is unchanged. `info` printed the byte as it
+// was, no UTF-8 for a terminal (QA round 66): since session 54 it prints '?', as `ls` shows such bytes.
 TEST(Cli, info_json_of_a_crs_in_latin1)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
@@ -1699,7 +1709,8 @@ TEST(Cli, info_json_of_a_crs_in_latin1)
     const std::string crs = nlohmann::json::parse(info.out)["crs"];
     EXPECT_EQ(crs.rfind("PROJCS[\"Zone \xEF\xBF\xBD 33N\",GEOGCS[", 0), 0u) << crs;
     const Result text = mrtile("info " + (dir / "m.mrt").string(), dir);
-    EXPECT_NE(text.out.find("crs         Zone \xE4 33N: 3D Tiles are placed on the globe by it"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("crs         Zone ? 33N: 3D Tiles are placed on the globe by it"), std::string::npos) << text.out;
+    EXPECT_EQ(text.out.find('\xE4'), std::string::npos) << text.out;
 }
 
 // A LAS 1.2 file (point format 0) of `points` whose GeoTIFF keys name EPSG code `epsg`.

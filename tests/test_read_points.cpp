@@ -1821,8 +1821,9 @@ TEST(ReadErrors, data_after_the_last_ply_element)
 // 100 points: the lines after the declared vertices must be the declared faces, one face per "n i j k
 // [colour]" (an integer count, then that many indices of declared vertices), and nothing after them.
 // A vertex line where a face belongs, a face too many, or any data when no face is declared is refused,
-// naming the line. Faces spread over lines (the format allows it), colours, comments, blank lines, and
-// fewer faces than declared (the points are whole) still read.
+// naming the line. Faces spread over lines (the format allows it), colours, comments and blank lines
+// still read. A file that ends before its declared faces, or inside a face, is truncated (as PLY is),
+// though its vertices are whole.
 TEST(ReadErrors, data_after_the_declared_off_vertices_and_faces)
 {
     const fs::path dir = test_dir();
@@ -1836,17 +1837,23 @@ TEST(ReadErrors, data_after_the_declared_off_vertices_and_faces)
         {"integers.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n7 7 7\n3 0 1 2\n",
          "line 6: face 0 of 1: vertex index 7 is not below the 3 vertices the header declares", false},
         {"more_faces.off", "OFF\n4 1 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n3 1 2 3\n",
-         "line 8: data after the 4 vertices and 1 faces the header declares", false},
+         "line 8: data after the 4 vertices and 1 face the header declares", false},
         {"after_colour.off", "COFF 3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2 255 0 0\n1 1 1 1 1 1 1\n",
          "line 6: data after", false},
     };
     expect_read_errors(dir, cases);
+    const std::string four = "0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n";
+    const std::vector<ReadErrorCase> truncated = {
+        {"fewer_faces.off", "OFF\n4 3 0\n" + four + "3 0 1 2\n", "truncated: file ends at line 7 after 1 of the 3 faces the header declares", true},
+        {"no_face.off", "OFF\n4 1 0\n" + four, "truncated: file ends at line 6 after 0 of the 1 face the header declares", true},
+        {"inside_face.off", "OFF\n4\n" + four + "3 0 1 2\n3 0", "truncated: file ends at line 8 inside face 1 (after 1 of its 3 indices)", true},
+    };
+    expect_read_errors(dir, truncated);
     const fs::path gz = write_gz(dir / "no_faces.off.gz", "OFF\n100 0 0\n" + vertices);
     expect_error<InvalidInput>([&] { read_points(gz); }, {gz.string(), "line 103"});
     expect_all_read_as_kpoints({
         {"split_face.off", "OFF\n4 2 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n4 0 1\n 2 3 0.5 0.5 0.5\n3 1 2 3\n"},
         {"trailing.off", "OFF\n4 1 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n\n# end\n  \n"},
-        {"fewer_faces.off", "OFF\n4 3 0\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n"},
         {"no_face_count.off", "OFF\n4\n0.5 -1.25 2\n3 4.75 -5.5\n-0.125 0 8\n1 1 1\n3 0 1 2\n"},
     });
 }
@@ -1891,7 +1898,7 @@ TEST(ReadErrors, data_after_the_declared_las_points)
 {
     const fs::path dir = test_dir();
     const auto patch = [](std::string bytes, std::size_t at, auto value) {
-        std::memcpy(&bytes[at], &value, sizeof value); // little-endian hosts, as the LAS files
+        bytes.replace(at, sizeof value, reinterpret_cast<const char*>(&value), sizeof value); // little-endian hosts, as the LAS files
         return bytes;
     };
     LasFile v12; // format 3: 38-byte records with the 4 extra bytes

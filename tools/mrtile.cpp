@@ -50,13 +50,50 @@ std::string count_of(std::size_t n, const char* one, const char* many)
     return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
+// The length of the well-formed UTF-8 sequence at text[at] (RFC 3629: no overlong forms, surrogates or
+// code points past U+10FFFF), or 0 when there is none.
+std::size_t utf8_length(const std::string& text, std::size_t at)
+{
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+    const unsigned char lead = byte(at);
+    if (lead < 0x80)
+        return 1;
+    std::size_t length = 0;
+    unsigned char low = 0x80, high = 0xBF; // the allowed range of the second byte
+    if (lead >= 0xC2 && lead <= 0xDF)
+        length = 2;
+    else if (lead >= 0xE0 && lead <= 0xEF) {
+        length = 3;
+        low = lead == 0xE0 ? 0xA0 : 0x80;
+        high = lead == 0xED ? 0x9F : 0xBF;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+        length = 4;
+        low = lead == 0xF0 ? 0x90 : 0x80;
+        high = lead == 0xF4 ? 0x8F : 0xBF;
+    } else
+        return 0;
+    if (at + length > text.size() || byte(at + 1) < low || byte(at + 1) > high)
+        return 0;
+    for (std::size_t k = 2; k < length; ++k)
+        if (byte(at + k) < 0x80 || byte(at + k) > 0xBF)
+            return 0;
+    return length;
+}
+
 // A message printed on one line whatever it holds: a file name or an argument with a line break in it
-// made an error of two lines (QA round 66). Control characters become '?'.
+// made an error of two lines (QA round 66), and `info` printed a LAS file's Latin-1 WKT name byte for
+// byte (QA round 66). Control characters and bytes that are no UTF-8 become '?', as `ls` shows them.
 std::string one_line(std::string text)
 {
-    for (char& c : text)
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
-            c = '?';
+    for (std::size_t at = 0; at < text.size();) {
+        const unsigned char c = static_cast<unsigned char>(text[at]);
+        const std::size_t length = utf8_length(text, at);
+        if (length == 0 || c < 0x20 || c == 0x7f) {
+            text[at] = '?';
+            ++at;
+        } else
+            at += length;
+    }
     return text;
 }
 
@@ -490,7 +527,7 @@ struct MeshArgs
             ->check(kNonNegative);
         cmd->add_option("--fit-rounds", fit_rounds,
                         "least-squares rounds fitting the vertices to the points (0 = interpolate, as the paper)")
-            ->check(CLI::Range(0, kMaxFitRounds))
+            ->check(integer_check(0, kMaxFitRounds))
             ->capture_default_str();
         cmd->add_flag("--no-colors", no_colors, "leave the mesh uncoloured even when the points have colours");
         cmd->add_flag("--thin-walls", thin_walls,
@@ -498,22 +535,22 @@ struct MeshArgs
                       "both sides); may open the rims of plates whose rims are not sampled (README: Choices, thin walls)");
         cmd->add_option("--close-holes", close_holes,
                         "also fill the sample's own holes of at most N edges, for watertight output (0 = off; at most 2000)")
-            ->check(CLI::Range(0, 2000));
+            ->check(integer_check(0, 2000));
         // LOD levels are mended by whole tolerance cuts instead (lod_set.h), so that they nest.
         if (one_mesh)
             crack_option = cmd->add_option("--crack-rounds", crack_rounds,
                                            "rounds refining the tiles along cracks of a closed surface and meshing again (0 = off)")
-                               ->check(CLI::Range(0, kMaxRefineRounds))
+                               ->check(integer_check(0, kMaxRefineRounds))
                                ->capture_default_str();
         if (one_mesh)
             crossing_option = cmd->add_option("--crossing-rounds", crossing_rounds,
                                               "rounds refining the tiles of faces that cross each other and meshing again (0 = off)")
-                                  ->check(CLI::Range(0, kMaxRefineRounds))
+                                  ->check(integer_check(0, kMaxRefineRounds))
                                   ->capture_default_str();
         if (one_mesh)
             hole_option = cmd->add_option("--hole-rounds", hole_rounds,
                                           "rounds refining the tiles of faces over holes of the sample and meshing again (0 = off)")
-                              ->check(CLI::Range(0, kMaxRefineRounds))
+                              ->check(integer_check(0, kMaxRefineRounds))
                               ->capture_default_str();
     }
 
@@ -563,7 +600,7 @@ struct OutputArgs
     {
         cmd->add_flag("--draco", draco, "Draco-compress glTF/GLB and 3D Tiles content");
         quantize_option = cmd->add_option("--quantize", quantize, "Draco position quantization bits (with --draco or .drc)")
-                              ->check(CLI::Range(1, kMaxPositionBits))
+                              ->check(integer_check(1, kMaxPositionBits))
                               ->capture_default_str();
         cmd->add_option("--up", up, "up axis of the input (glTF is y-up): z or y")->check(CLI::IsMember({"z", "y"}))->capture_default_str();
     }
@@ -1355,7 +1392,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
         if (!h.cloud.crs.empty())
             std::printf("note: --enu places the model's coordinates as east-north-up metres at %.7g, %.7g; its own "
                         "coordinate system (%s) is not used (leave --enu out to place the tileset by it)\n",
-                        v[0], v[1], crs_label(h.cloud.crs).c_str());
+                        v[0], v[1], one_line(crs_label(h.cloud.crs)).c_str());
         const double away = norm(h.bbox().centre() + h.cloud.origin);
         if (away > 100000.0 && h.cloud.crs.empty()) // with a CRS, the note above says what to do
             std::printf("note: --enu takes the input's coordinates as metres from the anchor: the model's centre lies "
@@ -1415,7 +1452,7 @@ void write_tileset(const Hierarchy& h, const ExportArgs& e, const MeshArgs& m, c
     if (placed)
         std::printf("placed on the globe by %s: local east-north-up metres at longitude %.7f, latitude %.7f, "
                     "height %.2f m (WGS 84)\n",
-                    crs_label(*crs).c_str(), placed->anchor.longitude_deg, placed->anchor.latitude_deg,
+                    one_line(crs_label(*crs)).c_str(), placed->anchor.longitude_deg, placed->anchor.latitude_deg,
                     placed->anchor.height);
     note_placement(h, e, placed.has_value());
     std::size_t contents = 0, triangles = 0, over = 0, largest = 0;
@@ -1710,7 +1747,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
         // should hear that nothing moves: the coordinates stay those of the files' own system.
         if (!cloud.crs.empty() && crs_differ(cloud.crs, crs))
             std::printf("note: --crs %s replaces the coordinate system of %s (%s); the points are not reprojected\n",
-                        crs_label(crs).c_str(), inputs_name(points).c_str(), crs_label(cloud.crs).c_str());
+                        one_line(crs_label(crs)).c_str(), one_line(inputs_name(points)).c_str(), one_line(crs_label(cloud.crs)).c_str());
         cloud.crs = crs;
     } else if (!cloud.crs.empty()) {
         note_unusable_crs(cloud.crs, inputs_name(points));
@@ -1884,7 +1921,7 @@ int run_info(const fs::path& model, bool json)
                     100.0 * view->hidden_share);
     }
     if (!h.cloud.crs.empty())
-        std::printf("crs         %s\n", crs_summary(h.cloud.crs).c_str());
+        std::printf("crs         %s\n", one_line(crs_summary(h.cloud.crs)).c_str());
     if (h.info.denoised && !h.denoise_moves.empty() && h.scale > 0)
         std::printf("denoised    the points were moved onto the surface before the build, by %.3g of the scale "
                     "(typically); their residual noise floors each region at %g times its points' typical move\n",
@@ -2083,7 +2120,7 @@ int run(int argc, char** argv)
                  "let tolerance, region and camera cuts refine below the points' noise level (noisy samples break into pieces there)");
     std::size_t threads = 0;
     app.add_option("--threads", threads, "worker threads (0 = one per hardware thread); output does not depend on it")
-        ->check(CLI::Range(std::size_t{0}, std::size_t{4096}))
+        ->check(integer_check(0, 4096))
         ->capture_default_str();
 
     // build
