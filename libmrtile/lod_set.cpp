@@ -26,11 +26,15 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <mutex>
 
 namespace mrt {
 namespace {
+
+constexpr std::int32_t kNoNode = -1;
+constexpr std::int32_t kMixed = -2;
 
 struct LevelIndex
 {
@@ -38,17 +42,18 @@ struct LevelIndex
     std::vector<std::int32_t> face_owner;
     // Faces owned by each hierarchy node's subtree at this level (0 for nodes not above/at the cut).
     std::vector<std::size_t> faces_below;
-    // Skirt faces the region of each node would get at this level (extract_region: two per edge
-    // between a face owned inside it and one owned outside; at most that, as a skirt face that would
-    // not be manifold is left out): what a tile holds besides its faces.
-    std::vector<std::size_t> skirts_below;
-    // Overlap faces the region of each node would get at this level (extract_region: faces owned
-    // outside it around a vertex that touches it), each with the skirt faces it can add (two for its
-    // one edge away from the region, when one corner alone touches it): at most that.
-    std::vector<std::size_t> overlap_below;
     // The cut node of each vertex of the level mesh (kVertexCluster; -1 or past the nodes for none).
     std::vector<std::int32_t> vertex_cluster;
-    // Vertices with a cluster, ordered by the cluster's first point (then by vertex), as faces_by_owner.
+    // The corners of each face (three per face), and the faces around each vertex (those of vertex v
+    // are vertex_faces[vertex_faces_begin[v] .. vertex_faces_begin[v + 1]), in face order): read once
+    // from the half-edges, whose random accesses made most of the overlaps' cost.
+    std::vector<std::uint32_t> face_corners;
+    std::vector<std::uint32_t> vertex_faces_begin, vertex_faces;
+    // The one cut node each vertex touches (its cluster, its faces' owners), kMixed for more than one,
+    // kNoNode for none.
+    std::vector<std::int32_t> vertex_node;
+    // Vertices with a cluster that touch more than one node, ordered by the cluster's first point (then
+    // by vertex), as faces_by_owner.
     std::vector<std::uint32_t> vertices_by_cluster;
     // True for nodes of the cut and their ancestors (regions may not go below the cut).
     std::vector<char> at_or_above_cut;
@@ -382,77 +387,51 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
                 std::max(value_or(adjusted, id, node_error(h.nodes[static_cast<std::size_t>(id)])),
                          deviation.empty() ? 0.0 : deviation[static_cast<std::size_t>(id)]);
     }
-    // Skirts: an edge between faces owned by cut nodes a and b (or b none) is a region border of a
-    // and of its ancestors up to the first that holds b too; each such region gets two skirt faces on
-    // a's side. Counted from each side's half-edge, so both sides are.
-    index.skirts_below.assign(h.nodes.size(), 0);
-    for (const auto he : mesh.halfedges()) {
-        const auto f = mesh.face_handle(he), g = mesh.opposite_face_handle(he);
-        if (!f.is_valid() || !g.is_valid())
-            continue; // a border of the level mesh: no skirt
-        const std::int32_t a = index.face_owner[static_cast<std::size_t>(f.idx())];
-        const std::int32_t b = index.face_owner[static_cast<std::size_t>(g.idx())];
-        if (a == b || a < 0 || static_cast<std::size_t>(a) >= h.nodes.size())
-            continue;
-        const bool b_owned = b >= 0 && static_cast<std::size_t>(b) < h.nodes.size();
-        for (std::int32_t n = a; n >= 0; n = h.nodes[static_cast<std::size_t>(n)].parent) {
-            const Node& region = h.nodes[static_cast<std::size_t>(n)];
-            if (b_owned && region.begin <= h.nodes[static_cast<std::size_t>(b)].begin &&
-                h.nodes[static_cast<std::size_t>(b)].end <= region.end)
-                break;
-            index.skirts_below[static_cast<std::size_t>(n)] += 2;
-        }
-    }
-    // Overlaps (extract_region): a corner of a face touches its cluster's region and those of the faces
-    // around it, and a face owned by b is an overlap face of every region one of its corners touches,
-    // up to the first that holds b too (each counted once per face: the chains merge). A corner that
-    // touches a region makes the face's two edges at it inner edges of that region's content, so a
-    // face with one such corner has one edge that can carry a skirt (two faces), one with more none.
+    // For the overlaps (extract_region, overlap_faces): the cut node of each vertex, the adjacency, and
+    // which vertices touch more than one cut node.
     index.vertex_cluster.assign(mesh.n_vertices(), -1);
     for (const auto v : mesh.vertices())
         index.vertex_cluster[static_cast<std::size_t>(v.idx())] = mesh.property(cluster, v);
     const auto node_of = [&](std::int32_t id) -> const Node* {
         return id >= 0 && static_cast<std::size_t>(id) < h.nodes.size() ? &h.nodes[static_cast<std::size_t>(id)] : nullptr;
     };
-    index.overlap_below.assign(h.nodes.size(), 0);
-    std::vector<std::uint32_t> stamp(h.nodes.size(), UINT32_MAX);
-    std::array<std::vector<const Node*>, 3> touches;
+    // A vertex that touches one cut node alone (its cluster and its faces' owners: a fan's centre) adds
+    // no overlap to any region, and is passed over here and in extract_region. Level meshes hold no
+    // deleted elements (meshed, or loaded from a model file), so indices run over all of them.
+    assert(mesh.n_faces() == static_cast<std::size_t>(std::distance(mesh.faces().begin(), mesh.faces().end())));
+    index.face_corners.assign(3 * mesh.n_faces(), 0);
+    index.vertex_faces_begin.assign(mesh.n_vertices() + 1, 0);
     for (const auto f : mesh.faces()) {
-        const Node* owner = node_of(index.face_owner[static_cast<std::size_t>(f.idx())]);
-        std::size_t k = 0;
-        bool all_owner = true;
+        std::size_t k = 3 * static_cast<std::size_t>(f.idx());
         for (const auto v : mesh.fv_range(f)) {
-            std::vector<const Node*>& touch = touches[k++];
-            touch.clear();
-            if (const Node* c = node_of(index.vertex_cluster[static_cast<std::size_t>(v.idx())]))
-                touch.push_back(c);
-            for (const auto g : mesh.vf_range(v))
-                if (const Node* o = node_of(index.face_owner[static_cast<std::size_t>(g.idx())]))
-                    touch.push_back(o);
-            std::sort(touch.begin(), touch.end());
-            touch.erase(std::unique(touch.begin(), touch.end()), touch.end());
-            all_owner = all_owner && touch.size() == 1 && touch[0] == owner;
+            index.face_corners[k++] = static_cast<std::uint32_t>(v.idx());
+            ++index.vertex_faces_begin[static_cast<std::size_t>(v.idx()) + 1];
         }
-        if (all_owner)
-            continue; // inside its owner's fan: no other region's
-        const auto touching = [&](const Node& region, const std::vector<const Node*>& touch) {
-            return std::any_of(touch.begin(), touch.end(), [&](const Node* t) { return inside(region, *t); });
-        };
-        for (const std::vector<const Node*>& touch : touches)
-            for (const Node* t : touch)
-                for (std::int32_t n = static_cast<std::int32_t>(t - h.nodes.data()); n >= 0; n = h.nodes[static_cast<std::size_t>(n)].parent) {
-                    const Node& region = h.nodes[static_cast<std::size_t>(n)];
-                    if ((owner && inside(region, *owner)) || stamp[static_cast<std::size_t>(n)] == static_cast<std::uint32_t>(f.idx()))
-                        break;
-                    stamp[static_cast<std::size_t>(n)] = static_cast<std::uint32_t>(f.idx());
-                    const auto corners = std::count_if(touches.begin(), touches.end(),
-                                                       [&](const std::vector<const Node*>& c) { return touching(region, c); });
-                    index.overlap_below[static_cast<std::size_t>(n)] += corners == 1 ? 3 : 1;
-                }
     }
+    for (std::size_t v = 0; v < mesh.n_vertices(); ++v)
+        index.vertex_faces_begin[v + 1] += index.vertex_faces_begin[v];
+    index.vertex_faces.resize(index.vertex_faces_begin.back());
+    {
+        std::vector<std::uint32_t> next(index.vertex_faces_begin.begin(), index.vertex_faces_begin.end() - 1);
+        for (std::size_t f = 0; f < mesh.n_faces(); ++f)
+            for (std::size_t k = 0; k < 3; ++k)
+                index.vertex_faces[next[index.face_corners[3 * f + k]]++] = static_cast<std::uint32_t>(f);
+    }
+    const auto corners_of = [&](std::size_t f) { return &index.face_corners[3 * f]; };
+    index.vertex_node.assign(mesh.n_vertices(), kNoNode);
+    const auto touched_by = [&](std::size_t v, std::int32_t id) {
+        std::int32_t& one = index.vertex_node[v];
+        if (node_of(id))
+            one = one == kNoNode || one == id ? id : kMixed;
+    };
+    for (std::size_t v = 0; v < index.vertex_cluster.size(); ++v)
+        touched_by(v, index.vertex_cluster[v]);
+    for (std::size_t f = 0; f < mesh.n_faces(); ++f)
+        for (std::size_t k = 0; k < 3; ++k)
+            touched_by(corners_of(f)[k], index.face_owner[f]);
     keys.clear();
     for (std::size_t v = 0; v < index.vertex_cluster.size(); ++v)
-        if (const Node* c = node_of(index.vertex_cluster[v]))
+        if (const Node* c = node_of(index.vertex_cluster[v]); c && index.vertex_node[v] == kMixed)
             keys.push_back(std::uint64_t{c->begin} << 32 | v);
     std::sort(keys.begin(), keys.end());
     index.vertices_by_cluster.reserve(keys.size());
@@ -469,23 +448,11 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     return index;
 }
 
-// The content of a tile: the level's faces owned by cut nodes inside the region and, with skirts, the
-// faces around those cut nodes' vertices (the overlap), with a skirt along every border edge of them
-// that is not a border of the whole level mesh, as deep as skirt_depth(the cut node
-// owning the face across; -1 for none) says (a vertex between two skirt edges takes the deeper; an
-// edge of depth 0 gets none: its faces would have no area). Written into `out` (empty), which
-// is the tile's own mesh: an OpenMesh mesh returned and assigned would be copied (it cannot be moved).
-// The faces are added through a FaceSequence (what add_face builds, at a tenth of its cost), each new
-// vertex recorded as the level vertex it copies, and the mesh is filled in once at the end.
-void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
-                    const std::function<double(std::int32_t)>& skirt_depth, bool skirts, Mesh& out, std::size_t* skirt_faces,
-                    std::size_t* overlap_faces)
+// The faces of the level owned by cut nodes inside `region`, in face order: an owner inside the region
+// starts in it, so they are among the run of faces_by_owner whose owners start in [region.begin,
+// region.end), and extracting a region does not scan the whole level.
+std::vector<std::uint32_t> owned_faces(const Hierarchy& h, const LevelIndex& index, const Node& region, bool in_face_order = true)
 {
-    assert(out.n_vertices() == 0);
-    const Mesh& src = level.mesh;
-    std::vector<int> map(src.n_vertices(), -1);
-    // The faces owned by nodes inside the region, in face order: an owner inside the region starts in
-    // it, so they are among the run of faces_by_owner whose owners start in [region.begin, region.end).
     auto owner_begin = [&](std::uint32_t f) { return h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin; };
     const auto run_begin = std::partition_point(index.faces_by_owner.begin(), index.faces_by_owner.end(),
                                                 [&](std::uint32_t f) { return owner_begin(f) < region.begin; });
@@ -495,46 +462,85 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     for (auto it = run_begin; it != run_end; ++it)
         if (inside(region, h.nodes[static_cast<std::size_t>(index.face_owner[*it])]))
             faces.push_back(*it);
-    std::sort(faces.begin(), faces.end());
+    if (in_face_order)
+        std::sort(faces.begin(), faces.end());
+    return faces;
+}
+
+// The faces a region's tile overlaps its neighbours by (see extract_region), in face order, and how
+// many skirt faces they can add: two for a face with one corner that touches the region (its edge
+// away from the region can be a border), none for a face with more (its edges all meet a touching
+// vertex, whose faces are all the tile's). The edges of the owned faces all meet a vertex of an owned
+// face, so they carry no skirt. What the tile tree's budget counts, and what extract_region adds.
+struct Overlap
+{
+    std::vector<std::uint32_t> faces;
+    std::size_t skirt_faces = 0;
+};
+
+Overlap region_overlap(const Hierarchy& h, const LevelIndex& index, const Node& region, const std::vector<std::uint32_t>& owned)
+{
+    // The vertices that touch the region and another cut node: of a face owned inside, or of a cut node
+    // inside (vertices_by_cluster holds only those that touch more than one).
+    std::vector<std::uint32_t> touching;
+    for (const std::uint32_t f : owned)
+        for (std::size_t k = 0; k < 3; ++k)
+            if (const std::uint32_t v = index.face_corners[3 * std::size_t{f} + k]; index.vertex_node[v] == kMixed)
+                touching.push_back(v);
+    auto cluster_begin = [&](std::uint32_t v) { return h.nodes[static_cast<std::size_t>(index.vertex_cluster[v])].begin; };
+    const auto v_begin = std::partition_point(index.vertices_by_cluster.begin(), index.vertices_by_cluster.end(),
+                                              [&](std::uint32_t v) { return cluster_begin(v) < region.begin; });
+    const auto v_end = std::partition_point(v_begin, index.vertices_by_cluster.end(),
+                                            [&](std::uint32_t v) { return cluster_begin(v) < region.end; });
+    for (auto it = v_begin; it != v_end; ++it)
+        if (inside(region, h.nodes[static_cast<std::size_t>(index.vertex_cluster[*it])]))
+            touching.push_back(*it);
+    std::sort(touching.begin(), touching.end());
+    touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+    const auto owned_inside = [&](std::uint32_t f) {
+        const std::int32_t owner = index.face_owner[f];
+        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
+               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
+    };
+    Overlap overlap;
+    for (const std::uint32_t v : touching)
+        for (std::uint32_t k = index.vertex_faces_begin[v]; k < index.vertex_faces_begin[v + 1]; ++k)
+            if (!owned_inside(index.vertex_faces[k]))
+                overlap.faces.push_back(index.vertex_faces[k]);
+    std::sort(overlap.faces.begin(), overlap.faces.end());
+    overlap.faces.erase(std::unique(overlap.faces.begin(), overlap.faces.end()), overlap.faces.end());
+    for (const std::uint32_t f : overlap.faces) {
+        int corners = 0;
+        for (std::size_t k = 0; k < 3; ++k)
+            corners += std::binary_search(touching.begin(), touching.end(), index.face_corners[3 * std::size_t{f} + k]) ? 1 : 0;
+        overlap.skirt_faces += corners == 1 ? 2 : 0;
+    }
+    return overlap;
+}
+
+// The content of a tile: the level's faces owned by cut nodes inside the region and, with skirts, the
+// faces around those cut nodes' vertices (the overlap), with a skirt along every border edge of them
+// that is not a border of the whole level mesh, as deep as skirt_depth(the cut node
+// owning the face across; -1 for none) says (a vertex between two skirt edges takes the deeper; an
+// edge of depth 0 gets none: its faces would have no area). `known_overlap`: the overlap as the tile
+// tree's search found it (region_overlap), or empty to find it here. Written into `out` (empty), which
+// is the tile's own mesh: an OpenMesh mesh returned and assigned would be copied (it cannot be moved).
+// The faces are added through a FaceSequence (what add_face builds, at a tenth of its cost), each new
+// vertex recorded as the level vertex it copies, and the mesh is filled in once at the end.
+void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex& index, const Node& region,
+                    const std::function<double(std::int32_t)>& skirt_depth, bool skirts, Mesh& out, std::size_t* skirt_faces,
+                    std::size_t* overlap_faces, std::vector<std::uint32_t>&& known_overlap)
+{
+    assert(out.n_vertices() == 0);
+    const Mesh& src = level.mesh;
+    std::vector<int> map(src.n_vertices(), -1);
+    std::vector<std::uint32_t> faces = owned_faces(h, index, region);
     // A face is the tile's own when its owner is a cut node inside the region (what chose `faces`).
     auto owned = [&](Mesh::FaceHandle f) {
         const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
         return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
                inside(region, h.nodes[static_cast<std::size_t>(owner)]);
     };
-    // With skirts, the faces owned outside around the vertices that touch the region (a vertex of a
-    // cut node inside, or of a face owned inside) overlap the neighbours: which faces a level gives a
-    // region differs from level to level along its border (a face across it is owned by one side),
-    // and where a neighbour is shown at another level, the strip that both levels gave away was a hole
-    // seen from above (QA round 68: 1-2% of a terrain between tiles three levels apart; 0.1% with the
-    // faces around the cut nodes' vertices alone, at corners where three regions meet). Both levels'
-    // faces across the border overlap it instead.
-    std::vector<std::uint32_t> overlap;
-    if (skirts) {
-        auto cluster_begin = [&](std::uint32_t v) {
-            return h.nodes[static_cast<std::size_t>(index.vertex_cluster[v])].begin;
-        };
-        const auto v_begin = std::partition_point(index.vertices_by_cluster.begin(), index.vertices_by_cluster.end(),
-                                                  [&](std::uint32_t v) { return cluster_begin(v) < region.begin; });
-        const auto v_end = std::partition_point(v_begin, index.vertices_by_cluster.end(),
-                                                [&](std::uint32_t v) { return cluster_begin(v) < region.end; });
-        for (auto it = v_begin; it != v_end; ++it) {
-            if (!inside(region, h.nodes[static_cast<std::size_t>(index.vertex_cluster[*it])]))
-                continue;
-            for (const auto f : src.vf_range(Mesh::VertexHandle(static_cast<int>(*it))))
-                if (!owned(f))
-                    overlap.push_back(static_cast<std::uint32_t>(f.idx()));
-        }
-        for (const std::uint32_t fi : faces)
-            for (const auto v : src.fv_range(Mesh::FaceHandle(static_cast<int>(fi))))
-                for (const auto f : src.vf_range(v))
-                    if (!owned(f))
-                        overlap.push_back(static_cast<std::uint32_t>(f.idx()));
-        std::sort(overlap.begin(), overlap.end());
-        overlap.erase(std::unique(overlap.begin(), overlap.end()), overlap.end());
-    }
-    *overlap_faces = overlap.size();
-    faces.insert(faces.end(), overlap.begin(), overlap.end());
     // The tile's vertices: the level vertex each copies, and how far it is lowered (a skirt's foot; 0
     // for the others).
     std::vector<int> source;
@@ -546,27 +552,43 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
         lowered_copy.push_back(0.0);
         return sequence.add_vertex();
     };
-    for (const std::uint32_t fi : faces) {
-        const Mesh::FaceHandle f(static_cast<int>(fi));
-        std::array<int, 3> vs;
-        int k = 0;
-        for (const auto v : src.fv_range(f)) {
-            int& m = map[static_cast<std::size_t>(v.idx())];
-            if (m < 0)
-                m = copy_vertex(v.idx());
-            vs[static_cast<std::size_t>(k++)] = m;
+    const auto add_faces = [&](const std::vector<std::uint32_t>& which) {
+        for (const std::uint32_t fi : which) {
+            std::array<int, 3> vs;
+            for (std::size_t k = 0; k < 3; ++k) {
+                const std::uint32_t v = index.face_corners[3 * std::size_t{fi} + k];
+                int& m = map[v];
+                if (m < 0)
+                    m = copy_vertex(static_cast<int>(v));
+                vs[k] = m;
+            }
+            if (sequence.add_face(vs[0], vs[1], vs[2]) < 0) {
+                // A subset of a manifold mesh is manifold except where two fans of the region touch at
+                // one vertex only: give this face its own copies of its vertices (same positions, so
+                // nothing moves on screen) rather than lose it.
+                for (int& v : vs)
+                    v = copy_vertex(source[static_cast<std::size_t>(v)]);
+                const int added = sequence.add_face(vs[0], vs[1], vs[2]);
+                assert(added >= 0);
+                (void)added;
+            }
         }
-        if (sequence.add_face(vs[0], vs[1], vs[2]) < 0) {
-            // A subset of a manifold mesh is manifold except where two fans of the region touch at
-            // one vertex only: give this face its own copies of its vertices (same positions, so
-            // nothing moves on screen) rather than lose it.
-            for (int& v : vs)
-                v = copy_vertex(source[static_cast<std::size_t>(v)]);
-            const int added = sequence.add_face(vs[0], vs[1], vs[2]);
-            assert(added >= 0);
-            (void)added;
-        }
+    };
+    add_faces(faces);
+    // With skirts, the faces owned outside around the vertices that touch the region (a vertex of a
+    // cut node inside, or of a face owned inside) overlap the neighbours: which faces a level gives a
+    // region differs from level to level along its border (a face across it is owned by one side),
+    // and where a neighbour is shown at another level, the strip that both levels gave away was a hole
+    // seen from above (QA round 68: 1-2% of a terrain between tiles three levels apart; 0.1% with the
+    // faces around the cut nodes' vertices alone, at corners where three regions meet). Both levels'
+    // faces across the border overlap it instead.
+    std::vector<std::uint32_t> overlap;
+    if (skirts) {
+        overlap = known_overlap.empty() ? region_overlap(h, index, region, faces).faces : std::move(known_overlap);
+        add_faces(overlap);
     }
+    *overlap_faces = overlap.size();
+    faces.insert(faces.end(), overlap.begin(), overlap.end());
     *skirt_faces = 0;
     auto selected = [&](Mesh::FaceHandle f) {
         return owned(f) || std::binary_search(overlap.begin(), overlap.end(), static_cast<std::uint32_t>(f.idx()));
@@ -951,9 +973,12 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
     std::vector<LevelIndex> index;
     for (std::size_t k = 0; k < set.levels.size(); ++k)
         index.push_back(index_level(h, set.levels[k], deviation[k], shown[k], adjusted[k]));
-    // Regions are chosen within three quarters of the budget (room for skirts), and with their skirts
-    // within all of it: a small region's skirt can outgrow the quarter (QA round 28b: at 256, a quarter
-    // of the bunny's tiles were over, up to 343 faces).
+    // Regions are chosen within three quarters of the budget (room for the overlap and the skirts), and
+    // with them within all of it: a small region's skirt can outgrow the quarter (QA round 28b: at 256,
+    // a quarter of the bunny's tiles were over, up to 343 faces). The overlap is found for each region
+    // that may fit (region_overlap, as extract_region adds it): per node for every node, it took the
+    // index of a 1M-point torus's finest level 0.2 s, and a bound cheap enough overstated it (the
+    // bunny at 256 in 2,182 tiles instead of 1,495).
     const std::size_t face_budget = o.max_tile_triangles * 3 / 4;
 
     // Breadth-first over (region, level).
@@ -962,10 +987,14 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         std::int32_t region;
         std::size_t level;
         std::ptrdiff_t parent;
+        std::vector<std::uint32_t> overlap; // as the search found it (extract_region takes it), or empty
     };
-    std::vector<Pending> queue{{0, 0, -1}};
+    std::vector<Pending> queue;
+    queue.push_back({0, 0, -1, {}});
+    std::vector<std::vector<std::uint32_t>> known_overlap; // of each tile
     for (std::size_t q = 0; q < queue.size(); ++q) {
-        const Pending p = queue[q];
+        const Pending p{queue[q].region, queue[q].level, queue[q].parent, {}};
+        known_overlap.push_back(std::move(queue[q].overlap));
         const Node& region = h.nodes[static_cast<std::size_t>(p.region)];
         LodTile tile;
         tile.region = p.region;
@@ -991,28 +1020,30 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         // that level's cut (a cut node's faces cannot be split between tiles).
         const LevelIndex& next = index[p.level + 1];
         std::vector<std::int32_t> stack{p.region};
-        std::vector<std::int32_t> children;
+        std::vector<Pending> children;
         while (!stack.empty()) {
             const std::int32_t id_q = stack.back();
             stack.pop_back();
             const Node& n = h.nodes[static_cast<std::size_t>(id_q)];
             const std::size_t faces = next.faces_below[static_cast<std::size_t>(id_q)];
-            const std::size_t skirt = o.skirts ? next.skirts_below[static_cast<std::size_t>(id_q)] +
-                                                     next.overlap_below[static_cast<std::size_t>(id_q)]
-                                               : 0;
-            const bool fits = faces <= face_budget && faces + skirt <= o.max_tile_triangles;
+            bool fits = faces <= face_budget;
+            Overlap overlap;
+            if (fits && o.skirts) { // the overlap and its skirts, counted only for a region that may fit
+                overlap = region_overlap(h, next, n, owned_faces(h, next, n, false));
+                fits = faces + overlap.faces.size() + overlap.skirt_faces <= o.max_tile_triangles;
+            }
             const bool stop = n.is_leaf() || fits ||
                               !next.at_or_above_cut[static_cast<std::size_t>(n.left)] ||
                               !next.at_or_above_cut[static_cast<std::size_t>(n.right)];
             if (stop) {
-                children.push_back(id_q);
+                children.push_back({id_q, p.level + 1, static_cast<std::ptrdiff_t>(id), std::move(overlap.faces)});
             } else {
                 stack.push_back(n.right);
                 stack.push_back(n.left);
             }
         }
-        for (std::int32_t c : children)
-            queue.push_back({c, p.level + 1, static_cast<std::ptrdiff_t>(id)});
+        for (Pending& c : children)
+            queue.push_back(std::move(c));
     }
     // A parent's error is at least its children's: REPLACE refinement needs errors that fall down the
     // tree, and where a finer level's vertices stand farther off the sample than the coarser's in the
@@ -1064,7 +1095,7 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
             return std::max(least, 2.0 * off);
         };
         extract_region(h, level, index[tile.level], region, depth, o.skirts, tile.mesh, &tile.skirt_faces,
-                       &tile.overlap_faces);
+                       &tile.overlap_faces, std::move(known_overlap[k]));
         // The content's box (not the region's points': strays the mesh leaves out made a bunny's root
         // box 17 times its size, QA round 57); empty for a tile without content.
         tile.box = mesh_box(tile.mesh);
