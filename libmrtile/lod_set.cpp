@@ -7,10 +7,13 @@
 //    this region" is a range test, and children regions partition their parent exactly;
 //  - skirts: a neighbour shown at another level has a slightly different border; a strip hanging
 //    along the surface normal from the region's border hides the crack (the standard terrain remedy).
-//    It hangs as deep as the coarsest tile that a viewer can show across that border lies off the
-//    surface: REPLACE refinement puts tiles of any two levels side by side, and a skirt sized by its
-//    own level alone left a clean terrain's finest tiles centimetres of skirt beside a neighbour three
-//    levels coarser and metres off (QA round 68, slivers of sky in CesiumJS and three.js).
+//    It hangs as deep as the coarser levels a viewer can show across that border lie off the surface
+//    there: REPLACE refinement puts tiles of any two levels side by side, and a skirt sized by its own
+//    level alone left a clean terrain's finest tiles centimetres of skirt beside a neighbour three
+//    levels coarser and metres off (QA round 68, slivers of sky in CesiumJS and three.js);
+//  - overlaps: each level gives a face across a region border to one side, not always the same one,
+//    so a tile also holds its neighbours' faces around its own vertices, and the strip that two levels
+//    gave to opposite sides is covered (QA round 68).
 #include "libmrtile/lod_set.h"
 
 #include "libmrtile/coverage_gap.h"
@@ -346,6 +349,12 @@ std::vector<NodeValues> adjusted_node_errors(const Hierarchy& h, const std::vect
 
 bool inside(const Node& region, const Node& node) { return region.begin <= node.begin && node.end <= region.end; }
 
+// Node `id` of h, or nullptr for none (-1, or past the nodes: face and vertex ids of a level mesh).
+const Node* node_of(const Hierarchy& h, std::int32_t id)
+{
+    return id >= 0 && static_cast<std::size_t>(id) < h.nodes.size() ? &h.nodes[static_cast<std::size_t>(id)] : nullptr;
+}
+
 // `deviation`: vertex_deviation of the level, or empty (the finest level, whose tiles have error 0).
 // `shown`: nodes_in_mesh of the level; `adjusted`: its adjusted_node_errors.
 LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vector<double>& deviation,
@@ -392,9 +401,6 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     index.vertex_cluster.assign(mesh.n_vertices(), -1);
     for (const auto v : mesh.vertices())
         index.vertex_cluster[static_cast<std::size_t>(v.idx())] = mesh.property(cluster, v);
-    const auto node_of = [&](std::int32_t id) -> const Node* {
-        return id >= 0 && static_cast<std::size_t>(id) < h.nodes.size() ? &h.nodes[static_cast<std::size_t>(id)] : nullptr;
-    };
     // A vertex that touches one cut node alone (its cluster and its faces' owners: a fan's centre) adds
     // no overlap to any region, and is passed over here and in extract_region. Level meshes hold no
     // deleted elements (meshed, or loaded from a model file), so indices run over all of them.
@@ -421,7 +427,7 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     index.vertex_node.assign(mesh.n_vertices(), kNoNode);
     const auto touched_by = [&](std::size_t v, std::int32_t id) {
         std::int32_t& one = index.vertex_node[v];
-        if (node_of(id))
+        if (node_of(h, id))
             one = one == kNoNode || one == id ? id : kMixed;
     };
     for (std::size_t v = 0; v < index.vertex_cluster.size(); ++v)
@@ -431,7 +437,7 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
             touched_by(corners_of(f)[k], index.face_owner[f]);
     keys.clear();
     for (std::size_t v = 0; v < index.vertex_cluster.size(); ++v)
-        if (const Node* c = node_of(index.vertex_cluster[v]); c && index.vertex_node[v] == kMixed)
+        if (const Node* c = node_of(h, index.vertex_cluster[v]); c && index.vertex_node[v] == kMixed)
             keys.push_back(std::uint64_t{c->begin} << 32 | v);
     std::sort(keys.begin(), keys.end());
     index.vertices_by_cluster.reserve(keys.size());
@@ -446,6 +452,13 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
             index.at_or_above_cut[parent] = 1;
     }
     return index;
+}
+
+// Whether face f of the level is owned by a cut node inside `region`: the tile's own face.
+bool owned_inside(const Hierarchy& h, const LevelIndex& index, const Node& region, std::uint32_t f)
+{
+    const Node* owner = node_of(h, index.face_owner[f]);
+    return owner && inside(region, *owner);
 }
 
 // The faces of the level owned by cut nodes inside `region`, in face order: an owner inside the region
@@ -497,15 +510,10 @@ Overlap region_overlap(const Hierarchy& h, const LevelIndex& index, const Node& 
             touching.push_back(*it);
     std::sort(touching.begin(), touching.end());
     touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
-    const auto owned_inside = [&](std::uint32_t f) {
-        const std::int32_t owner = index.face_owner[f];
-        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
-               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
-    };
     Overlap overlap;
     for (const std::uint32_t v : touching)
         for (std::uint32_t k = index.vertex_faces_begin[v]; k < index.vertex_faces_begin[v + 1]; ++k)
-            if (!owned_inside(index.vertex_faces[k]))
+            if (!owned_inside(h, index, region, index.vertex_faces[k]))
                 overlap.faces.push_back(index.vertex_faces[k]);
     std::sort(overlap.faces.begin(), overlap.faces.end());
     overlap.faces.erase(std::unique(overlap.faces.begin(), overlap.faces.end()), overlap.faces.end());
@@ -535,12 +543,6 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     const Mesh& src = level.mesh;
     std::vector<int> map(src.n_vertices(), -1);
     std::vector<std::uint32_t> faces = owned_faces(h, index, region);
-    // A face is the tile's own when its owner is a cut node inside the region (what chose `faces`).
-    auto owned = [&](Mesh::FaceHandle f) {
-        const std::int32_t owner = index.face_owner[static_cast<std::size_t>(f.idx())];
-        return owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size() &&
-               inside(region, h.nodes[static_cast<std::size_t>(owner)]);
-    };
     // The tile's vertices: the level vertex each copies, and how far it is lowered (a skirt's foot; 0
     // for the others).
     std::vector<int> source;
@@ -591,7 +593,8 @@ void extract_region(const Hierarchy& h, const LodLevel& level, const LevelIndex&
     faces.insert(faces.end(), overlap.begin(), overlap.end());
     *skirt_faces = 0;
     auto selected = [&](Mesh::FaceHandle f) {
-        return owned(f) || std::binary_search(overlap.begin(), overlap.end(), static_cast<std::uint32_t>(f.idx()));
+        const auto fi = static_cast<std::uint32_t>(f.idx());
+        return owned_inside(h, index, region, fi) || std::binary_search(overlap.begin(), overlap.end(), fi);
     };
     if (skirts) {
         // Border edges of the region that are interior edges of the level mesh get a skirt quad.
@@ -989,12 +992,11 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
         std::ptrdiff_t parent;
         std::vector<std::uint32_t> overlap; // as the search found it (extract_region takes it), or empty
     };
+    // queue[k] becomes set.tiles[k] (each entry makes a tile, in order).
     std::vector<Pending> queue;
     queue.push_back({0, 0, -1, {}});
-    std::vector<std::vector<std::uint32_t>> known_overlap; // of each tile
     for (std::size_t q = 0; q < queue.size(); ++q) {
-        const Pending p{queue[q].region, queue[q].level, queue[q].parent, {}};
-        known_overlap.push_back(std::move(queue[q].overlap));
+        const Pending p{queue[q].region, queue[q].level, queue[q].parent, {}}; // the overlap stays for extraction
         const Node& region = h.nodes[static_cast<std::size_t>(p.region)];
         LodTile tile;
         tile.region = p.region;
@@ -1076,12 +1078,12 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
             chain[l] = t;
         const double least = skirt_depth[tile.level];
         const auto depth = [&](std::int32_t across) {
-            if (across < 0 || static_cast<std::size_t>(across) >= h.nodes.size())
+            const Node* node = node_of(h, across);
+            if (!node)
                 return least;
-            const Node& node = h.nodes[static_cast<std::size_t>(across)];
             std::size_t first = tile.level;
             for (std::size_t l = 1; l < tile.level && first == tile.level; ++l)
-                if (!inside(h.nodes[static_cast<std::size_t>(set.tiles[chain[l]].region)], node))
+                if (!inside(h.nodes[static_cast<std::size_t>(set.tiles[chain[l]].region)], *node))
                     first = l;
             double off = 0.0;
             for (std::size_t l = first; l < tile.level; ++l) {
@@ -1095,7 +1097,7 @@ LodSet make_lod_tiles(const Hierarchy& h, std::vector<LodLevel> levels, const Lo
             return std::max(least, 2.0 * off);
         };
         extract_region(h, level, index[tile.level], region, depth, o.skirts, tile.mesh, &tile.skirt_faces,
-                       &tile.overlap_faces, std::move(known_overlap[k]));
+                       &tile.overlap_faces, std::move(queue[k].overlap));
         // The content's box (not the region's points': strays the mesh leaves out made a bunny's root
         // box 17 times its size, QA round 57); empty for a tile without content.
         tile.box = mesh_box(tile.mesh);
