@@ -521,7 +521,7 @@ struct MeshArgs
             cmd->add_option("--stats-json", stats_json, "write the mesh statistics as JSON to this file")->check(kNonEmpty);
         cmd->add_flag("--no-quality", no_quality,
                       one_mesh ? "skip the point-to-mesh distance measurement"
-                               : "refused here: lods measures every level (a finer level measured worse ends the set)");
+                               : "refused here: lods measures every level (a finer level measured worse than the one kept before it is left out)");
         cmd->add_option("--refine-fans", refine_fans,
                         "insert fan points deviating more than F x their tile's RMS plane distance (0 = off; try 1-2)")
             ->check(kNonNegative);
@@ -1627,7 +1627,7 @@ struct ProduceArgs
         if (exp.lod_set() && !mesh.stats_json.empty()) // lods has no --stats-json: its lods.json has the levels'
             throw UsageError("--stats-json: describes one mesh; not a LOD set");
         if (lods_command && mesh.no_quality)
-            throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is higher ends the set)");
+            throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is not below the one kept before it is left out)");
         if (exp.lod_set() && mesh.no_quality)
             throw UsageError("--no-quality: a LOD set's levels are not measured; it skips the measurement of one mesh");
         // Accepted and ignored until QA round 48: the levels of a LOD set are mended by whole cuts.
