@@ -374,7 +374,7 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     for (const auto f : mesh.faces()) {
         const int owner = face_owner(mesh, tile, cluster, f);
         index.face_owner[static_cast<std::size_t>(f.idx())] = owner;
-        if (owner >= 0 && static_cast<std::size_t>(owner) < h.nodes.size())
+        if (node_of(h, owner))
             ++index.faces_below[static_cast<std::size_t>(owner)];
     }
     // Sorted as (first point, face) keys in one integer each: the order of a stable sort by first point
@@ -382,8 +382,8 @@ LevelIndex index_level(const Hierarchy& h, const LodLevel& level, const std::vec
     std::vector<std::uint64_t> keys;
     keys.reserve(index.face_owner.size());
     for (std::size_t f = 0; f < index.face_owner.size(); ++f)
-        if (index.face_owner[f] >= 0 && static_cast<std::size_t>(index.face_owner[f]) < h.nodes.size())
-            keys.push_back(std::uint64_t{h.nodes[static_cast<std::size_t>(index.face_owner[f])].begin} << 32 | f);
+        if (const Node* owner = node_of(h, index.face_owner[f]))
+            keys.push_back(std::uint64_t{owner->begin} << 32 | f);
     std::sort(keys.begin(), keys.end());
     index.faces_by_owner.reserve(keys.size());
     for (const std::uint64_t key : keys)
