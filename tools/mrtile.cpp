@@ -1627,7 +1627,7 @@ struct ProduceArgs
         if (exp.lod_set() && !mesh.stats_json.empty()) // lods has no --stats-json: its lods.json has the levels'
             throw UsageError("--stats-json: describes one mesh; not a LOD set");
         if (lods_command && mesh.no_quality)
-            throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is not below the one kept before it is left out)");
+            throw UsageError("--no-quality: lods measures every level (a finer level whose measured mean error is higher than the one kept before it is left out)");
         if (exp.lod_set() && mesh.no_quality)
             throw UsageError("--no-quality: a LOD set's levels are not measured; it skips the measurement of one mesh");
         // Accepted and ignored until QA round 48: the levels of a LOD set are mended by whole cuts.

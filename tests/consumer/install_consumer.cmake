@@ -33,3 +33,8 @@ set_tests_properties(install_consumer PROPERTIES TIMEOUT 900)
 add_test(NAME readme_api_in_sync
          COMMAND ${CMAKE_COMMAND} -DREADME=${PROJECT_SOURCE_DIR}/README.md
                  -DSOURCE=${CMAKE_CURRENT_LIST_DIR}/readme_api.cpp -P ${CMAKE_CURRENT_LIST_DIR}/readme_sync.cmake)
+# readme_example.cpp runs the README's local-refinement examples (QA round 71: they had drifted from it).
+add_test(NAME readme_example_in_sync
+         COMMAND ${CMAKE_COMMAND} -DREADME=${PROJECT_SOURCE_DIR}/README.md
+                 -DSOURCE=${CMAKE_CURRENT_LIST_DIR}/readme_example.cpp -DPARTS=focus,incremental
+                 -P ${CMAKE_CURRENT_LIST_DIR}/readme_sync.cmake)

@@ -1,5 +1,7 @@
-// The README's API example, built against the *installed* package by the install_consumer test:
-// load a model, refine it around a point, write the OpenMesh mesh.
+// The README's local-refinement examples (under "Library"), built against the *installed* package by the
+// install_consumer test: load a model, refine it around a point, write the OpenMesh mesh, then change
+// the mesh in place for other cuts. The text between each pair of README markers is the README's,
+// verbatim; the readme_example_in_sync test checks that it is.
 #include "formats/write_mesh.h"
 #include "libmrtile/cluster_tree.h"
 #include "libmrtile/cut.h"
@@ -17,38 +19,39 @@ int main(int argc, char** argv)
     if (argc <= 1)
         mrt::save_model(mrt::build_hierarchy(mrt::shapes::torus(50000)), model);
 
-    const mrt::Hierarchy h = mrt::load_model(model);
-
-    // Coarse everywhere (1% of the model size), fine (0.02%) within 0.3 units of a point of interest.
-    mrt::FocusRegion focus;
-    focus.centre = mrt::Vec3{1.35, 0.0, 0.0} - h.cloud.origin;
-    focus.radius = 0.3;
-    focus.tolerance = 0.0002;
-    const mrt::Cut cut = mrt::cut_by_regions(h, 0.01, {focus});
-
-    const mrt::MeshResult result = mrt::mesh_cut(h, cut); // OpenMesh TriMesh with f:tile, v:cluster
-    mrt::write_mesh(result.mesh, h.cloud.origin, "focus.ply");
+    // README focus begin
+const mrt::Hierarchy h = mrt::load_model(model);
+mrt::FocusRegion focus;                                  // a sphere (or Shape::Box) of interest
+focus.centre = mrt::Vec3{1.35, 0.0, 0.0} - h.cloud.origin;
+focus.radius = 0.3;
+focus.tolerance = 0.0002;                                // fine inside ...
+const mrt::Cut cut = mrt::cut_by_regions(h, 0.01, {focus}); // ... coarse (1%) elsewhere
+const mrt::MeshResult result = mrt::mesh_cut(h, cut);   // OpenMesh TriMesh with f:tile, f:gap, v:cluster
+mrt::write_mesh(result.mesh, h.cloud.origin, "focus.ply");
+    // README focus end
     std::printf("%zu tiles, %zu faces, %zu refused\n", result.tiles, static_cast<std::size_t>(result.mesh.n_faces()),
                 result.surface.refused_faces);
 
-    // The focus reached incrementally: a mesh patched in place where the cut got finer (a step of a few
-    // levels: one of 16 or more new tiles per tile is meshed afresh, LocalRefineOptions::max_step_ratio).
-    mrt::MeshResult coarse = mrt::mesh_cut(h, mrt::cut_by_tolerance(h, 0.002));
-    const mrt::LocalRefineStats patched = mrt::refine_mesh(h, coarse, mrt::refine_cut(h, coarse.cut, 0.002, {focus}));
-    std::printf("refined %zu tiles in place (%zu kept, remeshed %d), %zu faces\n", patched.refined, patched.kept,
-                static_cast<int>(patched.remeshed), static_cast<std::size_t>(coarse.mesh.n_faces()));
-    const mrt::LocalRefineStats merged = mrt::coarsen_mesh(h, coarse, mrt::coarsen_cut(h, coarse.cut, focus, 0.002));
-    std::printf("coarsened %zu groups back (%zu kept), %zu faces\n", merged.coarsened, merged.kept,
-                static_cast<std::size_t>(coarse.mesh.n_faces()));
-    // Any new cut (a camera that moved): coarsened where it is coarser, then refined where it is finer.
-    mrt::Camera camera; // fov 60 degrees, 1080 px, 16 px error
-    camera.position = mrt::Vec3{3, 0, 1} - h.cloud.origin;
-    camera.direction = mrt::Vec3{-3, 0, -1};
-    const mrt::LocalRefineStats moved = mrt::update_mesh(h, coarse, mrt::cut_for_camera(h, camera));
-    std::printf("camera: %zu refined, %zu coarsened (%zu kept, remeshed %d), %zu faces\n", moved.refined, moved.coarsened,
-                moved.kept, static_cast<int>(moved.remeshed), static_cast<std::size_t>(coarse.mesh.n_faces()));
-    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && patched.refined > 0 && patched.refused == 0 &&
-                   merged.refused == 0 && moved.refused == 0 && !moved.remeshed
+    // README incremental begin
+mrt::MeshResult r = mrt::mesh_cut(h, mrt::cut_by_tolerance(h, 0.002));     // the mesh a viewer shows
+const mrt::Cut finer = mrt::refine_cut(h, r.cut, 0.002, {focus});           // the user zooms in (a few levels)
+const mrt::LocalRefineStats s = mrt::refine_mesh(h, r, finer);              // r.mesh, r.cut updated in place
+// s.refined tiles re-triangulated, s.kept left as they were (r.cut keeps those); untouched tiles bit for bit
+// (a step of many levels at once, such as 0.01 -> 0.0002, is meshed afresh instead: s.remeshed)
+const mrt::LocalRefineStats m = mrt::coarsen_mesh(h, r, mrt::coarsen_cut(h, r.cut, focus, 0.002)); // tiles inside focus merged
+const mrt::LocalRefineStats b = mrt::update_mesh(h, r, mrt::cut_by_tolerance(h, 0.002)); // back to the base cut (coarsen_cut is no undo)
+mrt::Camera camera;                                                       // fov 60°, 1080 px, 16 px error
+camera.position = mrt::Vec3{3, 0, 1} - h.cloud.origin;                   // model coordinates, like regions
+camera.direction = mrt::Vec3{-3, 0, -1};                                  // looking at the torus's centre
+const mrt::LocalRefineStats c = mrt::update_mesh(h, r, mrt::cut_for_camera(h, camera)); // any new cut: coarsen, then refine
+    // README incremental end
+    std::printf("refined %zu tiles in place (%zu kept, remeshed %d); coarsened %zu groups (%zu kept); back to the base "
+                "cut: %zu coarsened; camera: %zu refined, %zu coarsened (%zu kept, remeshed %d), %zu faces\n",
+                s.refined, s.kept, static_cast<int>(s.remeshed), m.coarsened, m.kept, b.coarsened, c.refined, c.coarsened,
+                c.kept, static_cast<int>(c.remeshed), static_cast<std::size_t>(r.mesh.n_faces()));
+    const bool refused = s.refused != 0 || m.refused != 0 || b.refused != 0 || c.refused != 0;
+    return result.surface.refused_faces == 0 && result.mesh.n_faces() > 0 && s.refined > 0 && !s.remeshed && m.coarsened > 0 &&
+                   !refused && !c.remeshed
                ? 0
                : 1;
 }

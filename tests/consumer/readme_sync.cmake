@@ -1,6 +1,6 @@
-# Script mode (cmake -P), run by the readme_api_in_sync test: the README's main API example must be
-# the text that readme_api.cpp builds and runs against the installed package (its includes and its body,
-# each between the file's README markers, found verbatim in README.md).
+# Script mode (cmake -P), run by the readme_*_in_sync tests: a README example must be the text that a
+# consumer source builds and runs against the installed package: each PART (default: includes and body)
+# between the source's "// README PART begin" / "end" markers, found verbatim in README.md.
 foreach(var README SOURCE)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "readme_sync.cmake: -D${var}=... is required")
@@ -8,7 +8,12 @@ foreach(var README SOURCE)
 endforeach()
 file(READ "${README}" readme)
 file(READ "${SOURCE}" source)
-foreach(part includes body)
+if(NOT DEFINED PARTS)
+  set(PARTS includes body)
+endif()
+string(REPLACE "," ";" PARTS "${PARTS}")
+get_filename_component(name "${SOURCE}" NAME)
+foreach(part ${PARTS})
   string(FIND "${source}" "// README ${part} begin\n" begin)
   string(FIND "${source}" "// README ${part} end" end)
   if(begin EQUAL -1 OR end EQUAL -1)
@@ -21,8 +26,8 @@ foreach(part includes body)
   string(REGEX REPLACE "\n[ ]+$" "\n" text "${text}") # the end marker's indentation
   string(FIND "${readme}" "${text}" found)
   if(found EQUAL -1)
-    message(FATAL_ERROR "README.md no longer holds the API example's ${part} that ${SOURCE} runs: "
+    message(FATAL_ERROR "README.md no longer holds the example's ${part} that ${SOURCE} runs: "
                         "change both together")
   endif()
 endforeach()
-message(STATUS "readme_api_in_sync: README.md holds readme_api.cpp's example")
+message(STATUS "README.md holds ${name}'s example (${PARTS})")
