@@ -982,6 +982,7 @@ void finish_mesh(const Hierarchy& h, const MeshOptions& options, MeshResult& res
     }
     const FitOptions fit = along_height_field(options.fit, result.surface);
     const SliverOptions slivers = along_height_field(options.slivers, result.surface);
+    const FoldOptions folds = along_height_field(options.folds, result.surface);
     const UntangleOptions untangle_options = along_height_field(options.untangle, result.surface);
     // Before the fit, which then places the vertices for the cleaned connectivity (and its flips make
     // no new caps: FitOptions::max_flip_angle_degrees).
@@ -990,6 +991,9 @@ void finish_mesh(const Hierarchy& h, const MeshOptions& options, MeshResult& res
         const std::vector<Vec3> kept = fit_points(h, result.cut, away);
         result.fit = fit_vertices(result.mesh, kept.empty() ? h.cloud.positions : kept, fit);
     }
+    // After the fit, whose moves make most of the folds at sharp edges; the crossing pairs it found stay
+    // as they are for the untangling (the flips leave their faces alone and add none).
+    result.folds = remove_folds(result.mesh, folds, result.fit.pairs_known ? &result.fit.intersecting_pairs : nullptr, &h);
     // Last of the geometry: the fit's flips can also cross a thin part (it reverts only its moves).
     if (untangle_options.max_rounds > 0)
         result.untangle = result.fit.pairs_known ? untangle(result.mesh, untangle_options, std::move(result.fit.intersecting_pairs))
@@ -1089,6 +1093,7 @@ void check_mesh_options(const MeshOptions& options)
     check_tile_options(options.tiles);
     check_fit_options(options.fit);
     check_sliver_options(options.slivers);
+    check_fold_options(options.folds);
 }
 
 MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& options)

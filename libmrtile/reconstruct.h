@@ -17,6 +17,7 @@
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/refine_fans.h"
+#include "libmrtile/remove_folds.h"
 #include "libmrtile/remove_slivers.h"
 #include "libmrtile/surface.h"
 #include "libmrtile/tiles.h"
@@ -40,6 +41,9 @@ struct MeshOptions
     FitOptions fit;
     //! caps flipped away before the fit (remove_slivers.h); vertical in height-field mode
     SliverOptions slivers;
+    //! folded edges (spikes and flaps at sharp edges) flipped away after the fit, never adding a
+    //! crossing (remove_folds.h); vertical in height-field mode; fold_angle_degrees 180 = off
+    FoldOptions folds;
     //! self-intersections removed by local flips and moves, after the fit (untangle.h); max_rounds 0 = off
     UntangleOptions untangle;
     //! the points' colours onto the vertices, last, when the cloud has colours (color_vertices.h)
@@ -135,6 +139,7 @@ struct MeshResult
     std::size_t meshed_tiles = 0;
     FitStats fit;                   //!< the vertex fit (fit_vertices)
     SliverStats slivers;            //!< caps and needles removed (remove_slivers)
+    FoldStats folds;                //!< folded edges flipped away after the fit (remove_folds)
     UntangleStats untangle;         //!< self-intersections removed (untangle)
     double seconds = 0.0; //!< tiles + surface + slivers + fit (with its relaxation) + colours
 };
