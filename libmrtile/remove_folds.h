@@ -1,17 +1,17 @@
 #pragma once
 //! \file remove_folds.h
 //! \brief Beyond the paper: folds (two faces turned back onto each other across their edge) removed by
-//! edge flips, after the vertex fit, so that a sharp edge of the sample shows as an edge and not as a
-//! row of spikes.
+//! edge flips and small moves of spike tips, after the vertex fit, so that a sharp edge of the sample
+//! shows as an edge and not as a row of spikes.
 //! \details Where two tiles meet at a sharp edge of the surface (a box's or a CAD part's crease), the
 //! gap triangles between their rims, and the fit's moves of those rims, can leave a face that turns
 //! back over its neighbour: the two faces' normals more than `fold_angle_degrees` apart, a flap or a
 //! spike that stands out of the edge in any viewer (QA round 72, the shared fandisk part and the demo's
-//! plate). Almost always the other diagonal of their quad is the right one: this pass flips an edge
+//! plate). Often the other diagonal of their quad is the right one: this pass flips an edge
 //! where the flip lowers the largest fold among the quad's five edges and leaves none above the
 //! limit; where no flip helps, a spike's tip (a vertex whose faces' angles sum to under 1.25 pi) moves
-//! the least of 1/8 to all of the way to the middle of its neighbours that clears its folds, never
-//! farther from the sample. A flip keeps the mesh an oriented 2-manifold with the same vertices,
+//! the least of 1/8 to all of the way to the middle of its neighbours that clears its folds, at most
+//! as far as it stands from the sample and never farther from it. A flip keeps the mesh an oriented 2-manifold with the same vertices,
 //! boundary loops and genus (OpenMesh's is_flip_ok), no change makes a face without area or a cap that
 //! was not there, border vertices stay, faces of `keep_pairs` (crossing faces the untangling repairs
 //! next) are left alone, and a change whose faces cross another face is undone: the pass adds no
