@@ -37,19 +37,10 @@ double fold_between(const std::array<Vec3, 3>& f, const std::array<Vec3, 3>& g)
     return std::atan2(norm(cross(n, m)), dot(n, m));
 }
 
-std::array<Vec3, 3> corners(const Mesh& mesh, Mesh::FaceHandle f)
-{
-    std::array<Vec3, 3> p;
-    int k = 0;
-    for (const auto v : mesh.fv_range(f))
-        p[static_cast<std::size_t>(k++)] = point(mesh, v);
-    return p;
-}
-
 // The fold across half-edge h's edge (interior), as the mesh stands.
 double fold_at(const Mesh& mesh, Mesh::HalfedgeHandle h)
 {
-    return fold_between(corners(mesh, mesh.face_handle(h)), corners(mesh, mesh.opposite_face_handle(h)));
+    return fold_between(face_corners(mesh, mesh.face_handle(h)), face_corners(mesh, mesh.opposite_face_handle(h)));
 }
 
 // The fold across half-edge `out`'s edge if the face inside it, left of `out`, were `inside`: kept
@@ -57,7 +48,7 @@ double fold_at(const Mesh& mesh, Mesh::HalfedgeHandle h)
 double fold_with(const Mesh& mesh, Mesh::HalfedgeHandle out, const std::array<Vec3, 3>& inside)
 {
     const Mesh::FaceHandle other = mesh.opposite_face_handle(out);
-    return other.is_valid() ? fold_between(inside, corners(mesh, other)) : -1.0;
+    return other.is_valid() ? fold_between(inside, face_corners(mesh, other)) : -1.0;
 }
 
 class FoldRemover
@@ -147,7 +138,7 @@ private:
     {
         std::vector<bool> touched(mesh_.n_faces(), false);
         std::vector<Flip> flips;
-        std::vector<int> changed;
+        std::vector<std::vector<int>> faces_of; // of each flip
         for (const auto e : mesh_.edges()) {
             if (mesh_.is_boundary(e) || !mesh_.is_flip_ok(e))
                 continue;
@@ -165,17 +156,13 @@ private:
                 mesh_.property(gap_, f0) = mesh_.property(gap_, f1) = true;
             }
             touched[i0] = touched[i1] = true;
-            changed.push_back(f0.idx());
-            changed.push_back(f1.idx());
+            faces_of.push_back({f0.idx(), f1.idx()});
             flips.push_back(flip);
         }
         if (flips.empty())
             return 0;
         // A flip across a thin part can put a new face through the other side: undo it (its faces go
         // back to what they were).
-        std::vector<std::vector<int>> faces_of(flips.size());
-        for (std::size_t k = 0; k < flips.size(); ++k)
-            faces_of[k] = {changed[2 * k], changed[2 * k + 1]};
         const std::vector<bool> undo = crossing_changes(faces_of, std::vector<bool>(flips.size(), false), [&](std::size_t k) {
             const Flip& flip = flips[k];
             mesh_.flip(flip.edge); // the quad's other diagonal again: a -> b
@@ -210,7 +197,7 @@ private:
     bool star_shape_ok(Mesh::VertexHandle v, double old_angle) const
     {
         for (const auto f : mesh_.vf_range(v)) {
-            const std::array<Vec3, 3> p = corners(mesh_, f);
+            const std::array<Vec3, 3> p = face_corners(mesh_, f);
             if (!has_area(p[0], p[1], p[2]))
                 return false;
             const double angle = largest_angle(p[0], p[1], p[2]);
@@ -288,9 +275,9 @@ private:
                                  mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1))})
                 candidate[static_cast<std::size_t>(v.idx())] = true;
         }
-        // How far each candidate may move: as far as it stands from the sample (a vertex on a point of
-        // a real corner stays; a spike's tip, off the points, may come back that far).
-        std::vector<double> reach(mesh_.n_vertices(), std::numeric_limits<double>::infinity());
+        // How far each candidate stands from the sample (squared): as far as it may move (a vertex on a
+        // point of a real corner stays; a spike's tip, off the points, may come back that far).
+        std::vector<double> reach_sq(mesh_.n_vertices(), std::numeric_limits<double>::infinity());
         if (sample_) {
             std::vector<Vec3> queries;
             std::vector<std::size_t> which;
@@ -301,11 +288,10 @@ private:
                 }
             const std::vector<double> d = squared_nearest_point_distances(*sample_, sample_->cloud.positions, queries, 1);
             for (std::size_t k = 0; k < which.size(); ++k)
-                reach[which[k]] = std::sqrt(d[k]);
+                reach_sq[which[k]] = d[k];
         }
         std::vector<bool> touched(mesh_.n_faces(), false);
         std::vector<std::pair<Mesh::VertexHandle, Mesh::Point>> moves; // vertex, where it was
-        std::vector<int> changed;
         for (std::size_t i = 0; i < candidate.size(); ++i) {
             if (!candidate[i])
                 continue;
@@ -318,7 +304,7 @@ private:
                 const auto k = static_cast<std::size_t>(f.idx());
                 free = free && !touched[k];
                 protect = protect || kept_[k];
-                const std::array<Vec3, 3> p = corners(mesh_, f);
+                const std::array<Vec3, 3> p = face_corners(mesh_, f);
                 old_angle = std::max(old_angle, largest_angle(p[0], p[1], p[2]));
             }
             if (!free || protect)
@@ -337,7 +323,7 @@ private:
             // The shortest move that does it: a tip that stands for a real edge keeps most of its place.
             bool moved = false;
             for (const double t : {0.125, 0.25, 0.5, 1.0}) {
-                if (t * (middle - was).norm() > reach[i])
+                if (t * (middle - was).norm() > std::sqrt(reach_sq[i]))
                     break;
                 mesh_.set_point(v, was + t * (middle - was));
                 const double after = star_fold(v);
@@ -350,10 +336,8 @@ private:
                 mesh_.set_point(v, was);
                 continue;
             }
-            for (const auto f : mesh_.vf_range(v)) {
+            for (const auto f : mesh_.vf_range(v))
                 touched[static_cast<std::size_t>(f.idx())] = true;
-                changed.push_back(f.idx());
-            }
             moves.emplace_back(v, was);
         }
         if (moves.empty())
@@ -364,13 +348,11 @@ private:
         std::vector<bool> farther(moves.size(), false);
         if (sample_) {
             std::vector<Vec3> queries;
-            for (const auto& [v, was] : moves) {
-                queries.push_back(to_vec3(was));
+            for (const auto& [v, was] : moves)
                 queries.push_back(point(mesh_, v));
-            }
             const std::vector<double> d = squared_nearest_point_distances(*sample_, sample_->cloud.positions, queries, 1);
             for (std::size_t k = 0; k < moves.size(); ++k)
-                farther[k] = d[2 * k + 1] > d[2 * k];
+                farther[k] = d[k] > reach_sq[static_cast<std::size_t>(moves[k].first.idx())];
         }
         std::vector<std::vector<int>> faces_of(moves.size());
         for (std::size_t k = 0; k < moves.size(); ++k)
