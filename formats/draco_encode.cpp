@@ -210,6 +210,9 @@ DracoEncoded encode_draco(const MeshBuffers& buffers, const DracoOptions& option
 
     draco::Encoder encoder;
     encoder.SetSpeedOptions(options.encoding_speed, options.decoding_speed);
+    // Chosen here, not left to Draco, so that draco_keeps_face_order is true of what we write.
+    encoder.SetEncodingMethod(draco_keeps_face_order(options) ? draco::MESH_SEQUENTIAL_ENCODING
+                                                              : draco::MESH_EDGEBREAKER_ENCODING);
     encoder.SetTrackEncodedProperties(true); // the points and faces a decoder will get (see below)
     if (options.grid) {
         // The buffers are relative to the grid's min corner, so the grid starts at local 0. Draco
@@ -277,6 +280,11 @@ DracoDecoded decode_draco(const std::string& bytes, const std::string& what)
     return out;
 }
 
+bool draco_keeps_face_order(const DracoOptions& options)
+{
+    return std::max(options.encoding_speed, options.decoding_speed) == 10;
+}
+
 void write_drc(const Mesh& mesh, const Vec3& origin, const std::filesystem::path& path, const DracoOptions& options)
 {
     validate(options);
@@ -285,6 +293,7 @@ void write_drc(const Mesh& mesh, const Vec3& origin, const std::filesystem::path
     MeshBufferOptions buffer_options;
     buffer_options.up_axis = UpAxis::Y; // .drc has no axis convention: keep the mesh's axes
     buffer_options.offset = draco_grid_offset(options, UpAxis::Y);
+    buffer_options.gpu_order = draco_keeps_face_order(options);
     const MeshBuffers buffers = make_mesh_buffers(mesh, buffer_options);
     const DracoEncoded encoded = encode_draco(buffers, options, origin + buffers.offset);
     write_file_atomically(path, encoded.bytes);

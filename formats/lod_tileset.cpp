@@ -20,6 +20,7 @@ std::vector<TilesetTile> tileset_tiles(const LodSet& set)
         out[k].box = t.box;
         out[k].geometric_error = t.geometric_error;
         out[k].children = t.children;
+        out[k].skirt_faces = t.skirt_faces; // extract_region adds them last (lod_set.cpp)
     }
     return out;
 }

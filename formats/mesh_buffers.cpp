@@ -69,7 +69,9 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
     std::vector<Mesh::VertexHandle> used;
     MeshBuffers out;
     out.indices.reserve(mesh.n_faces() * 3);
-    for (const auto f : mesh.faces()) {
+    const std::size_t end_face = std::min(options.end_face, mesh.n_faces());
+    for (std::size_t i = options.first_face; i < end_face; ++i) {
+        const Mesh::FaceHandle f(static_cast<int>(i));
         if (face_deleted(f))
             continue;
         int corners = 0;

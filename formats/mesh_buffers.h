@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -41,11 +42,17 @@ struct MeshBufferOptions
     //! (meshoptimizer's optimizeVertexCache and optimizeVertexFetch, what gltfpack does): renderers draw
     //! the same triangles with fewer vertex shader runs (bunny at tolerance 0.002: 2.4 -> 0.65 per
     //! triangle with a 16-entry cache; the surface stage emits faces in no useful order). Only the
-    //! order changes; false keeps the mesh's face order.
+    //! order changes; false keeps the mesh's face order. The Draco writers set it only where Draco keeps
+    //! the order (draco_keeps_face_order, draco_encode.h).
     bool gpu_order = true;
     //! Subtracted (in the output frame) from every position. Default: the bounding-box centre of the
     //! used vertices in the output frame, rounded to whole units.
     std::optional<Vec3> offset;
+    //! Only the faces whose index lies in [first_face, end_face) (deleted ones are skipped as always),
+    //! and the vertices they use: a tile's skirts are written apart from its surface (GltfOptions::
+    //! skirt_faces). Default: every face.
+    std::size_t first_face = 0;
+    std::size_t end_face = std::numeric_limits<std::size_t>::max();
 };
 
 struct MeshBuffers

@@ -193,7 +193,9 @@ void write_3d_tiles(const std::vector<TilesetTile>& tiles, const Vec3& origin, c
         try {
             // Origin 0: the positions stay relative to the tileset origin, which the root
             // transform carries; the shared offset keeps float precision.
-            write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), gltf);
+            GltfOptions content = gltf;
+            content.skirt_faces = tiles[t].skirt_faces;
+            write_gltf(*tiles[t].mesh, Vec3{}, built / content_uri(t), content);
         } catch (const InvalidInput& e) {
             failures[t] = std::make_exception_ptr(
                 InvalidInput("write_3d_tiles: tile " + std::to_string(t) + ": " + e.what()));

@@ -26,12 +26,14 @@ struct TilesetTile
     BoundingBox box;                    //!< model units, relative to origin (as the mesh positions), input axes
     double geometric_error = 0.0;       //!< model units, >= 0, never larger than the parent's
     std::vector<std::size_t> children;  //!< indices into the tiles vector
+    std::size_t skirt_faces = 0;        //!< the content's last faces that are skirts (GltfOptions::skirt_faces)
 };
 
 struct TilesetOptions
 {
     //! Content options. up_axis also tells the frame of the boxes; Draco's grid, if any, is shared by
-    //! every tile (so border vertices of neighbouring tiles decode identically).
+    //! every tile (so border vertices of neighbouring tiles decode identically). Its skirt_faces is
+    //! each tile's own (TilesetTile::skirt_faces).
     GltfOptions gltf;
     //! Column-major 4x4 root transform mapping positions relative to origin (tileset z-up frame) to
     //! the tileset's coordinates, e.g. enu_to_ecef_transform(). Default: translation by origin.

@@ -59,15 +59,28 @@ public:
         buffer_options.normals = options_.normals;
         buffer_options.colors = options_.colors;
         buffer_options.offset = options_.offset;
+        // Draco's edgebreaker writes faces and vertices in its own order: a vertex-cache order made here
+        // would be lost (draco_encode.h).
+        buffer_options.gpu_order = !options_.draco || draco_keeps_face_order(options_.draco_options);
         if (options_.draco && options_.draco_options.grid)
             buffer_options.offset = draco_grid_offset(options_.draco_options, options_.up_axis);
+        const std::size_t skirt_faces = options_.skirt_faces;
+        if (skirt_faces > 0 && skirt_faces >= mesh.n_faces())
+            throw InvalidInput("glTF: skirt_faces " + std::to_string(skirt_faces) + " is not below the mesh's " +
+                               std::to_string(mesh.n_faces()) + " faces");
+        buffer_options.end_face = mesh.n_faces() - skirt_faces;
         const MeshBuffers buffers = make_mesh_buffers(mesh, buffer_options);
-
-        Json primitive = options_.draco ? draco_primitive(buffers) : plain_primitive(buffers);
-        primitive["material"] = material_index();
-        primitive["mode"] = kTriangles;
+        Json primitives = Json::array({primitive(buffers, material_index(options_.double_sided))});
+        if (skirt_faces > 0) {
+            // The skirts' own vertices (their top edges copy surface vertices) in the surface's frame:
+            // one node translation serves both primitives.
+            buffer_options.first_face = buffer_options.end_face;
+            buffer_options.end_face = mesh.n_faces();
+            buffer_options.offset = buffers.offset;
+            primitives.push_back(primitive(make_mesh_buffers(mesh, buffer_options), material_index(false)));
+        }
         const std::size_t mesh_index = meshes_.size();
-        meshes_.push_back(Json{{"name", name}, {"primitives", Json::array({primitive})}});
+        meshes_.push_back(Json{{"name", name}, {"primitives", std::move(primitives)}});
 
         Json node{{"name", name}, {"mesh", mesh_index}};
         const Vec3 translation = to_output_frame(origin, options_.up_axis) + buffers.offset;
@@ -242,15 +255,26 @@ private:
         return primitive;
     }
 
-    std::size_t material_index()
+    // The material of that sidedness, added at first use (so a file without skirts has one).
+    std::size_t material_index(bool double_sided)
     {
-        if (materials_.empty()) {
-            // metallicFactor defaults to 1, which renders black without an environment map.
-            materials_.push_back(Json{{"name", "libmrtile"},
-                                      {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}},
-                                      {"doubleSided", options_.double_sided}});
-        }
-        return 0;
+        const char* name = double_sided == options_.double_sided ? "libmrtile" : "libmrtile skirts";
+        for (std::size_t i = 0; i < materials_.size(); ++i)
+            if (materials_[i]["doubleSided"] == double_sided)
+                return i;
+        // metallicFactor defaults to 1, which renders black without an environment map.
+        materials_.push_back(Json{{"name", name},
+                                  {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}},
+                                  {"doubleSided", double_sided}});
+        return materials_.size() - 1;
+    }
+
+    Json primitive(const MeshBuffers& buffers, std::size_t material)
+    {
+        Json out = options_.draco ? draco_primitive(buffers) : plain_primitive(buffers);
+        out["material"] = material;
+        out["mode"] = kTriangles;
+        return out;
     }
 
     Json document(const std::vector<std::size_t>& scene_nodes, const std::optional<std::string>& uri) const
@@ -322,6 +346,8 @@ void write_glb_lods(const std::vector<const Mesh*>& levels_fine_to_coarse, const
     const auto& levels = levels_fine_to_coarse;
     if (levels.empty())
         throw InvalidInput("write_glb_lods: no levels given");
+    if (options.gltf.skirt_faces != 0)
+        throw InvalidInput("write_glb_lods: GltfOptions::skirt_faces must be 0 (it names faces of one mesh)");
     const auto& coverage = options.screen_coverage;
     if (!coverage.empty()) {
         if (coverage.size() != levels.size())

@@ -33,6 +33,13 @@ struct GltfOptions
     //! sets its own). Files that must agree bit for bit where they meet (the tiles of one tileset
     //! level) pass one offset: float(p - offset) is then the same number in each.
     std::optional<Vec3> offset;
+    //! The mesh's last `skirt_faces` faces (by index) are skirts, the strips a 3D Tiles tile hangs
+    //! from its border (lod_set.h): they go into a second primitive whose material is single-sided,
+    //! the first's otherwise. A double-sided material shows a skirt's back with its normals reversed
+    //! (glTF's rule), dark, and wherever the skirt's top edge meets the neighbour's surface the two
+    //! fight for depth: double-sided skirts drew dashed dark lines along every tile border. Must be
+    //! below the mesh's face count; 0: one primitive.
+    std::size_t skirt_faces = 0;
 };
 
 //! \brief Writes one mesh (positions relative to `origin`) as a glTF scene with one node.

@@ -109,7 +109,7 @@ struct LodTile
     BoundingBox box;              //!< contains the content and every descendant's box
     double geometric_error = 0.0;
     std::vector<std::size_t> children;
-    std::size_t skirt_faces = 0;  //!< of the content's faces, those of its skirts
+    std::size_t skirt_faces = 0;  //!< of the content's faces, those of its skirts: the last ones
     std::size_t overlap_faces = 0; //!< of the content's faces, those owned by neighbours (see the file comment)
 };
 

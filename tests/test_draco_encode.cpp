@@ -263,6 +263,40 @@ TEST(DracoEncode, a_tiny_model_keeps_its_grid)
     EXPECT_THROW(encode_draco(make_mesh_buffers(speck, buffer_options), options), InvalidInput);
 }
 
+// The writers reorder triangles for the GPU's vertex cache only where Draco keeps that order. The
+// edgebreaker (default speeds) writes the same bytes whatever the face order it is given, so the
+// reordering would be wasted there; the sequential coding (a speed of 10) stores faces as given, so a
+// .drc written with it has its triangles in GPU order.
+TEST_F(DracoFiles, face_order_is_kept_only_by_the_sequential_coding)
+{
+    const Mesh mesh = uv_sphere(16, 32, 1.0, {0.2, 0.1, -0.3}, false);
+    MeshBufferOptions gpu, plain;
+    gpu.up_axis = plain.up_axis = UpAxis::Y;
+    plain.gpu_order = false;
+    const MeshBuffers in_gpu_order = make_mesh_buffers(mesh, gpu);
+    const MeshBuffers in_face_order = make_mesh_buffers(mesh, plain);
+    ASSERT_NE(in_gpu_order.indices, in_face_order.indices);
+
+    const DracoOptions edgebreaker;
+    EXPECT_FALSE(draco_keeps_face_order(edgebreaker));
+    EXPECT_EQ(encode_draco(in_gpu_order, edgebreaker).bytes, encode_draco(in_face_order, edgebreaker).bytes);
+
+    for (const auto& [encoding, decoding] : {std::pair{10, 3}, std::pair{3, 10}, std::pair{10, 10}}) {
+        DracoOptions sequential;
+        sequential.encoding_speed = encoding;
+        sequential.decoding_speed = decoding;
+        EXPECT_TRUE(draco_keeps_face_order(sequential));
+        EXPECT_EQ(decode_draco(encode_draco(in_face_order, sequential).bytes, "face order").indices,
+                  in_face_order.indices);
+        write_drc(mesh, {}, scratch("sequential.drc"), sequential);
+        EXPECT_EQ(decode_draco(read_bytes(scratch("sequential.drc")), "sequential.drc").indices, in_gpu_order.indices)
+            << encoding << "/" << decoding;
+    }
+    DracoOptions nine = edgebreaker;
+    nine.encoding_speed = nine.decoding_speed = 9;
+    EXPECT_FALSE(draco_keeps_face_order(nine));
+}
+
 TEST_F(DracoFiles, output_is_byte_deterministic)
 {
     const Mesh mesh = uv_sphere(10, 20, 1.0, {}, true);

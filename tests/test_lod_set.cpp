@@ -740,6 +740,25 @@ TEST(LodSet, tiles_with_their_skirts_fit_the_triangle_budget)
         for (std::size_t t = 1; t < set.tiles.size(); ++t) {
             const LodTile& tile = set.tiles[t];
             skirted += tile.skirt_faces > 0;
+            // The skirts are the content's last faces (the glTF writer puts them in a primitive of
+            // their own): each has a corner hung below the surface faces' vertices, and two or one on it.
+            ASSERT_LT(tile.skirt_faces, std::max<std::size_t>(tile.mesh.n_faces(), 1)) << "tile " << t;
+            const std::size_t surface_faces = tile.mesh.n_faces() - tile.skirt_faces;
+            std::set<std::array<double, 3>> on_surface;
+            for (std::size_t f = 0; f < surface_faces; ++f)
+                for (const auto v : tile.mesh.fv_range(Mesh::FaceHandle(static_cast<int>(f)))) {
+                    const auto p = tile.mesh.point(v);
+                    on_surface.insert({p[0], p[1], p[2]});
+                }
+            for (std::size_t f = surface_faces; f < tile.mesh.n_faces(); ++f) {
+                int on = 0;
+                for (const auto v : tile.mesh.fv_range(Mesh::FaceHandle(static_cast<int>(f)))) {
+                    const auto p = tile.mesh.point(v);
+                    on += on_surface.count({p[0], p[1], p[2]}) > 0;
+                }
+                EXPECT_TRUE(on == 1 || on == 2) << "tile " << t << ": face " << f << " of the skirts has " << on
+                                                << " corners on the surface";
+            }
             if (tile.mesh.n_faces() <= budget)
                 continue;
             const Node& region = h.nodes[static_cast<std::size_t>(tile.region)];

@@ -279,6 +279,34 @@ std::vector<std::string> listing(const fs::path& dir)
 
 // A failed write leaves the previous tileset untouched and nothing beside it; a successful one
 // replaces it whole; a directory that is not a tileset is never replaced.
+// Each tile's skirt_faces reach its content: the tile's last faces become a second, single-sided
+// primitive (GltfOptions::skirt_faces); a tile without skirts keeps one primitive.
+TEST_F(WriteTilesets, each_tiles_skirts_are_its_own)
+{
+    Pyramid pyramid;
+    pyramid.tiles[2].skirt_faces = 12;
+    pyramid.tiles[6].skirt_faces = 30;
+    fs::create_directories(scratch_dir());
+    const fs::path dir = scratch_dir() / "skirts";
+    write_3d_tiles(pyramid.tiles, kOrigin, dir);
+    for (std::size_t t = 0; t < pyramid.tiles.size(); ++t) {
+        const std::string bytes = read_bytes(dir / "tiles" / (std::to_string(t) + ".glb"));
+        std::uint32_t length = 0;
+        std::memcpy(&length, bytes.data() + 12, 4);
+        const json doc = json::parse(bytes.substr(20, length));
+        const json& primitives = doc["meshes"][0]["primitives"];
+        const std::size_t skirts = pyramid.tiles[t].skirt_faces;
+        ASSERT_EQ(primitives.size(), skirts > 0 ? 2u : 1u) << t;
+        const std::size_t faces = pyramid.tiles[t].mesh->n_faces();
+        EXPECT_EQ(doc["accessors"][primitives[0]["indices"].get<std::size_t>()]["count"], 3 * (faces - skirts)) << t;
+        if (skirts > 0) {
+            EXPECT_EQ(doc["accessors"][primitives[1]["indices"].get<std::size_t>()]["count"], 3 * skirts) << t;
+            EXPECT_FALSE(doc["materials"][primitives[1]["material"].get<std::size_t>()]["doubleSided"].get<bool>()) << t;
+        }
+        EXPECT_TRUE(doc["materials"][primitives[0]["material"].get<std::size_t>()]["doubleSided"].get<bool>()) << t;
+    }
+}
+
 TEST_F(WriteTilesets, replace_only_on_success)
 {
     const fs::path base = scratch_dir() / "replace";

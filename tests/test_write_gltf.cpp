@@ -86,6 +86,10 @@ protected:
         write("colors_draco.glb", "colors", {}, draco);
         write("far_draco.gltf", "far", kFarOrigin, draco);
         write("big_draco.glb", "big", {}, draco);
+        GltfOptions skirted = plain, skirted_draco = draco;
+        skirted.skirt_faces = skirted_draco.skirt_faces = kSkirtFaces;
+        write("skirted.glb", "far", kFarOrigin, skirted);
+        write("skirted_draco.glb", "far", kFarOrigin, skirted_draco);
         const std::vector<const Mesh*> levels{&meshes_->at("sphere"), &meshes_->at("lod1"), &meshes_->at("lod2")};
         GltfLodOptions lods;
         lods.screen_coverage = {0.5, 0.2, 0.05};
@@ -144,6 +148,7 @@ protected:
         return model;
     }
 
+    static constexpr std::size_t kSkirtFaces = 200; // "far"'s last faces, written as skirts
     static inline fs::path dir_;
     static inline std::map<std::string, Mesh>* meshes_ = nullptr;
     static inline json* validation_ = nullptr;
@@ -156,7 +161,7 @@ protected:
 // coarser LOD nodes (referenced only through MSFT_lod ids) as UNUSED_OBJECT. Plain files: no infos.
 TEST_F(GltfFiles, khronos_validator_reports_no_error_or_warning)
 {
-    ASSERT_EQ(validation().size(), 12u);
+    ASSERT_EQ(validation().size(), 14u);
     for (const json& r : validation()) {
         const std::string file = r["file"];
         const bool draco = file.find("draco") != std::string::npos, lods = file.find("lods") != std::string::npos;
@@ -255,6 +260,80 @@ TEST_F(GltfFiles, tinygltf_loads_and_reproduces_positions)
     EXPECT_EQ(color.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
     EXPECT_TRUE(color.normalized);
     EXPECT_EQ(color.type, TINYGLTF_TYPE_VEC4);
+}
+
+// A mesh's last GltfOptions::skirt_faces faces (a 3D Tiles tile's skirts) are a second primitive whose
+// material is single-sided, so that viewers cull a skirt seen from behind: double-sided, its back shows
+// with reversed normals, and it drew dark dashes where its top edge meets the neighbour's surface (QA
+// round 72). The two primitives hold the mesh's faces, in one node frame, loaded by tinygltf; Draco
+// encodes each on its own (draco3d decodes them to the same counts).
+TEST_F(GltfFiles, skirts_are_a_second_single_sided_primitive)
+{
+    const Mesh& mesh = meshes_->at("far");
+    const tinygltf::Model model = load("skirted.glb");
+    ASSERT_EQ(model.meshes.size(), 1u);
+    const auto& primitives = model.meshes[0].primitives;
+    ASSERT_EQ(primitives.size(), 2u);
+    const auto material = [&](const tinygltf::Primitive& p) { return model.materials.at(static_cast<std::size_t>(p.material)); };
+    EXPECT_TRUE(material(primitives[0]).doubleSided);
+    EXPECT_FALSE(material(primitives[1]).doubleSided);
+    const std::vector<double> t = model.nodes.at(0).translation;
+    ASSERT_EQ(t.size(), 3u);
+    std::vector<Vec3> absolute;
+    std::vector<std::size_t> corners;
+    std::vector<std::size_t> faces;
+    for (const tinygltf::Primitive& prim : primitives) {
+        const tinygltf::Accessor& pos = model.accessors.at(static_cast<std::size_t>(prim.attributes.at("POSITION")));
+        const tinygltf::Accessor& idx = model.accessors.at(static_cast<std::size_t>(prim.indices));
+        EXPECT_EQ(prim.attributes.count("NORMAL"), 1u);
+        auto data = [&](const tinygltf::Accessor& a) {
+            const tinygltf::BufferView& v = model.bufferViews.at(static_cast<std::size_t>(a.bufferView));
+            return model.buffers.at(static_cast<std::size_t>(v.buffer)).data.data() + v.byteOffset + a.byteOffset;
+        };
+        ASSERT_EQ(idx.componentType, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+        const std::size_t base = absolute.size();
+        const auto* positions = reinterpret_cast<const float*>(data(pos));
+        for (std::size_t i = 0; i < pos.count; ++i)
+            absolute.push_back(Vec3{t[0] + positions[3 * i], t[1] + positions[3 * i + 1], t[2] + positions[3 * i + 2]});
+        for (std::size_t k = 0; k < idx.count; ++k)
+            corners.push_back(base + reinterpret_cast<const std::uint16_t*>(data(idx))[k]);
+        faces.push_back(idx.count / 3);
+    }
+    EXPECT_EQ(faces, (std::vector<std::size_t>{mesh.n_faces() - kSkirtFaces, kSkirtFaces}));
+    const double worst = testing::worst_triangle_mismatch(
+        mesh, [&](const Vec3& p) { return to_output_frame(kFarOrigin + p, UpAxis::Z); }, absolute, corners);
+    EXPECT_LE(worst, 2e-6); // float(10) precision, as far.glb
+    // The skirts' own faces: the surface primitive holds none of the last ones.
+    MeshBufferOptions last;
+    last.first_face = mesh.n_faces() - kSkirtFaces;
+    EXPECT_EQ(make_mesh_buffers(mesh, last).face_count(), kSkirtFaces);
+
+    const json& r = draco_result("skirted_draco.glb");
+    EXPECT_TRUE(r["problems"].empty()) << r.dump(1);
+    ASSERT_EQ(r["primitives"].size(), 2u);
+    EXPECT_EQ(r["primitives"][0]["faces"], mesh.n_faces() - kSkirtFaces);
+    EXPECT_EQ(r["primitives"][1]["faces"], kSkirtFaces);
+    const json doc = glb_json(dir_ / "skirted_draco.glb");
+    EXPECT_FALSE(doc["materials"][doc["meshes"][0]["primitives"][1]["material"].get<std::size_t>()]["doubleSided"].get<bool>());
+
+    // Without skirts, or single-sided throughout, one material; skirts must leave a surface.
+    EXPECT_EQ(glb_json(dir_ / "far.glb")["materials"].size(), 1u);
+    GltfOptions one_sided;
+    one_sided.double_sided = false;
+    one_sided.skirt_faces = kSkirtFaces;
+    const std::string bytes = glb_bytes(mesh, kFarOrigin, one_sided);
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    const json single = json::parse(bytes.substr(20, length));
+    EXPECT_EQ(single["materials"].size(), 1u);
+    EXPECT_EQ(single["meshes"][0]["primitives"].size(), 2u);
+    GltfOptions all_skirt;
+    all_skirt.skirt_faces = mesh.n_faces();
+    EXPECT_THROW(glb_bytes(mesh, kFarOrigin, all_skirt), InvalidInput);
+    GltfLodOptions lods;
+    lods.gltf.skirt_faces = 1;
+    EXPECT_THROW(write_glb_lods({&mesh}, kFarOrigin, dir_ / "never.glb", lods), InvalidInput);
+    EXPECT_FALSE(fs::exists(dir_ / "never.glb"));
 }
 
 // glTF's COLOR_0 is linear; the mesh's colours are the points' sRGB bytes. QA round 28b: the bytes
