@@ -20,12 +20,17 @@
 namespace mrt {
 namespace {
 
-// Triangles in vertex-cache order, then vertices in order of first use by them (meshoptimizer), so a
-// GPU transforms each vertex about once and reads the vertex buffer front to back.
-void reorder_for_gpu(std::vector<std::uint32_t>& indices, std::vector<Mesh::VertexHandle>& used)
+// Triangles in vertex-cache order (those before `split_triangle` and those after apart, each among
+// themselves), then vertices in order of first use by them (meshoptimizer), so a GPU transforms each
+// vertex about once and reads the vertex buffer front to back.
+void reorder_for_gpu(std::vector<std::uint32_t>& indices, std::vector<Mesh::VertexHandle>& used, std::size_t split_triangle)
 {
     std::vector<unsigned int> cached(indices.size());
-    meshopt_optimizeVertexCache(cached.data(), indices.data(), indices.size(), used.size());
+    const std::size_t split = 3 * split_triangle;
+    if (split > 0)
+        meshopt_optimizeVertexCache(cached.data(), indices.data(), split, used.size());
+    if (split < indices.size())
+        meshopt_optimizeVertexCache(cached.data() + split, indices.data() + split, indices.size() - split, used.size());
     std::vector<unsigned int> remap(used.size());
     meshopt_optimizeVertexFetchRemap(remap.data(), cached.data(), cached.size(), used.size());
     meshopt_remapIndexBuffer(indices.data(), cached.data(), cached.size(), remap.data());
@@ -74,6 +79,8 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
         const Mesh::FaceHandle f(static_cast<int>(i));
         if (face_deleted(f))
             continue;
+        if (i < options.split_face)
+            ++out.split_triangle;
         int corners = 0;
         for (const auto v : mesh.fv_range(f)) {
             if (vertex_deleted(v))
@@ -96,7 +103,7 @@ MeshBuffers make_mesh_buffers(const Mesh& mesh, const MeshBufferOptions& options
     if (out.indices.empty())
         throw InvalidInput("mesh: no faces to write");
     if (options.gpu_order)
-        reorder_for_gpu(out.indices, used);
+        reorder_for_gpu(out.indices, used, out.split_triangle);
 
     const UpAxis up = options.up_axis;
     std::vector<Vec3> frame_positions(used.size());

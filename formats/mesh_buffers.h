@@ -49,10 +49,15 @@ struct MeshBufferOptions
     //! used vertices in the output frame, rounded to whole units.
     std::optional<Vec3> offset;
     //! Only the faces whose index lies in [first_face, end_face) (deleted ones are skipped as always),
-    //! and the vertices they use: a tile's skirts are written apart from its surface (GltfOptions::
-    //! skirt_faces). Default: every face.
+    //! and the vertices they use: a Draco tile's skirts are encoded apart from its surface
+    //! (GltfOptions::skirt_faces). Default: every face.
     std::size_t first_face = 0;
     std::size_t end_face = std::numeric_limits<std::size_t>::max();
+    //! The triangles of faces from index split_face on come after all the others, each part in an
+    //! order of its own (GPU order within each), so that two index ranges over one vertex array draw
+    //! them apart (a plain tile's surface and skirts). MeshBuffers::split_triangle tells where the
+    //! second part starts. Default: one part.
+    std::size_t split_face = std::numeric_limits<std::size_t>::max();
 };
 
 struct MeshBuffers
@@ -64,6 +69,8 @@ struct MeshBuffers
     std::vector<std::uint32_t> indices; //!< three per triangle
     std::array<float, 3> min{};         //!< of positions
     std::array<float, 3> max{};
+    //! Triangles before MeshBufferOptions::split_face's part (all of them without a split).
+    std::size_t split_triangle = 0;
 
     std::size_t vertex_count() const { return positions.size() / 3; }
     std::size_t face_count() const { return indices.size() / 3; }

@@ -68,16 +68,30 @@ public:
         if (skirt_faces > 0 && skirt_faces >= mesh.n_faces())
             throw InvalidInput("glTF: skirt_faces " + std::to_string(skirt_faces) + " is not below the mesh's " +
                                std::to_string(mesh.n_faces()) + " faces");
-        buffer_options.end_face = mesh.n_faces() - skirt_faces;
+        const std::size_t surface_faces = mesh.n_faces() - skirt_faces;
+        if (options_.draco)
+            buffer_options.end_face = surface_faces;
+        else
+            buffer_options.split_face = surface_faces;
         const MeshBuffers buffers = make_mesh_buffers(mesh, buffer_options);
-        Json primitives = Json::array({primitive(buffers, material_index(options_.double_sided))});
-        if (skirt_faces > 0) {
-            // The skirts' own vertices (their top edges copy surface vertices) in the surface's frame:
-            // one node translation serves both primitives.
-            buffer_options.first_face = buffer_options.end_face;
-            buffer_options.end_face = mesh.n_faces();
-            buffer_options.offset = buffers.offset;
-            primitives.push_back(primitive(make_mesh_buffers(mesh, buffer_options), material_index(false)));
+        Json primitives = Json::array();
+        if (!options_.draco) {
+            // Surface and skirts as two index ranges over one set of vertex accessors (the skirts' top
+            // edges are surface vertices).
+            const Json attributes = plain_attributes(buffers);
+            primitives.push_back(plain_primitive(attributes, buffers, 0, buffers.split_triangle, material_index(options_.double_sided)));
+            if (skirt_faces > 0)
+                primitives.push_back(plain_primitive(attributes, buffers, buffers.split_triangle, buffers.face_count(), material_index(false)));
+        } else {
+            primitives.push_back(primitive(draco_primitive(buffers), material_index(options_.double_sided)));
+            if (skirt_faces > 0) {
+                // A Draco stream holds its own vertices: the skirts' (their top edges copy surface
+                // vertices) in the surface's frame, so that one node translation serves both.
+                buffer_options.first_face = surface_faces;
+                buffer_options.end_face = mesh.n_faces();
+                buffer_options.offset = buffers.offset;
+                primitives.push_back(primitive(draco_primitive(make_mesh_buffers(mesh, buffer_options)), material_index(false)));
+            }
         }
         const std::size_t mesh_index = meshes_.size();
         meshes_.push_back(Json{{"name", name}, {"primitives", std::move(primitives)}});
@@ -182,7 +196,7 @@ private:
         return vertex_count <= 65535 ? kUnsignedShort : kUnsignedInt;
     }
 
-    Json plain_primitive(const MeshBuffers& b)
+    Json plain_attributes(const MeshBuffers& b)
     {
         const std::size_t n = b.vertex_count();
         Json attributes;
@@ -209,17 +223,25 @@ private:
                      {"count", n},
                      {"type", "VEC4"}});
         }
-        const int type = index_type(n);
+        return attributes;
+    }
+
+    // Triangles [first, end) of `b` drawn with `attributes` (plain_attributes of b) and `material`.
+    Json plain_primitive(const Json& attributes, const MeshBuffers& b, std::size_t first, std::size_t end, std::size_t material)
+    {
+        const int type = index_type(b.vertex_count());
+        const auto begin = b.indices.begin() + static_cast<std::ptrdiff_t>(3 * first);
+        const auto stop = b.indices.begin() + static_cast<std::ptrdiff_t>(3 * end);
         std::size_t view;
         if (type == kUnsignedShort) {
-            std::vector<std::uint16_t> narrow(b.indices.begin(), b.indices.end());
+            std::vector<std::uint16_t> narrow(begin, stop);
             view = add_view(narrow.data(), narrow.size() * sizeof(std::uint16_t), kElementArrayBuffer);
         } else {
-            view = add_view(b.indices.data(), b.indices.size() * sizeof(std::uint32_t), kElementArrayBuffer);
+            view = add_view(&*begin, static_cast<std::size_t>(stop - begin) * sizeof(std::uint32_t), kElementArrayBuffer);
         }
         const std::size_t indices = add_accessor(
-            Json{{"bufferView", view}, {"componentType", type}, {"count", b.indices.size()}, {"type", "SCALAR"}});
-        return Json{{"attributes", attributes}, {"indices", indices}};
+            Json{{"bufferView", view}, {"componentType", type}, {"count", 3 * (end - first)}, {"type", "SCALAR"}});
+        return primitive(Json{{"attributes", attributes}, {"indices", indices}}, material);
     }
 
     Json draco_primitive(const MeshBuffers& b)
@@ -269,9 +291,8 @@ private:
         return materials_.size() - 1;
     }
 
-    Json primitive(const MeshBuffers& buffers, std::size_t material)
+    static Json primitive(Json out, std::size_t material)
     {
-        Json out = options_.draco ? draco_primitive(buffers) : plain_primitive(buffers);
         out["material"] = material;
         out["mode"] = kTriangles;
         return out;

@@ -107,6 +107,57 @@ TEST(MeshBuffers, gpu_order_keeps_the_triangles_and_improves_the_vertex_cache)
     EXPECT_LT(after_acmr, 0.8);
 }
 
+// split_face: the triangles of the faces from it on come last, each part in GPU order among its own
+// (one vertex array, two index ranges: a plain tile's surface and skirts); first_face/end_face keep
+// only a range of faces and their vertices (a Draco tile's skirts, encoded apart).
+TEST(MeshBuffers, a_split_keeps_each_part_of_the_faces_apart)
+{
+    const Mesh mesh = grid_mesh(30, 30, 0.0, 0.0, 1.0, testing::wave);
+    const std::size_t split = mesh.n_faces() - 300;
+    const auto frame = [](const Vec3& p) { return to_output_frame(p, UpAxis::Z); };
+    // The faces [first, end) of the mesh as a mesh of their own, to compare triangles with.
+    const auto part = [&](std::size_t first, std::size_t end) {
+        Mesh out;
+        for (const auto v : mesh.vertices())
+            out.add_vertex(mesh.point(v));
+        for (std::size_t f = first; f < end; ++f) {
+            std::array<Mesh::VertexHandle, 3> c;
+            int k = 0;
+            for (const auto v : mesh.fv_range(Mesh::FaceHandle(static_cast<int>(f))))
+                c[static_cast<std::size_t>(k++)] = out.vertex_handle(static_cast<unsigned>(v.idx()));
+            testing::add_checked_face(out, c[0], c[1], c[2]);
+        }
+        return out;
+    };
+    const auto triangles = [](const MeshBuffers& b, std::size_t first, std::size_t end, std::vector<Vec3>& positions) {
+        positions.resize(b.vertex_count());
+        for (std::size_t i = 0; i < positions.size(); ++i)
+            positions[i] = Vec3{b.positions[3 * i], b.positions[3 * i + 1], b.positions[3 * i + 2]} + b.offset;
+        return std::vector<std::size_t>(b.indices.begin() + static_cast<std::ptrdiff_t>(3 * first),
+                                        b.indices.begin() + static_cast<std::ptrdiff_t>(3 * end));
+    };
+    MeshBufferOptions two_parts;
+    two_parts.split_face = split;
+    const MeshBuffers b = make_mesh_buffers(mesh, two_parts);
+    EXPECT_EQ(b.split_triangle, split);
+    EXPECT_EQ(b.face_count(), mesh.n_faces());
+    EXPECT_EQ(b.vertex_count(), mesh.n_vertices());
+    std::vector<Vec3> positions;
+    const std::vector<std::size_t> head = triangles(b, 0, split, positions);
+    EXPECT_LT(testing::worst_triangle_mismatch(part(0, split), frame, positions, head), 1e-6);
+    const std::vector<std::size_t> tail = triangles(b, split, b.face_count(), positions);
+    EXPECT_LT(testing::worst_triangle_mismatch(part(split, mesh.n_faces()), frame, positions, tail), 1e-6);
+    EXPECT_EQ(make_mesh_buffers(mesh).split_triangle, mesh.n_faces());
+
+    MeshBufferOptions last;
+    last.first_face = split;
+    const MeshBuffers skirts = make_mesh_buffers(mesh, last);
+    EXPECT_EQ(skirts.face_count(), mesh.n_faces() - split);
+    EXPECT_LT(skirts.vertex_count(), mesh.n_vertices() / 2); // only the vertices of those faces
+    const std::vector<std::size_t> own = triangles(skirts, 0, skirts.face_count(), positions);
+    EXPECT_LT(testing::worst_triangle_mismatch(part(split, mesh.n_faces()), frame, positions, own), 1e-6);
+}
+
 TEST(MeshBuffers, computes_missing_normals_and_keeps_stored_ones)
 {
     Mesh mesh = grid_mesh(3, 3, 0.0, 0.0, 1.0, [](double, double) { return 0.0; });

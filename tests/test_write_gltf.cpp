@@ -277,6 +277,10 @@ TEST_F(GltfFiles, skirts_are_a_second_single_sided_primitive)
     const auto material = [&](const tinygltf::Primitive& p) { return model.materials.at(static_cast<std::size_t>(p.material)); };
     EXPECT_TRUE(material(primitives[0]).doubleSided);
     EXPECT_FALSE(material(primitives[1]).doubleSided);
+    // Plain: two index ranges over one set of vertex accessors (the skirts' top edges are surface
+    // vertices, not written twice).
+    EXPECT_EQ(primitives[0].attributes, primitives[1].attributes);
+    EXPECT_EQ(model.accessors.at(static_cast<std::size_t>(primitives[0].attributes.at("POSITION"))).count, mesh.n_vertices());
     const std::vector<double> t = model.nodes.at(0).translation;
     ASSERT_EQ(t.size(), 3u);
     std::vector<Vec3> absolute;
