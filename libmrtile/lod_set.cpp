@@ -16,6 +16,7 @@
 //    gave to opposite sides is covered (QA round 68).
 #include "libmrtile/lod_set.h"
 
+#include "libmrtile/box_grid.h"
 #include "libmrtile/coverage_gap.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/face_sequence.h"
@@ -28,6 +29,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <iterator>
 #include <limits>
@@ -821,6 +823,175 @@ void mend_coarse_levels(const Hierarchy& h, std::vector<LodLevel>& levels, const
         }
 }
 
+namespace {
+
+// A coarse level can have a hole that the finest level has not, in another place than its own holes:
+// where its tiles straddle a thin part (the bunny's ears, levels 0 and 1 of its automatic set: loops of
+// 59-71 edges where every finer level is closed; QA round 72's renders). mend_coarse_levels counts
+// loops, and a level with no more loops than the finest passes it. Here a loop of a level most of
+// whose vertices lie farther than kStrayLoopEdges of the level's median edge lengths from every border
+// vertex of the finest mesh is a hole between tiles (a sample's own border runs along its points, so a
+// coarse level's loop around it lies on the finest level's: its vertices are hull points of border
+// tiles). The level's cut nodes around such loops (their vertices' tiles and their faces') give way to
+// the next level's nodes below them and the level is meshed again, kept when it has fewer such loops,
+// no more loops or pieces, a genus no farther from the finest level's (a noisy sphere's hole had
+// closed into a handle) and (level 0) still fits its budget, up to kMendSteps times. From the finest
+// level up, so that a level can refine into the mended one below it. The levels still nest: each
+// node of a level lies at or above nodes of the next. A level mended so is no tolerance cut any more.
+constexpr double kStrayLoopEdges = 3.0;
+
+// The boundary loops of `mesh` as vertex lists (in half-edge order, from the lowest half-edge).
+std::vector<std::vector<Mesh::VertexHandle>> loop_vertices(const Mesh& mesh)
+{
+    std::vector<std::vector<Mesh::VertexHandle>> loops;
+    std::vector<char> seen(mesh.n_halfedges(), 0);
+    for (const auto start : mesh.halfedges()) {
+        if (!mesh.is_boundary(start) || seen[static_cast<std::size_t>(start.idx())])
+            continue;
+        std::vector<Mesh::VertexHandle> loop;
+        for (auto he = start; !seen[static_cast<std::size_t>(he.idx())]; he = mesh.next_halfedge_handle(he)) {
+            seen[static_cast<std::size_t>(he.idx())] = 1;
+            loop.push_back(mesh.to_vertex_handle(he));
+        }
+        loops.push_back(std::move(loop));
+    }
+    return loops;
+}
+
+double median_edge_length(const Mesh& mesh)
+{
+    std::vector<double> lengths;
+    lengths.reserve(mesh.n_edges());
+    for (const auto e : mesh.edges())
+        lengths.push_back(mesh.calc_edge_length(e));
+    if (lengths.empty())
+        return 0.0;
+    std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+    return lengths[lengths.size() / 2];
+}
+
+// The loops of `mesh` away from the borders of the finest mesh (see above), as vertex lists.
+std::vector<std::vector<Mesh::VertexHandle>> stray_loops(const Mesh& mesh, const std::vector<Vec3>& finest_border)
+{
+    std::vector<std::vector<Mesh::VertexHandle>> out;
+    std::vector<std::vector<Mesh::VertexHandle>> loops = loop_vertices(mesh);
+    if (loops.empty())
+        return out;
+    const double reach = kStrayLoopEdges * median_edge_length(mesh);
+    if (!(reach > 0.0))
+        return out;
+    BoxGrid grid(reach);
+    for (std::size_t i = 0; i < finest_border.size(); ++i)
+        grid.insert(static_cast<std::uint32_t>(i), BoundingBox{finest_border[i], finest_border[i]});
+    const Vec3 around{reach, reach, reach};
+    for (std::vector<Mesh::VertexHandle>& loop : loops) {
+        std::size_t far = 0;
+        for (const Mesh::VertexHandle v : loop) {
+            const Vec3 p = to_vec3(mesh.point(v));
+            far += !grid.any_candidate(BoundingBox{p - around, p + around},
+                                       [&](std::uint32_t i) { return distance(finest_border[i], p) <= reach; });
+        }
+        if (2 * far > loop.size())
+            out.push_back(std::move(loop));
+    }
+    return out;
+}
+
+// Level k's cut with the nodes around `loops` (the tiles of their vertices, and of those vertices'
+// neighbours with `wider`, and of the faces around them) replaced by the next level's nodes below
+// them; empty when that replaces nothing.
+Cut refined_around(const Hierarchy& h, const std::vector<LodLevel>& levels, std::size_t k,
+                   const std::vector<std::vector<Mesh::VertexHandle>>& loops, bool wider)
+{
+    const Mesh& mesh = levels[k].mesh;
+    OpenMesh::VPropHandleT<int> cluster;
+    OpenMesh::FPropHandleT<int> tile;
+    if (!mesh.get_property_handle(cluster, kVertexCluster) || !mesh.get_property_handle(tile, kFaceTile))
+        return {};
+    std::vector<char> around(h.nodes.size(), 0);
+    const auto mark = [&](int id) {
+        if (id >= 0 && static_cast<std::size_t>(id) < h.nodes.size())
+            around[static_cast<std::size_t>(id)] = 1;
+    };
+    const auto mark_vertex = [&](Mesh::VertexHandle v) {
+        mark(mesh.property(cluster, v));
+        for (const auto f : mesh.vf_range(v))
+            mark(mesh.property(tile, f));
+    };
+    for (const auto& loop : loops)
+        for (const Mesh::VertexHandle v : loop) {
+            mark_vertex(v);
+            if (wider)
+                for (const auto w : mesh.vv_range(v))
+                    mark_vertex(w);
+        }
+    std::vector<char> in_cut(h.nodes.size(), 0);
+    for (const std::int32_t id : levels[k].cut)
+        in_cut[static_cast<std::size_t>(id)] = 1;
+    std::vector<char> replaced(h.nodes.size(), 0);
+    Cut cut;
+    for (const std::int32_t id : levels[k + 1].cut) {
+        std::int32_t above = id;
+        while (above >= 0 && !in_cut[static_cast<std::size_t>(above)])
+            above = h.nodes[static_cast<std::size_t>(above)].parent;
+        if (above >= 0 && above != id && around[static_cast<std::size_t>(above)]) {
+            cut.push_back(id);
+            replaced[static_cast<std::size_t>(above)] = 1;
+        }
+    }
+    if (cut.empty())
+        return {};
+    for (const std::int32_t id : levels[k].cut)
+        if (!replaced[static_cast<std::size_t>(id)])
+            cut.push_back(id);
+    return cut;
+}
+
+void mend_stray_loops(const Hierarchy& h, std::vector<LodLevel>& levels, const LodSetOptions& o)
+{
+    if (levels.size() < 2)
+        return;
+    std::vector<Vec3> finest_border;
+    const Mesh& finest = levels.back().mesh;
+    for (const auto v : finest.vertices())
+        if (finest.is_boundary(v))
+            finest_border.push_back(to_vec3(finest.point(v)));
+    const int finest_genus = topology_stats(finest).genus;
+    for (std::size_t k = levels.size() - 1; k-- > 0;)
+        for (int step = 0; step < kMendSteps; ++step) {
+            const std::vector<std::vector<Mesh::VertexHandle>> stray = stray_loops(levels[k].mesh, finest_border);
+            if (stray.empty())
+                break;
+            const TopologyStats before = topology_stats(levels[k].mesh);
+            const auto genus_off = [&](const TopologyStats& t) { return std::abs(t.genus - finest_genus); };
+            // The tiles on the loops first, then a ring wider (the bunny's ear at level 1 of a 2,000-
+            // triangle set: the loops' own tiles refined split a piece off, a ring more closed it).
+            bool mended = false;
+            for (const bool wider : {false, true}) {
+                LodLevel again;
+                again.tolerance = levels[k].tolerance;
+                again.cut = refined_around(h, levels, k, stray, wider);
+                if (again.cut.empty() || again.cut.size() >= levels[k + 1].cut.size())
+                    continue;
+                mesh_level(h, again, o.mesh);
+                const TopologyStats after = topology_stats(again.mesh);
+                if (stray_loops(again.mesh, finest_border).size() < stray.size() &&
+                    after.boundary_loops <= before.boundary_loops && after.components <= before.components &&
+                    after.genus >= 0 && genus_off(after) <= genus_off(before) &&
+                    (k > 0 || again.mesh.n_faces() <= first_level_budget(o))) {
+                    levels[k].cut = std::move(again.cut);
+                    levels[k].mesh = again.mesh; // a coarse level: the copy is small (OpenMesh has no move)
+                    mended = true;
+                    break;
+                }
+            }
+            if (!mended)
+                break;
+        }
+}
+
+} // namespace
+
 std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o)
 {
     check_lod_options(h, o);
@@ -879,8 +1050,10 @@ std::vector<LodLevel> make_lod_levels(const Hierarchy& h, const LodSetOptions& o
             o.progress(++done, total);
         }
     });
-    if (o.tolerances.empty())
+    if (o.tolerances.empty()) {
         mend_coarse_levels(h, levels, o.mesh);
+        mend_stray_loops(h, levels, o);
+    }
     // Two levels that mesh the same cut are one level shown twice (QA round 57: the bunny with three
     // stray points, whose small-object rounds made level 0's meshed cut the next level's, had two
     // byte-identical root tiles): the coarser copy goes.

@@ -6,7 +6,9 @@
 //! Levels: level 0 is the tolerance cut at the tolerance of the best cut that fits one tile
 //! (cut_by_budget; the tolerance cut is no finer, and the levels' tolerance cuts nest; the cuts meshed,
 //! LodLevel::cut, nearly: mesh_cut's small-object and dropped-fan rounds can refine a few nodes of a
-//! level below the next level's cut), each next level halves the
+//! level below the next level's cut; and an automatic level with a hole where the finest level has
+//! none, between tiles that straddle a thin part, has the nodes around it refined to the next level's,
+//! so that its cut is then finer there than its tolerance asks), each next level halves the
 //! scale-free tolerance, the last is the hierarchy's leaves. Each level is meshed *globally* (one
 //! manifold surface per level), so tiles of one level cut from it share their border vertices exactly.
 //! Tiles: a tile is a hierarchy node (its region) at a level. Its content is the level's faces owned

@@ -1971,7 +1971,12 @@ TEST(Cli, lods_on_the_bunny_are_consistent)
                                 "boundary_loops", "components", "genus"})
             EXPECT_TRUE(index[l].contains(key)) << key;
         EXPECT_EQ(index[l]["genus"].get<int>(), 0); // the bunny: open at its base, no handle at any level
-        EXPECT_GE(index[l]["boundary_loops"].get<std::size_t>(), 1u);
+        // Its base's holes: open at the finest level; a coarse level's tiles may span them (level 0
+        // does), but no level has more loops (until 0.13.0 levels 0 and 1 had theirs in the ears).
+        if (l + 1 == index.size()) {
+            EXPECT_GE(index[l]["boundary_loops"].get<std::size_t>(), 1u);
+        }
+        EXPECT_LE(index[l]["boundary_loops"].get<std::size_t>(), index.back()["boundary_loops"].get<std::size_t>());
         EXPECT_NE(r.out.find("level " + std::to_string(l) + ": tolerance"), std::string::npos) << r.out;
         // Each level's pieces on the console too (QA round 50: in lods.json only).
         const std::size_t pieces = index[l]["components"].get<std::size_t>();
