@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -74,6 +75,8 @@ public:
         else
             buffer_options.split_face = surface_faces;
         const MeshBuffers buffers = make_mesh_buffers(mesh, buffer_options);
+        if (buffers.split_triangle == 0) // the faces before the skirts all deleted
+            throw InvalidInput("glTF: no face of the mesh before its " + std::to_string(skirt_faces) + " skirt faces");
         Json primitives = Json::array();
         if (!options_.draco) {
             // Surface and skirts as two index ranges over one set of vertex accessors (the skirts' top
@@ -230,14 +233,15 @@ private:
     Json plain_primitive(const Json& attributes, const MeshBuffers& b, std::size_t first, std::size_t end, std::size_t material)
     {
         const int type = index_type(b.vertex_count());
-        const auto begin = b.indices.begin() + static_cast<std::ptrdiff_t>(3 * first);
-        const auto stop = b.indices.begin() + static_cast<std::ptrdiff_t>(3 * end);
+        assert(first < end && 3 * end <= b.indices.size());
+        const std::uint32_t* begin = b.indices.data() + 3 * first;
+        const std::uint32_t* stop = b.indices.data() + 3 * end;
         std::size_t view;
         if (type == kUnsignedShort) {
             std::vector<std::uint16_t> narrow(begin, stop);
             view = add_view(narrow.data(), narrow.size() * sizeof(std::uint16_t), kElementArrayBuffer);
         } else {
-            view = add_view(&*begin, static_cast<std::size_t>(stop - begin) * sizeof(std::uint32_t), kElementArrayBuffer);
+            view = add_view(begin, static_cast<std::size_t>(stop - begin) * sizeof(std::uint32_t), kElementArrayBuffer);
         }
         const std::size_t indices = add_accessor(
             Json{{"bufferView", view}, {"componentType", type}, {"count", 3 * (end - first)}, {"type", "SCALAR"}});

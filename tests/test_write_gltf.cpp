@@ -334,6 +334,15 @@ TEST_F(GltfFiles, skirts_are_a_second_single_sided_primitive)
     GltfOptions all_skirt;
     all_skirt.skirt_faces = mesh.n_faces();
     EXPECT_THROW(glb_bytes(mesh, kFarOrigin, all_skirt), InvalidInput);
+    Mesh only_skirts_left = mesh; // every face before the skirts deleted
+    only_skirts_left.request_face_status();
+    only_skirts_left.request_edge_status();
+    only_skirts_left.request_vertex_status();
+    for (std::size_t f = 0; f + kSkirtFaces < mesh.n_faces(); ++f)
+        only_skirts_left.delete_face(Mesh::FaceHandle(static_cast<int>(f)), false);
+    GltfOptions skirts_only;
+    skirts_only.skirt_faces = kSkirtFaces;
+    EXPECT_THROW(glb_bytes(only_skirts_left, kFarOrigin, skirts_only), InvalidInput);
     GltfLodOptions lods;
     lods.gltf.skirt_faces = 1;
     EXPECT_THROW(write_glb_lods({&mesh}, kFarOrigin, dir_ / "never.glb", lods), InvalidInput);
