@@ -957,13 +957,12 @@ void mend_stray_loops(const Hierarchy& h, std::vector<LodLevel>& levels, const L
         if (finest.is_boundary(v))
             finest_border.push_back(to_vec3(finest.point(v)));
     const int finest_genus = topology_stats(finest).genus;
-    for (std::size_t k = levels.size() - 1; k-- > 0;)
-        for (int step = 0; step < kMendSteps; ++step) {
-            const std::vector<std::vector<Mesh::VertexHandle>> stray = stray_loops(levels[k].mesh, finest_border);
-            if (stray.empty())
-                break;
-            const TopologyStats before = topology_stats(levels[k].mesh);
-            const auto genus_off = [&](const TopologyStats& t) { return std::abs(t.genus - finest_genus); };
+    const auto genus_off = [&](const TopologyStats& t) { return std::abs(t.genus - finest_genus); };
+    for (std::size_t k = levels.size() - 1; k-- > 0;) {
+        // The level's stray loops and topology, carried over from the mesh a step kept.
+        std::vector<std::vector<Mesh::VertexHandle>> stray = stray_loops(levels[k].mesh, finest_border);
+        TopologyStats before = topology_stats(levels[k].mesh);
+        for (int step = 0; step < kMendSteps && !stray.empty(); ++step) {
             // The tiles on the loops first, then a ring wider (the bunny's ear at level 1 of a 2,000-
             // triangle set: the loops' own tiles refined split a piece off, a ring more closed it).
             bool mended = false;
@@ -975,12 +974,14 @@ void mend_stray_loops(const Hierarchy& h, std::vector<LodLevel>& levels, const L
                     continue;
                 mesh_level(h, again, o.mesh);
                 const TopologyStats after = topology_stats(again.mesh);
-                if (stray_loops(again.mesh, finest_border).size() < stray.size() &&
-                    after.boundary_loops <= before.boundary_loops && after.components <= before.components &&
-                    after.genus >= 0 && genus_off(after) <= genus_off(before) &&
+                std::vector<std::vector<Mesh::VertexHandle>> still = stray_loops(again.mesh, finest_border);
+                if (still.size() < stray.size() && after.boundary_loops <= before.boundary_loops &&
+                    after.components <= before.components && after.genus >= 0 && genus_off(after) <= genus_off(before) &&
                     (k > 0 || again.mesh.n_faces() <= first_level_budget(o))) {
                     levels[k].cut = std::move(again.cut);
-                    levels[k].mesh = again.mesh; // a coarse level: the copy is small (OpenMesh has no move)
+                    levels[k].mesh = again.mesh; // a coarse level: the copy is small (OpenMesh has no move); same handles
+                    stray = std::move(still);
+                    before = after;
                     mended = true;
                     break;
                 }
@@ -988,6 +989,7 @@ void mend_stray_loops(const Hierarchy& h, std::vector<LodLevel>& levels, const L
             if (!mended)
                 break;
         }
+    }
 }
 
 } // namespace

@@ -27,14 +27,13 @@ constexpr double kTipAngleSum = 1.25 * kPi;
 
 Vec3 point(const Mesh& mesh, Mesh::VertexHandle vh) { return to_vec3(mesh.point(vh)); }
 
-// The angle between the normals of triangles (p, q, r) and (s, t, u), in radians (0: flat, pi: folded
-// flat onto each other); pi for a triangle without area, whose normal is no direction.
+// The angle between the normals of triangles f and g, in radians (0: flat, pi: folded flat onto each
+// other); pi for a triangle without area, whose normal is no direction.
 double fold_between(const std::array<Vec3, 3>& f, const std::array<Vec3, 3>& g)
 {
     if (!has_area(f[0], f[1], f[2]) || !has_area(g[0], g[1], g[2]))
         return kPi;
-    const Vec3 n = normalized(cross(f[1] - f[0], f[2] - f[0])), m = normalized(cross(g[1] - g[0], g[2] - g[0]));
-    return std::atan2(norm(cross(n, m)), dot(n, m));
+    return angle_between(normalized(cross(f[1] - f[0], f[2] - f[0])), normalized(cross(g[1] - g[0], g[2] - g[0])));
 }
 
 // The fold across half-edge h's edge (interior), as the mesh stands.
@@ -193,7 +192,8 @@ private:
         return worst;
     }
 
-    // Whether the faces around v all have area and no new cap with v at `at` (old angles `old_angle`).
+    // Whether the faces around v, as v stands now, all have area, make no cap beyond the largest angle
+    // they had before (`old_angle`) and (vertical) face along the axis.
     bool star_shape_ok(Mesh::VertexHandle v, double old_angle) const
     {
         for (const auto f : mesh_.vf_range(v)) {
@@ -253,7 +253,7 @@ private:
             if (mesh_.is_boundary(h))
                 continue;
             const Vec3 q = point(mesh_, mesh_.to_vertex_handle(h)), r = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-            sum += std::atan2(norm(cross(q - p, r - p)), dot(q - p, r - p));
+            sum += angle_between(q - p, r - p);
         }
         return sum;
     }
@@ -382,7 +382,7 @@ void check_fold_options(const FoldOptions& options)
 {
     const auto angle_ok = [](double a) { return a > 0.0 && a <= 180.0; };
     if (!angle_ok(options.fold_angle_degrees) || !angle_ok(options.max_face_angle_degrees) || options.passes < 0 || options.passes > 64 ||
-        (options.vertical && !(squared_norm(options.axis) > 0.0) ) || !std::isfinite(options.axis.x) || !std::isfinite(options.axis.y) ||
+        (options.vertical && !(squared_norm(options.axis) > 0.0)) || !std::isfinite(options.axis.x) || !std::isfinite(options.axis.y) ||
         !std::isfinite(options.axis.z))
         throw InvalidInput("remove_folds: fold_angle_degrees and max_face_angle_degrees must be in (0, 180], passes in [0, 64], "
                            "and a vertical pass needs a finite, non-zero axis");

@@ -115,13 +115,17 @@ inline double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& 
     return distance(p, closest_point_on_triangle(p, a, b, c));
 }
 
+//! The angle between x and y, in [0, pi] (atan2 of |x × y| and x · y: exact near 0 and pi, where acos
+//! of a rounded cosine is not).
+inline double angle_between(const Vec3& x, const Vec3& y)
+{
+    return std::atan2(norm(cross(x, y)), dot(x, y));
+}
+
 //! The largest angle of triangle (p, q, r), in radians (near pi for a cap).
 inline double largest_angle(const Vec3& p, const Vec3& q, const Vec3& r)
 {
-    const auto corner = [](const Vec3& u, const Vec3& v, const Vec3& w) {
-        const Vec3 x = u - w, y = v - w;
-        return std::atan2(norm(cross(x, y)), dot(x, y));
-    };
+    const auto corner = [](const Vec3& u, const Vec3& v, const Vec3& w) { return angle_between(u - w, v - w); };
     return std::max({corner(q, r, p), corner(r, p, q), corner(p, q, r)});
 }
 

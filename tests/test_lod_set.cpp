@@ -162,13 +162,19 @@ TEST(LodSet, uneven_sampling_still_gives_nested_levels)
 // No level is in more pieces or has more boundary loops than the finest: the rocker arm's level 0 (94
 // tiles) was in 5 pieces with 469 open edges while every finer level was closed (QA, session 19); it
 // is cut again at a finer tolerance, and the levels still nest.
+// The levels `mrtile lods` makes: no tile tree, level 0 of at most three quarters of 4,096 triangles.
+LodSet lods_as_the_cli_makes(const Hierarchy& h)
+{
+    LodSetOptions o;
+    o.tileset = false;
+    o.first_level_triangles = 4096;
+    return make_lod_set(h, o);
+}
+
 TEST(LodSet, coarse_levels_are_no_more_broken_than_the_finest)
 {
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/rocker-arm.obj"));
-    LodSetOptions o;
-    o.tileset = false;
-    o.first_level_triangles = 4096; // as `mrtile lods`
-    const LodSet set = make_lod_set(h, o);
+    const LodSet set = lods_as_the_cli_makes(h);
     ASSERT_GE(set.levels.size(), 3u);
     const TopologyStats finest = topology_stats(set.levels.back().mesh);
     for (std::size_t l = 0; l < set.levels.size(); ++l) {
@@ -196,10 +202,7 @@ TEST(LodSet, coarse_levels_are_no_more_broken_than_the_finest)
 TEST(LodSet, coarse_levels_have_no_holes_where_the_finest_has_none)
 {
     const Hierarchy h = build_hierarchy(read_points(MRTILE_SHARED_DATA "/bun_zipper.ply"));
-    LodSetOptions o;
-    o.tileset = false;
-    o.first_level_triangles = 4096; // as `mrtile lods`
-    const LodSet set = make_lod_set(h, o);
+    const LodSet set = lods_as_the_cli_makes(h);
     ASSERT_GE(set.levels.size(), 4u);
     const Mesh& finest = set.levels.back().mesh;
     std::vector<Vec3> border;
