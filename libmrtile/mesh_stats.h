@@ -123,12 +123,17 @@ DistanceStats mesh_to_point_distance(const Mesh& mesh, const Hierarchy& h, const
 //! workers (0 = one per hardware thread) give the same result. With `near_enough` (one squared
 //! distance per query), a query's search ends at the first leaf that holds a point within it: its
 //! result is then at most that bound, not necessarily the nearest (for callers that only ask how far
-//! beyond a bound a query lies; most queries end at their first leaf).
+//! beyond a bound a query lies; most queries end at their first leaf). With `first_nodes` (one node of
+//! `h` per query, or -1), a query's search starts in that node's subtree (the node whose tile the query
+//! lies on, say) and goes on from the root only where no point there is near enough: the same
+//! guarantees, fewer nodes visited when the node holds points near the query.
 //! \throw InvalidInput if `points` does not have one position per point of `h`, or is empty while
-//! `queries` is not, or if `near_enough` does not have one bound per query.
+//! `queries` is not, or if `near_enough` or `first_nodes` does not have one entry per query, or a
+//! first node is neither -1 nor a node of `h`.
 std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const std::vector<Vec3>& points,
                                                     const std::vector<Vec3>& queries, std::size_t threads = 0,
-                                                    const std::vector<double>* near_enough = nullptr);
+                                                    const std::vector<double>* near_enough = nullptr,
+                                                    const std::vector<std::int32_t>* first_nodes = nullptr);
 
 //! \brief Pairs of faces (handle indices, smaller first, sorted) whose triangles intersect other than in
 //! the vertices and edges they share: geometric self-intersections of a combinatorially valid mesh (CGAL's

@@ -774,6 +774,39 @@ TEST(Distance, nearest_points_through_a_hierarchy_with_and_without_a_bound)
         }
     }
     EXPECT_GT(early, 0u); // some searches did end before the nearest point
+    // Started at a node of each query's (its nearest point's leaf, one of its ancestors, a node
+    // elsewhere, or none): the same guarantees, with the bound and without.
+    std::vector<std::int32_t> leaf_of(h.cloud.size(), -1);
+    for (std::size_t id = 0; id < h.nodes.size(); ++id)
+        if (h.nodes[id].is_leaf())
+            for (std::uint32_t i = h.nodes[id].begin; i < h.nodes[id].end; ++i)
+                leaf_of[i] = static_cast<std::int32_t>(id);
+    std::vector<std::int32_t> first(queries.size());
+    for (std::size_t k = 0; k < queries.size(); ++k) {
+        std::size_t nearest = 0;
+        for (std::size_t i = 1; i < h.cloud.size(); ++i)
+            if (squared_norm(h.cloud.positions[i] - queries[k]) < squared_norm(h.cloud.positions[nearest] - queries[k]))
+                nearest = i;
+        std::int32_t node = leaf_of[nearest];
+        if (k % 4 == 1)
+            node = h.nodes[static_cast<std::size_t>(node)].parent;
+        first[k] = k % 4 == 2 ? static_cast<std::int32_t>(h.nodes.size() - 1 - k % 7) : k % 4 == 3 ? -1 : node;
+    }
+    EXPECT_EQ(squared_nearest_point_distances(h, h.cloud.positions, queries, 2, nullptr, &first), exact);
+    const std::vector<double> started = squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &bound, &first);
+    for (std::size_t k = 0; k < queries.size(); ++k) {
+        if (exact[k] <= bound[k]) {
+            EXPECT_LE(started[k], bound[k]) << k;
+            EXPECT_GE(started[k], exact[k]) << k;
+        } else {
+            EXPECT_EQ(started[k], exact[k]) << k; // a node elsewhere: found from the root
+        }
+    }
+    std::vector<std::int32_t> wrong = first;
+    wrong[3] = static_cast<std::int32_t>(h.nodes.size());
+    EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &bound, &wrong), InvalidInput);
+    wrong.pop_back();
+    EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &bound, &wrong), InvalidInput);
     const std::vector<double> short_bound(queries.size() - 1, 1.0);
     EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &short_bound), InvalidInput);
     EXPECT_THROW(squared_nearest_point_distances(h, std::vector<Vec3>(3), queries), InvalidInput);
