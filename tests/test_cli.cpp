@@ -19,6 +19,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <random>
 #include <string>
 #include <vector>
 #include <sys/stat.h>
@@ -235,6 +236,35 @@ TEST(Cli, bad_input_gives_one_line_error_and_no_output)
     EXPECT_EQ(full.err, "mrtile: error: /dev/full: write failed (disk full or not writable?)\n");
     EXPECT_EQ(slurp(limited / "sphere.obj"), "old mesh\n");
     EXPECT_EQ(std::distance(fs::directory_iterator(limited), fs::directory_iterator()), 1);
+}
+
+// Points that fill a volume are refused before the build (sample_dimension.h): one line naming the file
+// and the cause, no output; --allow-volume builds them anyway.
+TEST(Cli, points_filling_a_volume_are_refused)
+{
+    const fs::path dir = testing::fresh_test_dir("cli_volume");
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 10.0);
+    std::string text;
+    for (int i = 0; i < 20000; ++i)
+        text += std::to_string(u(rng)) + " " + std::to_string(u(rng)) + " " + std::to_string(u(rng)) + "\n";
+    write_text(dir / "cloud.xyz", text);
+    const std::string input = (dir / "cloud.xyz").string();
+    for (const std::string& command : {"build " + input + " -o " + (dir / "m.mrt").string(),
+                                       "reconstruct " + input + " -o " + (dir / "m.ply").string()}) {
+        const Result r = mrtile(command, dir);
+        EXPECT_EQ(r.code, 1) << command << "\n" << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find("cloud.xyz: the points fill a volume"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("--allow-volume"), std::string::npos) << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "m.mrt"));
+    EXPECT_FALSE(fs::exists(dir / "m.ply"));
+    const Result r = mrtile("build " + input + " -o " + (dir / "m.mrt").string() + " --allow-volume", dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "m.mrt"));
+    // A surface of as many points is built as before.
+    EXPECT_EQ(mrtile("build " + sphere_xyz(dir, 20000).string() + " -o " + (dir / "s.mrt").string(), dir).code, 0);
 }
 
 // Every output is checked before any work, so that a command that cannot write one of its outputs

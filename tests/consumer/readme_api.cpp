@@ -4,6 +4,7 @@
 // README includes begin
 #include "formats/read_points.h"       // read_points
 #include "libmrtile/outliers.h"        // remove_outliers (opt-in)
+#include "libmrtile/sample_dimension.h" // sample_dimension (a surface at all, or points filling a volume?)
 #include "libmrtile/denoise.h"         // denoise_points (build_hierarchy calls it on noisy samples)
 #include "libmrtile/cluster_tree.h"    // build_hierarchy  (§4.1)
 #include "libmrtile/model_file.h"      // save_model / load_model
@@ -38,6 +39,7 @@ int main()
     // README body begin
 mrt::PointCloud cloud = mrt::read_points("scan.ply");                  // recentred: double origin
 std::size_t stray = mrt::remove_outliers(cloud);                        // opt-in: isolated points of a raw scan
+bool no_surface = mrt::sample_dimension(cloud.positions).fills_volume;  // what `build` refuses (2 = a surface, 3 = a volume)
 std::vector<mrt::Vec3> smooth = cloud.positions;
 double rms_move = mrt::denoise_points(smooth);                          // by hand: each onto a quadric of it and 47 neighbours
 mrt::BuildOptions build;                                                // tolerance 1e-4, pca_limit 500, min_cluster 16
@@ -85,7 +87,7 @@ mrt::TilesetOptions on_globe;
 on_globe.root_transform = at.root_transform;                            // ENU at at.anchor → ECEF
 mrt::write_lod_tileset(placed, {0, 0, 0}, "tiles_on_globe", on_globe);   // positions are ENU metres now
     // README body end
-    (void)stray, (void)rms_move, (void)moved, (void)move, (void)budget, (void)paper, (void)hole, (void)gap, (void)q;
+    (void)stray, (void)no_surface, (void)rms_move, (void)moved, (void)move, (void)budget, (void)paper, (void)hole, (void)gap, (void)q;
     (void)one_view, (void)notches, (void)capped, (void)seen, (void)small, (void)t, (void)again;
     for (const char* made : {"scan.mrt", "scan_mesh.ply", "scan.glb", "tiles/tileset.json", "tiles_draco/tileset.json",
                              "tiles_on_globe/tileset.json"})
