@@ -1,6 +1,6 @@
 // Beyond the paper: whether the input samples a surface at all. The method (and every surface
 // reconstruction) assumes a surface sample; points that fill a volume are meshed slowly into pieces of
-// no use, so the command line refuses them up front. See sample_dimension.h for the measure.
+// no use, so the command line refuses them before meshing. See sample_dimension.h for the measures.
 
 #include "libmrtile/sample_dimension.h"
 
@@ -10,27 +10,22 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <string>
+#include <vector>
 
 namespace mrt {
 
-SampleDimension sample_dimension(const std::vector<Vec3>& positions, const DimensionOptions& options)
+namespace {
+
+// The mean local dimension of every k-th of `positions` (see the file comment of the header).
+void measure_dimension(const std::vector<Vec3>& positions, const DimensionOptions& options, SampleDimension& out)
 {
-    if (options.near < 2 || options.far <= options.near || options.samples == 0 || options.max_points == 0 ||
-        !std::isfinite(options.volume_dimension))
-        throw InvalidInput("DimensionOptions: near at least 2, far above near, samples and max_points at least 1, "
-                           "a finite volume_dimension");
-    for (const Vec3& p : positions)
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            throw InvalidInput("sample_dimension: a position is not finite");
-    SampleDimension out;
     const std::size_t stride = (positions.size() + options.max_points - 1) / options.max_points;
     std::vector<Vec3> thinned;
     thinned.reserve(positions.size() / std::max<std::size_t>(1, stride) + 1);
     for (std::size_t i = 0; i < positions.size(); i += stride)
         thinned.push_back(positions[i]);
     if (thinned.size() < 8 * options.far)
-        return out;
+        return;
     const NearestNeighbours neighbours(thinned);
     const std::size_t step = std::max<std::size_t>(1, thinned.size() / options.samples);
     const double log_ratio = std::log(static_cast<double>(options.far) / static_cast<double>(options.near));
@@ -48,10 +43,44 @@ SampleDimension sample_dimension(const std::vector<Vec3>& positions, const Dimen
         sum += log_ratio / std::log(outer / inner);
         ++out.sampled;
     }
-    if (out.sampled > 0) {
+    if (out.sampled > 0)
         out.mean_dimension = sum / static_cast<double>(out.sampled);
-        out.fills_volume = out.mean_dimension >= options.volume_dimension;
+}
+
+// The median over the leaves of at least 8 points of sqrt(λ0 / λ1) of their `positions`.
+double median_leaf_roughness(const Hierarchy& h, const std::vector<Vec3>& positions)
+{
+    std::vector<double> roughness;
+    for (const Node& n : h.nodes) {
+        if (!n.is_leaf() || n.count() < 8)
+            continue;
+        Moments m;
+        for (std::uint32_t i = n.begin; i < n.end; ++i)
+            m.add(positions[i]);
+        const Eigen3x3 e = eigen_decomposition(m);
+        roughness.push_back(e.values[1] > 0.0 ? std::sqrt(std::max(0.0, e.values[0]) / e.values[1]) : 0.0);
     }
+    if (roughness.empty())
+        return 0.0;
+    const auto middle = roughness.begin() + static_cast<std::ptrdiff_t>(roughness.size() / 2);
+    std::nth_element(roughness.begin(), middle, roughness.end());
+    return *middle;
+}
+
+} // namespace
+
+SampleDimension sample_dimension(const Hierarchy& h, const DimensionOptions& options)
+{
+    if (options.near < 2 || options.far <= options.near || options.samples == 0 || options.max_points == 0 ||
+        !std::isfinite(options.volume_dimension) || !std::isfinite(options.volume_roughness))
+        throw InvalidInput("DimensionOptions: near at least 2, far above near, samples and max_points at least 1, "
+                           "finite thresholds");
+    const std::vector<Vec3>& positions = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;
+    SampleDimension out;
+    measure_dimension(positions, options, out);
+    out.leaf_roughness = median_leaf_roughness(h, positions);
+    out.fills_volume = out.sampled > 0 && out.mean_dimension >= options.volume_dimension &&
+                       out.leaf_roughness >= options.volume_roughness;
     return out;
 }
 

@@ -4,9 +4,9 @@
 // README includes begin
 #include "formats/read_points.h"       // read_points
 #include "libmrtile/outliers.h"        // remove_outliers (opt-in)
-#include "libmrtile/sample_dimension.h" // sample_dimension (a surface at all, or points filling a volume?)
 #include "libmrtile/denoise.h"         // denoise_points (build_hierarchy calls it on noisy samples)
 #include "libmrtile/cluster_tree.h"    // build_hierarchy  (§4.1)
+#include "libmrtile/sample_dimension.h" // sample_dimension (a surface at all, or points filling a volume?)
 #include "libmrtile/model_file.h"      // save_model / load_model
 #include "libmrtile/cut.h"             // cut_by_*
 #include "libmrtile/coverage_gap.h"    // coverage_gap (holes a tile would cover)
@@ -39,12 +39,12 @@ int main()
     // README body begin
 mrt::PointCloud cloud = mrt::read_points("scan.ply");                  // recentred: double origin
 std::size_t stray = mrt::remove_outliers(cloud);                        // opt-in: isolated points of a raw scan
-bool no_surface = mrt::sample_dimension(cloud.positions).fills_volume;  // what `build` refuses (2 = a surface, 3 = a volume)
 std::vector<mrt::Vec3> smooth = cloud.positions;
 double rms_move = mrt::denoise_points(smooth);                          // by hand: each onto a quadric of it and 47 neighbours
 mrt::BuildOptions build;                                                // tolerance 1e-4, pca_limit 500, min_cluster 16
 build.denoise = mrt::BuildOptions::Denoise::Auto;                       // default: noisy samples are denoised, then built
 mrt::Hierarchy h = mrt::build_hierarchy(std::move(cloud), build);      // persistent tree, exact node statistics
+bool no_surface = mrt::sample_dimension(h).fills_volume;                // points that fill a volume: what `build` refuses
 bool moved = h.info.denoised;                                           // the stored points are the denoised ones
 double move = mrt::typical_move(h, 0, h.cloud.size());                  // how far denoising moved them (0 if not): each region's floor is 0.7× its own
 mrt::save_model(h, "scan.mrt");                                         // atomic, checksummed, deterministic
