@@ -16,7 +16,8 @@ namespace mrt {
 
 namespace {
 
-// The mean local dimension of every k-th of `positions` (see the file comment of the header).
+// The mean local dimension of every k-th of `positions` (see the file comment of the header), which are
+// in the tree's order: spatially even, where every k-th point of a file can be one row of a grid.
 void measure_dimension(const std::vector<Vec3>& positions, const DimensionOptions& options, SampleDimension& out)
 {
     const std::size_t stride = (positions.size() + options.max_points - 1) / options.max_points;

@@ -7,8 +7,9 @@
 //! 236 s, 1,640 pieces, 26,192 crossing pairs). Two measures, because each alone mistakes a surface:
 //!  - The dimension: around a point of a surface the points within r grow as r², in a volume as r³,
 //!    along a curve as r; with d(k) the distance to the k-th nearest point it is
-//!    log(far / near) / log(d(far) / d(near)). Measured on every k-th point of the cloud (at most
-//!    `max_points`), so that `far` is about 1/64 of them: large against the point spacing, so that
+//!    log(far / near) / log(d(far) / d(near)). Measured on every k-th point in the hierarchy's order
+//!    (at most `max_points`; spatially even, where every k-th point of a grid read row by row can be one
+//!    plane of it), so that `far` is about 1/64 of them: large against the point spacing, so that
 //!    noise of a few spacings is still a surface (a sphere with noise of 4 spacings: 2.24-2.38), small
 //!    against the object, so that curvature does not count (the shared scans 1.99-2.19). Random points
 //!    measure 2.8-3.1, but so do surfaces stacked closer than that scale: nested spheres, a rolled or
