@@ -1773,7 +1773,7 @@ Hierarchy build_from_points(const std::vector<fs::path>& points, const BuildArgs
             char what[360];
             std::snprintf(what, sizeof what,
                           "the points fill a volume instead of sampling a surface (local dimension %.2f, where a "
-                          "surface measures 2 and a volume 3; leaves %.2f as thick as wide): random points, "
+                          "surface measures 2 and a volume 3; leaves %.2f times as thick as wide): random points, "
                           "vegetation, or noise of several percent of the object's size have no surface to mesh "
                           "(--allow-volume builds anyway)",
                           d.mean_dimension, d.leaf_roughness);
