@@ -5,6 +5,7 @@
 #include "libmrtile/sample_dimension.h"
 
 #include "libmrtile/errors.h"
+#include "libmrtile/median.h"
 #include "libmrtile/neighbours.h"
 
 #include <algorithm>
@@ -48,24 +49,25 @@ void measure_dimension(const std::vector<Vec3>& positions, const DimensionOption
         out.mean_dimension = sum / static_cast<double>(out.sampled);
 }
 
-// The median over the leaves of at least 8 points of sqrt(λ0 / λ1) of their `positions`.
-double median_leaf_roughness(const Hierarchy& h, const std::vector<Vec3>& positions)
+// The median over the leaves of at least 8 points of sqrt(λ0 / λ1) of their points as read: the
+// leaves' own frames where the points were not moved (eigen_decomposition of the same moments), the
+// raw positions' where denoising moved them.
+double median_leaf_roughness(const Hierarchy& h)
 {
     std::vector<double> roughness;
     for (const Node& n : h.nodes) {
         if (!n.is_leaf() || n.count() < 8)
             continue;
-        Moments m;
-        for (std::uint32_t i = n.begin; i < n.end; ++i)
-            m.add(positions[i]);
-        const Eigen3x3 e = eigen_decomposition(m);
-        roughness.push_back(e.values[1] > 0.0 ? std::sqrt(std::max(0.0, e.values[0]) / e.values[1]) : 0.0);
+        Eigen3x3 e = n.frame;
+        if (!h.raw_positions.empty()) {
+            Moments m;
+            for (std::uint32_t i = n.begin; i < n.end; ++i)
+                m.add(h.raw_positions[i]);
+            e = eigen_decomposition(m);
+        }
+        roughness.push_back(e.values[1] > 0.0 ? std::sqrt(e.values[0] / e.values[1]) : 0.0);
     }
-    if (roughness.empty())
-        return 0.0;
-    const auto middle = roughness.begin() + static_cast<std::ptrdiff_t>(roughness.size() / 2);
-    std::nth_element(roughness.begin(), middle, roughness.end());
-    return *middle;
+    return upper_median_in_place(roughness);
 }
 
 } // namespace
@@ -79,7 +81,7 @@ SampleDimension sample_dimension(const Hierarchy& h, const DimensionOptions& opt
     const std::vector<Vec3>& positions = h.raw_positions.empty() ? h.cloud.positions : h.raw_positions;
     SampleDimension out;
     measure_dimension(positions, options, out);
-    out.leaf_roughness = median_leaf_roughness(h, positions);
+    out.leaf_roughness = median_leaf_roughness(h);
     out.fills_volume = out.sampled > 0 && out.mean_dimension >= options.volume_dimension &&
                        out.leaf_roughness >= options.volume_roughness;
     return out;

@@ -18,8 +18,8 @@
 //!    points), the median over the leaves. A surface, stacked or not, is flat at that scale (0.00-0.02);
 //!    a volume is not (0.57-0.68), nor is a noisy surface (0.55-0.67), which the dimension tells apart.
 //! A cloud fills a volume when both say so. Deterministic; the dimension costs about 0.03 s whatever the
-//! size (`samples` neighbour searches), the roughness an eigen-decomposition per leaf (about 0.06 s per
-//! million points: the noisy 1M torus 0.08 s in all, the 4M one 0.23 s, beside 2 and 13 s of build).
+//! size (`samples` neighbour searches); the roughness reads the leaves' frames (one eigen-decomposition
+//! per leaf of the raw positions where denoising moved the points: about 0.05 s per million points).
 //!
 //! \code
 //!   const mrt::Hierarchy h = mrt::build_hierarchy(std::move(cloud));

@@ -66,6 +66,25 @@ TEST(SampleDimension, random_points_in_a_cube_fill_a_volume)
     }
 }
 
+// Clumps of near-equal points filling a cube: denoising moves each clump onto a plane (its leaves'
+// frames then look flat), but the points as read fill a volume, and those are measured.
+TEST(SampleDimension, a_volume_is_judged_by_its_points_as_read)
+{
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> u(0.0, 1.0), jitter(-1e-3, 1e-3);
+    std::vector<Vec3> clumps;
+    for (int site = 0; site < 2500; ++site) {
+        const Vec3 c{u(rng), u(rng), u(rng)};
+        for (int k = 0; k < 20; ++k)
+            clumps.push_back(c + Vec3{jitter(rng), jitter(rng), jitter(rng)});
+    }
+    const Hierarchy h = build_hierarchy(cloud_of(clumps));
+    ASSERT_TRUE(h.info.denoised);
+    const SampleDimension d = sample_dimension(h);
+    EXPECT_GT(d.leaf_roughness, 0.5);
+    EXPECT_TRUE(d.fills_volume);
+}
+
 // Each measure alone takes a surface for a volume: noise of four point spacings makes the leaves as
 // thick as wide, surfaces stacked closer than the dimension's scale (QA round 76: nested spheres, a
 // rolled sheet, a book) measure as a volume there, but their leaves are flat.
