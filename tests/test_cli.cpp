@@ -2101,7 +2101,7 @@ TEST(Cli, duplicates_and_noise_floor_are_reported)
     const Result cad = mrtile("reconstruct " + std::string(MRTILE_SHARED_DATA) + "/fandisk.obj -o " +
                                   (dir / "fan.ply").string() + " --tolerance 0 --no-quality", dir);
     ASSERT_EQ(cad.code, 0) << cad.err;
-    EXPECT_NE(cad.out.find("note: some points are rough (sharp edges or local noise): "), std::string::npos) << cad.out;
+    EXPECT_NE(cad.out.find("note: some points are rough (sharp edges, local noise or overlapping scans): "), std::string::npos) << cad.out;
     EXPECT_EQ(cad.out.find("noisy"), std::string::npos) << cad.out;
     EXPECT_EQ(cad.out.find("--denoise on"), std::string::npos) << cad.out;
     // Its LOD chain ends at that floor and says so; a chain of two levels ends above it, and does not

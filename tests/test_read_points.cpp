@@ -1609,6 +1609,30 @@ TEST(ReadScanList, placement_paths_and_malformed_lists)
     expect_error<InvalidInput>([&] { read_points(far); }, {far.string() + ": the points span x from", "to 1e+300"});
 }
 
+// QA round 77 (a full Stanford scan set): a scan that saw nothing, a valid PLY of 0 vertices, failed
+// the whole list; a quaternion typed to three decimals (length 1.001) was refused as no rotation.
+TEST(ReadScanList, empty_scans_and_hand_rounded_quaternions)
+{
+    const fs::path dir = test_dir();
+    write_file(dir / "a.xyz", "1 0 0\n0 2 0\n0 0 3\n");
+    write_file(dir / "nothing.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                     "property float z\nend_header\n");
+    const fs::path list = write_file(dir / "list.conf", "bmesh nothing.ply 5 5 5 0 0 0 1\nbmesh a.xyz 0 0 0 0 0 0 1\n");
+    EXPECT_EQ(absolute(read_points(list)), (std::vector<Vec3>{{1, 0, 0}, {0, 2, 0}, {0, 0, 3}}));
+    const fs::path only_empty = write_file(dir / "only_empty.conf", "bmesh nothing.ply 0 0 0 0 0 0 1\n");
+    expect_error<InvalidInput>([&] { read_points(only_empty); }, {only_empty.string(), "no points"});
+    // A half turn about z typed as 0 0 1.001 0: normalised, so the points turn exactly.
+    const fs::path rounded = write_file(dir / "rounded.conf", "bmesh a.xyz 0 0 0 0 0 1.001 0\n");
+    const std::vector<Vec3> turned = absolute(read_points(rounded));
+    const std::vector<Vec3> expected = {{-1, 0, 0}, {0, -2, 0}, {0, 0, 3}};
+    ASSERT_EQ(turned.size(), expected.size());
+    for (std::size_t i = 0; i < turned.size(); ++i)
+        for (int a = 0; a < 3; ++a)
+            EXPECT_NEAR(turned[i][a], expected[i][a], 1e-12) << "point " << i << " axis " << a;
+    const fs::path typo = write_file(dir / "typo.conf", "bmesh a.xyz 0 0 0 0 0 1.02 0\n");
+    expect_error<InvalidInput>([&] { read_points(typo); }, {typo.string(), "line 1: the quaternion has length 1.02"});
+}
+
 TEST(ReadErrors, missing_file_directory_and_unknown_extension)
 {
     const fs::path dir = test_dir();
