@@ -852,5 +852,43 @@ TEST(MeshStats, faces_intersect_refuses_a_deleted_face)
     EXPECT_THROW(faces_intersect(mesh, Mesh::FaceHandle(3), Mesh::FaceHandle(40)), InvalidInput);
 }
 
+// corners_intersect skips the exact predicates for faces whose boxes are apart (QA round 78: capping
+// holes on trial tested every pair of a cap's faces). Against triangles_meet on pairs that are apart,
+// that overlap, that cross, and that touch where their boxes touch (a corner on the other's face or
+// corner at the box's edge: contact, so they meet), on a small grid so that ties are common.
+TEST(MeshStats, corners_intersect_agrees_with_the_exact_test_where_boxes_are_apart_or_touch)
+{
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> coordinate(0, 4);
+    std::size_t meeting = 0, apart_boxes = 0, touching_boxes = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        Mesh mesh;
+        std::array<Vec3, 3> a, b;
+        std::array<Mesh::VertexHandle, 3> fa, fb;
+        for (int k = 0; k < 3; ++k) {
+            a[static_cast<std::size_t>(k)] = {double(coordinate(rng)), double(coordinate(rng)), double(coordinate(rng))};
+            b[static_cast<std::size_t>(k)] = {double(coordinate(rng)) + 2.0, double(coordinate(rng)), double(coordinate(rng))};
+        }
+        for (int k = 0; k < 3; ++k) {
+            const Vec3& p = a[static_cast<std::size_t>(k)];
+            const Vec3& q = b[static_cast<std::size_t>(k)];
+            fa[static_cast<std::size_t>(k)] = mesh.add_vertex(Mesh::Point(p.x, p.y, p.z));
+            fb[static_cast<std::size_t>(k)] = mesh.add_vertex(Mesh::Point(q.x, q.y, q.z));
+        }
+        const auto hi = [](const std::array<Vec3, 3>& t) { return std::max({t[0].x, t[1].x, t[2].x}); };
+        const auto lo = [](const std::array<Vec3, 3>& t) { return std::min({t[0].x, t[1].x, t[2].x}); };
+        apart_boxes += hi(a) < lo(b) ? 1 : 0;
+        touching_boxes += hi(a) == lo(b) ? 1 : 0;
+        const bool expected = triangles_meet(a, b);
+        meeting += expected ? 1 : 0;
+        ASSERT_EQ(corners_intersect(mesh, fa, fb), expected) << "trial " << trial;
+        ASSERT_EQ(corners_intersect(mesh, fb, fa), expected) << "trial " << trial;
+    }
+    // The cases the shortcut decides and those it must leave to the exact test all occurred.
+    EXPECT_GT(apart_boxes, 100u);
+    EXPECT_GT(touching_boxes, 100u);
+    EXPECT_GT(meeting, 100u);
+}
+
 } // namespace
 } // namespace mrt
