@@ -758,18 +758,22 @@ std::vector<double> finer_tolerances(const Hierarchy& h, const LodSetOptions& o,
 // kept one has kMinLevelGrowth × its tiles and it has as much more than level 0.
 constexpr double kMinLevelGrowth = 1.5;
 
+// The rule for a level of `tiles` between level 0 (`first_tiles`) and the next level kept (`next_tiles`).
+bool grows_enough(std::size_t tiles, std::size_t next_tiles, std::size_t first_tiles)
+{
+    return static_cast<double>(next_tiles) >= kMinLevelGrowth * static_cast<double>(tiles) &&
+           static_cast<double>(tiles) >= kMinLevelGrowth * static_cast<double>(first_tiles);
+}
+
 void drop_small_steps(std::vector<LodLevel>& levels, std::size_t first_tiles)
 {
     if (levels.size() < 2)
         return;
     std::vector<LodLevel> kept;
     kept.push_back(std::move(levels.back()));
-    for (std::size_t i = levels.size() - 1; i-- > 0;) {
-        const auto tiles = static_cast<double>(levels[i].cut.size());
-        if (static_cast<double>(kept.back().cut.size()) >= kMinLevelGrowth * tiles &&
-            tiles >= kMinLevelGrowth * static_cast<double>(first_tiles))
+    for (std::size_t i = levels.size() - 1; i-- > 0;)
+        if (grows_enough(levels[i].cut.size(), kept.back().cut.size(), first_tiles))
             kept.push_back(std::move(levels[i]));
-    }
     std::reverse(kept.begin(), kept.end());
     levels = std::move(kept);
 }
@@ -782,12 +786,9 @@ void drop_mended_small_steps(std::vector<LodLevel>& levels)
 {
     if (levels.size() < 3)
         return;
-    const auto first = static_cast<double>(levels.front().cut.size());
-    for (std::size_t k = levels.size() - 2; k >= 1; --k) {
-        const auto tiles = static_cast<double>(levels[k].cut.size());
-        if (static_cast<double>(levels[k + 1].cut.size()) < kMinLevelGrowth * tiles || tiles < kMinLevelGrowth * first)
+    for (std::size_t k = levels.size() - 2; k >= 1; --k)
+        if (!grows_enough(levels[k].cut.size(), levels[k + 1].cut.size(), levels.front().cut.size()))
             levels.erase(levels.begin() + static_cast<std::ptrdiff_t>(k));
-    }
 }
 
 // What both halves of a LOD set need: a hierarchy, and room in a tile for a mesh.

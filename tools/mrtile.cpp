@@ -712,14 +712,19 @@ const char* denoise_hint(const Hierarchy& h)
     return h.info.denoised ? "" : "; or build with --denoise on to move the points onto the surface first";
 }
 
-// What a noise-floor note calls the points: "noisy" (with the denoising hint) only when the sample is
-// (sample_is_noisy) or was denoised; otherwise a few rough leaves, as at the sharp edges of a clean CAD
-// part (fandisk: 1 of 463 tiles), which denoising would round off.
+// What the noise-floor notes and `info` call the points: "noisy" (the notes add the denoising hint)
+// only when the sample is (sample_is_noisy) or was denoised; otherwise a few rough leaves, as at the
+// sharp edges of a clean CAD part (fandisk: 1 of 463 tiles), which denoising would round off.
+bool noisy_as_a_whole(const Hierarchy& h) { return h.info.denoised || sample_is_noisy(h); }
+const char* noise_words(bool noisy)
+{
+    return noisy ? "the points are noisy" : "some points are rough (sharp edges, local noise or overlapping scans)";
+}
+
 std::string noise_note(const Hierarchy& h, const std::string& what)
 {
-    if (h.info.denoised || sample_is_noisy(h))
-        return "note: the points are noisy: " + what + "; --below-noise goes on" + denoise_hint(h);
-    return "note: some points are rough (sharp edges, local noise or overlapping scans): " + what + "; --below-noise goes on";
+    const bool noisy = noisy_as_a_whole(h);
+    return std::string("note: ") + noise_words(noisy) + ": " + what + "; --below-noise goes on" + (noisy ? denoise_hint(h) : "");
 }
 
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
@@ -1953,8 +1958,7 @@ int run_info(const fs::path& model, bool json)
     if (noisy_points > 0)
         std::printf("noise       %s: %.0f%% of the points lie under noise floors, where cuts by tolerance stop (floors up "
                     "to %.3g of the scale)\n",
-                    h.info.denoised || sample_is_noisy(h) ? "the points are noisy"
-                                                          : "some points are rough (sharp edges, local noise or overlapping scans)",
+                    noise_words(noisy_as_a_whole(h)),
                     100.0 * noisy_share, floor_max);
     else
         std::printf("noise       none found (no noise floor)\n");
