@@ -55,6 +55,19 @@ constexpr double kForeignPlaneFactor = 4.0;
 // surfaces part where they lie about 16 spacings apart or more: QA round 48's wall, 20 of its spacings
 // behind a pipe, is 1.3 reaches off the pipe's tiles.
 constexpr double kOtherSurfaceFactor = 16.0;
+// Nearer than that, a small node and one at least kApartCountRatio times larger are other surfaces
+// (apart) when the small one's bounding box lies off the larger one's plane farther than kApartFactor
+// times the larger of their reach units (as above): the small one's points do not come near the
+// larger's surface. The larger node's plane is the one to trust (a tile of 8-25 points in a concave
+// corner leans whichever way its noise has it), and the box, not the centre, is what must keep off it
+// (a small tile across a crease reaches the larger's plane at the crease). A point whose nearest centre
+// is apart from its own node goes to the nearest centre that is not. QA round 78: a 14-point tile under
+// a fandisk's overhang, 9 spacings thick, took a point of the top face 0.21 above it, and its fan rose
+// through the plate as a finger 4.7 spacings from the truth. Nodes of like size are left as they were:
+// without the ratio, five nested spheres 5 spacings apart lost their closure (a loop) and a stack of
+// planes 5 spacings apart had 9 times the crossing faces.
+constexpr double kApartFactor = 4.0;
+constexpr std::uint32_t kApartCountRatio = 4;
 
 // Tiles whose normals are this close (either way round) may be the two sides of a thin wall: with
 // TileOptions::meet_factor, their adjacency asks whether their cells meet (meet_on_surface).
@@ -691,32 +704,54 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
         out.closest[k].assign(graph[k].size(), std::numeric_limits<double>::infinity());
     std::vector<std::uint32_t> owner;
     std::vector<std::uint32_t> point;
-    // How far off its plane a cell takes other nodes' points (kOtherSurfaceFactor).
-    std::vector<double> reach(tiles);
+    // The unit of each cell's reaches off its node's plane (kOtherSurfaceFactor, kApartFactor).
+    std::vector<double> unit(tiles);
     for (std::uint32_t k = 0; k < tiles; ++k) {
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
         // (3 RMS plane distances stand in for the largest where a hierarchy was not built by
         // build_hierarchy, which alone records it.)
-        reach[k] = kOtherSurfaceFactor * std::max({n.max_plane_distance, 3.0 * n.rms_plane_distance, node_spacing(n)});
+        unit[k] = std::max({n.max_plane_distance, 3.0 * n.rms_plane_distance, node_spacing(n)});
     }
+    // Whether the nodes of tiles a and b are other surfaces (kApartFactor).
+    const auto apart = [&](std::uint32_t a, std::uint32_t b) {
+        const Node& na = h.nodes[static_cast<std::size_t>(cut[a])];
+        const Node& nb = h.nodes[static_cast<std::size_t>(cut[b])];
+        const bool a_larger = na.count() > nb.count() || (na.count() == nb.count() && a < b);
+        const Node& larger = a_larger ? na : nb;
+        const Node& smaller = a_larger ? nb : na;
+        if (larger.count() < static_cast<std::uint64_t>(kApartCountRatio) * smaller.count())
+            return false;
+        // How near the smaller node's box comes to the larger node's plane.
+        const Vec3 normal = larger.frame.vectors[0];
+        const Vec3 half = smaller.box.size() * 0.5;
+        const double box_reach = std::abs(normal.x) * half.x + std::abs(normal.y) * half.y + std::abs(normal.z) * half.z;
+        const double nearest = std::abs(dot(smaller.box.centre() - larger.moments.mean, normal)) - box_reach;
+        return nearest > kApartFactor * std::max(unit[a], unit[b]);
+    };
+    // Greedy walk from `start` to p over the centres `allowed` admits: (distance, index) strictly
+    // decreases, so it ends, at a centre with no allowed neighbour nearer to p (with all allowed, a
+    // nearest centre: the graph is Delaunay). Returns the centre and its squared distance.
+    const auto walk = [&](std::uint32_t start, const Vec3& p, const auto& allowed) {
+        std::uint32_t best = start;
+        double best_d = squared_distance(p, centres[best]);
+        for (bool moved = true; moved;) {
+            moved = false;
+            for (std::uint32_t j : graph[best]) {
+                const double d = squared_distance(p, centres[j]);
+                if ((d < best_d || (d == best_d && j < best)) && allowed(j)) {
+                    best = j;
+                    best_d = d;
+                    moved = true;
+                }
+            }
+        }
+        return std::pair{best, best_d};
+    };
     for (std::uint32_t k = 0; k < tiles; ++k) {
         const Node& n = h.nodes[static_cast<std::size_t>(cut[k])];
         for (std::uint32_t i : node_sample(h, cut[k], max_points)) {
             const Vec3 p = space(h.cloud.positions[i]);
-            std::uint32_t best = representative[k];
-            double best_d = squared_distance(p, centres[best]);
-            // Greedy walk: (distance, index) strictly decreases, so it ends, at a nearest centre.
-            for (bool moved = true; moved;) {
-                moved = false;
-                for (std::uint32_t j : graph[best]) {
-                    const double d = squared_distance(p, centres[j]);
-                    if (d < best_d || (d == best_d && j < best)) {
-                        best = j;
-                        best_d = d;
-                        moved = true;
-                    }
-                }
-            }
+            const auto [best, best_d] = walk(representative[k], p, [](std::uint32_t) { return true; });
             // A point of another surface (a wall behind a pipe whose tile's centre is nearer than the
             // wall's own: QA round 48, the pipe's fan reached across to the wall; a slab's top under a
             // small tile of its underside: QA round 43) stays in its own node's cell, and is no witness
@@ -731,10 +766,16 @@ Partition voronoi_partition(const Hierarchy& h, const std::vector<std::int32_t>&
                 // of the coarse node's span, not of the fine tile's (with the fine tile's reach alone,
                 // the torus's focus cut kept such points from the fine cells: overlapping tiles, and its
                 // mesh took 3 times as long).
-                const double off = std::max(reach[best], reach[k]);
-                if (std::abs(dot(q - other.moments.mean, other.frame.vectors[0])) > off &&
-                    std::abs(dot(q - n.moments.mean, n.frame.vectors[0])) <= off) {
+                const double off = kOtherSurfaceFactor * std::max(unit[best], unit[k]);
+                const double height = std::abs(dot(q - other.moments.mean, other.frame.vectors[0]));
+                if (height > off && std::abs(dot(q - n.moments.mean, n.frame.vectors[0])) <= off) {
                     owner.push_back(k);
+                    point.push_back(i);
+                    continue;
+                }
+                if (apart(best, k)) {
+                    // The nearest centre among those not apart from k; no witness either.
+                    owner.push_back(walk(representative[k], p, [&](std::uint32_t j) { return !apart(j, k); }).first);
                     point.push_back(i);
                     continue;
                 }
