@@ -989,7 +989,8 @@ TEST(Reconstruct, the_underside_of_an_overhang_does_not_reach_through_the_plate)
         shapes::add_noise(c, 0.2 * spacing, seed + 100);
         const Hierarchy h = build_hierarchy(std::move(c));
         for (const double tolerance : tolerances) {
-            const Mesh& mesh = mesh_at_tolerance(h, tolerance).result.mesh;
+            const MendedMeshResult mended = mesh_at_tolerance(h, tolerance);
+            const Mesh& mesh = mended.result.mesh;
             double farthest = 0.0;
             for (const auto v : mesh.vertices())
                 farthest = std::max(farthest, off_the_truth(to_vec3(mesh.point(v)) + h.cloud.origin));
