@@ -2548,49 +2548,6 @@ void append_within_limit(PointCloud& cloud, PointCloud part, const ReadOptions& 
                            " points together so far, more than max_points " + std::to_string(options.max_points));
 }
 
-enum class Format;
-Format format_of(const fs::path& path, const std::string& name);
-PointCloud read_format(Input& in, Format format, const std::string& name, const ReadOptions& options, bool allow_empty = false);
-
-PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOptions& options)
-{
-    PointCloud cloud;
-    std::size_t read = 0;
-    for (const ScanPlacement& scan : read_scan_list(path)) {
-        if (scan.missing) {
-            if (options.skip_missing_scans)
-                continue;
-            throw IoError(name + ": line " + std::to_string(scan.line) + ": " + scan.path.string() +
-                          ": no such file (to read the scans that exist: --skip-missing-scans, or "
-                          "ReadOptions::skip_missing_scans through the API)");
-        }
-        // A scan's error names the list and its line too: the list is what the user gave.
-        const std::string where = name + ": line " + std::to_string(scan.line) + ": ";
-        PointCloud part;
-        try {
-            // A scan that saw nothing adds nothing (QA round 77: a valid PLY of 0 vertices failed the
-            // whole list, --skip-missing-scans or not); a list of nothing but such scans has no points.
-            Input in(scan.path, scan.path.string(), options.pipe_wait_seconds);
-            part = read_format(in, format_of(scan.path, scan.path.string()), scan.path.string(), options, true);
-        } catch (const IoError& e) {
-            throw IoError(where + e.what());
-        } catch (const InvalidInput& e) {
-            throw InvalidInput(where + e.what());
-        }
-        ++read;
-        if (part.empty())
-            continue;
-        place_scan(part, scan);
-        append_within_limit(cloud, std::move(part), options, name, "its scans");
-    }
-    if (read == 0)
-        throw IoError(name + ": none of the scans it lists exists");
-    // Each scan was checked alone; placed, they may lie farther apart than a mesh can span (a
-    // translation of 1e300 passed every check and failed in the build, naming no file).
-    validate(cloud, name);
-    return cloud;
-}
-
 // ---------------------------------------------------------------------------------------------------
 // The format by extension
 
@@ -2647,7 +2604,7 @@ std::optional<Format> format_by_header(Input& in)
 }
 
 // `allow_empty`: a scan of a list may have seen nothing (read_conf leaves it out).
-PointCloud read_format(Input& in, Format format, const std::string& name, const ReadOptions& options, bool allow_empty)
+PointCloud read_format(Input& in, Format format, const std::string& name, const ReadOptions& options, bool allow_empty = false)
 {
     PointCloud cloud;
     switch (format) {
@@ -2665,6 +2622,46 @@ PointCloud read_format(Input& in, Format format, const std::string& name, const 
         return cloud;
     validate(cloud, name);
     recenter(cloud);
+    return cloud;
+}
+
+// The points of a Stanford scan list (.conf), each scan read by its format and placed (see above).
+PointCloud read_conf(const fs::path& path, const std::string& name, const ReadOptions& options)
+{
+    PointCloud cloud;
+    std::size_t read = 0;
+    for (const ScanPlacement& scan : read_scan_list(path)) {
+        if (scan.missing) {
+            if (options.skip_missing_scans)
+                continue;
+            throw IoError(name + ": line " + std::to_string(scan.line) + ": " + scan.path.string() +
+                          ": no such file (to read the scans that exist: --skip-missing-scans, or "
+                          "ReadOptions::skip_missing_scans through the API)");
+        }
+        // A scan's error names the list and its line too: the list is what the user gave.
+        const std::string where = name + ": line " + std::to_string(scan.line) + ": ";
+        PointCloud part;
+        try {
+            // A scan that saw nothing adds nothing (QA round 77: a valid PLY of 0 vertices failed the
+            // whole list, --skip-missing-scans or not); a list of nothing but such scans has no points.
+            Input in(scan.path, scan.path.string(), options.pipe_wait_seconds);
+            part = read_format(in, format_of(scan.path, scan.path.string()), scan.path.string(), options, true);
+        } catch (const IoError& e) {
+            throw IoError(where + e.what());
+        } catch (const InvalidInput& e) {
+            throw InvalidInput(where + e.what());
+        }
+        ++read;
+        if (part.empty())
+            continue;
+        place_scan(part, scan);
+        append_within_limit(cloud, std::move(part), options, name, "its scans");
+    }
+    if (read == 0)
+        throw IoError(name + ": none of the scans it lists exists");
+    // Each scan was checked alone; placed, they may lie farther apart than a mesh can span (a
+    // translation of 1e300 passed every check and failed in the build, naming no file).
+    validate(cloud, name);
     return cloud;
 }
 
