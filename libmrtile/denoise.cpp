@@ -11,9 +11,8 @@
 #include "libmrtile/neighbours.h"
 #include "libmrtile/pca.h"
 
-#include <Eigen/Dense>
-
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -28,7 +27,7 @@ struct Jet
 {
     Vec3 origin, e1, e2, n;
     double scale = 1.0;
-    Eigen::Matrix<double, 6, 1> c = Eigen::Matrix<double, 6, 1>::Zero();
+    std::array<double, 6> c{0, 0, 0, 0, 0, 0};
     bool fitted = false; // false: the plane (c = 0)
 
     void local(const Vec3& p, double& u, double& v, double& w) const
@@ -43,25 +42,19 @@ struct Jet
     // (neighbours along a few lines).
     void fit(const std::vector<Vec3>& points)
     {
-        Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
-        Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+        Symmetric6 a{}; // the lower triangle of the normal equations' matrix
+        std::array<double, 6> b{0, 0, 0, 0, 0, 0};
         for (const Vec3& q : points) {
             double u, v, w;
             local(q, u, v, w);
-            Eigen::Matrix<double, 6, 1> basis;
-            basis << 1.0, u, v, u * u, u * v, v * v;
-            // The lower triangle of a += basis basisᵀ, by hand: Eigen's rankUpdate takes its general
-            // product path for a 6x6 (a tenth of the denoising). The same products and sums.
-            for (int j = 0; j < 6; ++j)
-                for (int i = j; i < 6; ++i)
-                    a(i, j) += basis[i] * basis[j];
-            b += basis * w;
+            const std::array<double, 6> basis{1.0, u, v, u * u, u * v, v * v};
+            for (std::size_t j = 0; j < 6; ++j)
+                for (std::size_t i = j; i < 6; ++i)
+                    a[6 * i + j] += basis[i] * basis[j];
+            for (std::size_t i = 0; i < 6; ++i)
+                b[i] += basis[i] * w;
         }
-        const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(a.selfadjointView<Eigen::Lower>());
-        if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(ldlt.rcond() > 1e-9))
-            return;
-        c = ldlt.solve(b);
-        fitted = true;
+        fitted = solve_positive_definite(a, b, c);
     }
 };
 

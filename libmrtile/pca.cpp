@@ -1,7 +1,9 @@
 // Paper §4.1 eq. 2-3: the 3x3 matrix M = ΔᵀΔ of a cluster and its eigen-decomposition (PCA).
-// This is the only file that includes Eigen, so the rest of the library stays free of it.
+// This is the only file that includes Eigen, so the rest of the library stays free of it (the 6x6
+// solve of the denoising's quadric fit is here for that reason).
 #include "libmrtile/pca.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -117,6 +119,22 @@ Eigen3x3 eigen_decomposition(const Moments& m)
     if (dot(cross(out.vectors[1], out.vectors[2]), out.vectors[0]) < 0)
         out.vectors[1] = -out.vectors[1];
     return out;
+}
+
+bool solve_positive_definite(const Symmetric6& a, const std::array<double, 6>& b, std::array<double, 6>& x)
+{
+    Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+    for (int j = 0; j < 6; ++j)
+        for (int i = j; i < 6; ++i)
+            m(i, j) = a[static_cast<std::size_t>(6 * i + j)];
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(m.selfadjointView<Eigen::Lower>());
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(ldlt.rcond() > 1e-9))
+        return false;
+    const Eigen::Matrix<double, 6, 1> rhs = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(b.data());
+    const Eigen::Matrix<double, 6, 1> solution = ldlt.solve(rhs);
+    for (int i = 0; i < 6; ++i)
+        x[static_cast<std::size_t>(i)] = solution[i];
+    return true;
 }
 
 } // namespace mrt

@@ -61,4 +61,12 @@ double smallest_eigenvalue_fast(const Moments& m);
 //! Vectors are sign-normalised (largest-magnitude component positive) so the result is deterministic.
 Eigen3x3 eigen_decomposition(const Moments& m);
 
+//! A 6x6 symmetric matrix by its lower triangle: entry (i, j), i >= j, at [6 * i + j] (the rest unused).
+using Symmetric6 = std::array<double, 36>;
+
+//! \brief Solves A x = b for a symmetric positive definite 6x6 A (an LDLᵀ factorisation), as the
+//! denoising's quadric fit needs (denoise.h). Returns false, x untouched, where A is not positive
+//! definite or its reciprocal condition estimate is not above 1e-9: x would be noise.
+bool solve_positive_definite(const Symmetric6& a, const std::array<double, 6>& b, std::array<double, 6>& x);
+
 } // namespace mrt
