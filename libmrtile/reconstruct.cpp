@@ -968,18 +968,17 @@ std::vector<bool> tiles_of_crossings(const Cut& cut, const Mesh& mesh, const std
 }
 
 // The stages after the surface, on `result` (its cut meshed into `tiles`; `away`: refine_dropped_tiles):
-// points inserted into fans, notches and small covered holes closed, slivers, the vertex fit and the
-// untangling.
+// tubes across empty space cut, points inserted into fans, notches and small covered holes closed,
+// slivers, the vertex fit and the untangling.
 void finish_mesh(const Hierarchy& h, const MeshOptions& options, MeshResult& result, const std::vector<Tile>& tiles,
                  const std::vector<bool>& away)
 {
     result.tiles = tiles.size();
+    const std::unordered_map<std::int32_t, double> spacing_of = sample_spacings(h, tiles);
+    result.bridges = remove_bridges(result.mesh, h, spacing_of, options.bridges);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
-    {
-        const std::unordered_map<std::int32_t, double> spacing_of = sample_spacings(h, tiles);
-        result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
-        result.covered_holes = close_covered_holes(result.mesh, h, spacing_of, along_height_field(options.covered_holes, result.surface));
-    }
+    result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
+    result.covered_holes = close_covered_holes(result.mesh, h, spacing_of, along_height_field(options.covered_holes, result.surface));
     const FitOptions fit = along_height_field(options.fit, result.surface);
     const SliverOptions slivers = along_height_field(options.slivers, result.surface);
     const FoldOptions folds = along_height_field(options.folds, result.surface);
@@ -1094,6 +1093,7 @@ void check_mesh_options(const MeshOptions& options)
     check_fit_options(options.fit);
     check_sliver_options(options.slivers);
     check_fold_options(options.folds);
+    check_bridge_options(options.bridges);
 }
 
 MeshResult mesh_cut(const Hierarchy& h, const Cut& given, const MeshOptions& options)

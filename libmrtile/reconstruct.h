@@ -17,6 +17,7 @@
 #include "libmrtile/mesh.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/refine_fans.h"
+#include "libmrtile/remove_bridges.h"
 #include "libmrtile/remove_folds.h"
 #include "libmrtile/remove_slivers.h"
 #include "libmrtile/surface.h"
@@ -54,6 +55,10 @@ struct MeshOptions
     //! small holes that the points cover closed by a fan around a vertex on the sample, after the
     //! notches (close_covered_holes.h); max_edges 0 = off; vertical in height-field mode
     CoveredHoleOptions covered_holes;
+    //! tubes of long gap faces across empty space, joining two surfaces that face each other a few
+    //! spacings apart, cut and their loops capped, first after the surface (remove_bridges.h);
+    //! max_loop_edges 0 = off
+    BridgeOptions bridges;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
     //! of at most three tiles, while other pieces exist, are refined (replaced by their children) up to
@@ -133,6 +138,7 @@ struct MeshResult
     std::size_t refined_points = 0; //!< points inserted into fans (refine_fans)
     std::size_t notches = 0;        //!< faces filling notches of open borders (fill_notches)
     CoveredHoleStats covered_holes; //!< small covered holes closed (close_covered_holes)
+    BridgeStats bridges;            //!< tubes across empty space cut (remove_bridges)
     //! Tiles meshed in all: the cut's, and the refined cut's again in each round that remeshed it
     //! (MeshOptions::piece_rounds, dropped_rounds). The surface costs about the same per tile, so this
     //! is the meshing's work, counted the same on every machine.

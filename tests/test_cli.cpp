@@ -832,6 +832,33 @@ TEST(Cli, crack_rounds_leave_to_the_caps_the_loops_they_close)
     EXPECT_EQ(slurp(dir / "rounds.ply"), slurp(dir / "capped.ply"));
 }
 
+// Two linked rings whose tubes pass 5 point spacings apart mesh as two rings: the tube of gap faces that
+// joined them at the default tolerance (seed 12) is cut and counted (remove_bridges, QA round 80).
+TEST(Cli, linked_rings_five_spacings_apart_stay_two_pieces)
+{
+    const fs::path dir = testing::fresh_test_dir("cli");
+    PointCloud rings = shapes::torus(41000, 1.0, 0.15, 12);
+    const PointCloud other = shapes::torus(41000, 1.0, 0.15, 1012);
+    for (const Vec3& p : other.positions)
+        rings.positions.push_back({p.x + 2.0 - 0.3 - 0.06, p.z, p.y}); // through the first's hole, 0.06 off its tube
+    {
+        std::ofstream ply(dir / "rings.ply", std::ios::binary);
+        ply << "ply\nformat binary_little_endian 1.0\nelement vertex " << rings.positions.size()
+            << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+        for (const Vec3& p : rings.positions)
+            for (const double c : {p.x, p.y, p.z})
+                ply.write(reinterpret_cast<const char*>(&c), sizeof c);
+    }
+    const Result r = mrtile("reconstruct " + (dir / "rings.ply").string() + " -o " + (dir / "rings_mesh.ply").string() +
+                                " --stats-json " + (dir / "rings.json").string(), dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "rings.json"));
+    EXPECT_GE(stats["bridges_cut"].get<std::size_t>(), 1u);
+    EXPECT_EQ(stats["components"].get<std::size_t>(), 2u);
+    EXPECT_EQ(stats["genus"].get<int>(), 2);
+    EXPECT_EQ(stats["boundary_loops"].get<std::size_t>(), 0u);
+}
+
 // Points the mesh leaves out far from it (two strays 1,000 radii out) are counted in the JSON and noted:
 // they set the maximum distance and widen the diagonal the fractions are of.
 TEST(Cli, far_points_left_out_are_noted)

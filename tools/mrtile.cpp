@@ -743,6 +743,7 @@ nlohmann::json mesh_json(const MeshResult& r, const QualityReport* q, double sec
     j["refined_points"] = r.refined_points;
     j["notches"] = r.notches;
     j["covered_holes_closed"] = r.covered_holes.closed;
+    j["bridges_cut"] = r.bridges.tubes;
     j["fit_rounds"] = r.fit.rounds;
     j["fit_clamped"] = r.fit.clamped;
     j["fit_flips"] = r.fit.flips;

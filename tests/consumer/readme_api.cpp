@@ -60,6 +60,7 @@ mrt::QualityReport q = mrt::measure_quality(h, r.cut, r.mesh);          // genus
 bool one_view = r.surface.view && r.surface.view->single_view;          // with a viewpoint: one view, so no handles were made
 std::size_t notches = r.notches;                                        // border notches filled where the points cover them (fill_notches.h)
 std::size_t capped = r.covered_holes.closed;                            // small holes the points cover, capped from them (close_covered_holes.h)
+std::size_t tubes = r.bridges.tubes;                                    // tubes of gap faces across empty space cut, both ends capped (remove_bridges.h)
 mrt::SingleViewStats seen = mrt::single_view_stats(h.cloud.positions, {0, 0, 2}); // any viewpoint: the share of points hidden from it
 mrt::TriangleCountResult small = mrt::mesh_to_triangle_count(h, 20000); // finest best-N cut with ≤ 20,000 faces
 mrt::MendedMeshResult t = mrt::mesh_at_tolerance(h, 0.02);             // a tolerance cut, finer where it breaks into pieces
@@ -88,7 +89,7 @@ on_globe.root_transform = at.root_transform;                            // ENU a
 mrt::write_lod_tileset(placed, {0, 0, 0}, "tiles_on_globe", on_globe);   // positions are ENU metres now
     // README body end
     (void)stray, (void)no_surface, (void)rms_move, (void)moved, (void)move, (void)budget, (void)paper, (void)hole, (void)gap, (void)q;
-    (void)one_view, (void)notches, (void)capped, (void)seen, (void)small, (void)t, (void)again;
+    (void)one_view, (void)notches, (void)capped, (void)tubes, (void)seen, (void)small, (void)t, (void)again;
     for (const char* made : {"scan.mrt", "scan_mesh.ply", "scan.glb", "tiles/tileset.json", "tiles_draco/tileset.json",
                              "tiles_on_globe/tileset.json"})
         if (!std::filesystem::exists(made)) {
