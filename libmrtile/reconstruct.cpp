@@ -975,7 +975,10 @@ void finish_mesh(const Hierarchy& h, const MeshOptions& options, MeshResult& res
 {
     result.tiles = tiles.size();
     const std::unordered_map<std::int32_t, double> spacing_of = sample_spacings(h, tiles);
-    result.bridges = remove_bridges(result.mesh, h, spacing_of, options.bridges);
+    // A height field is one layer over its plane: no two of its surfaces face each other (and the
+    // faces over its unsampled walls, long and off the sample, made the test 1.5-2.7 times the meshing).
+    if (!result.surface.height_field_used)
+        result.bridges = remove_bridges(result.mesh, h, spacing_of, options.bridges);
     result.refined_points = refine_fans(result.mesh, h, options.refine);
     result.notches = fill_notches(result.mesh, h, spacing_of, options.notches);
     result.covered_holes = close_covered_holes(result.mesh, h, spacing_of, along_height_field(options.covered_holes, result.surface));

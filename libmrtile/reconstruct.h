@@ -56,8 +56,8 @@ struct MeshOptions
     //! notches (close_covered_holes.h); max_edges 0 = off; vertical in height-field mode
     CoveredHoleOptions covered_holes;
     //! tubes of long gap faces across empty space, joining two surfaces that face each other a few
-    //! spacings apart, cut and their loops capped, first after the surface (remove_bridges.h);
-    //! max_loop_edges 0 = off
+    //! spacings apart, cut and their loops capped, first after the surface (remove_bridges.h; not
+    //! on a height field, one layer over its plane); max_loop_edges 0 = off
     BridgeOptions bridges;
     //! A separate object that the cut gives one or two tiles cannot close (two hemisphere fans are a
     //! flat pillow) and the surface drops it. Tiles in a piece of the tile adjacency (Tile::neighbours)
