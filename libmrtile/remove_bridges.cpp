@@ -151,8 +151,8 @@ private:
         if (euler != 0)
             return false;
         std::unordered_set<int> used;
-        for (const auto& [from, first] : border_from) {
-            (void)from;
+        for (const auto& start : border_from) {
+            const Mesh::HalfedgeHandle first = start.second;
             if (used.count(first.idx()))
                 continue;
             std::vector<Mesh::HalfedgeHandle> loop;

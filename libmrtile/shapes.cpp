@@ -159,6 +159,19 @@ PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed)
     return c;
 }
 
+PointCloud linked_tori(std::size_t count, double R, double r, double gap, std::uint32_t seed)
+{
+    PointCloud c = torus(count, R, r, seed);
+    const PointCloud other = torus(count, R, r, seed + 1000);
+    // The second's centre lies on the x axis where its inner side, R - r from it, keeps `gap` off the
+    // first's inner side at x = R - r.
+    const double centres = 2.0 * R - 2.0 * r - gap;
+    c.positions.reserve(2 * count);
+    for (const Vec3& p : other.positions)
+        c.positions.push_back({p.x + centres, p.z, p.y});
+    return c;
+}
+
 PointCloud box_surface(const Vec3& size, double density, double dense_face_factor, std::uint32_t seed)
 {
     std::mt19937 rng(seed);

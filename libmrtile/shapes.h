@@ -25,6 +25,10 @@ PointCloud smooth_height_field(std::size_t count, std::uint32_t seed = 4);
 PointCloud step_function(std::size_t count, std::uint32_t seed = 5);
 //! Two parallel planes z = 0 and z = gap over [0,1]^2, count points each (random).
 PointCloud parallel_planes(std::size_t count, double gap, std::uint32_t seed = 6);
+//! Two linked tori (major radius R, minor r), `count` samples each (torus(count, R, r, seed) and
+//! seed + 1000): the first about the z axis, the second in the xz-plane through the first's hole, its
+//! tube passing the first's inner side `gap` away (separate objects that come close; R > 2 r + gap).
+PointCloud linked_tori(std::size_t count, double R, double r, double gap, std::uint32_t seed = 12);
 //! Uniform samples on the surface of the box [0,size.x]×[0,size.y]×[0,size.z], `density` points per unit
 //! area, except the face x = 0, which gets `dense_face_factor` times as many (a face a range scanner saw
 //! head-on beside faces it saw at a grazing angle: the density jumps at sharp edges).

@@ -65,6 +65,17 @@ std::string xyz_line(double x, double y, double z)
 }
 std::string xyz_line(const Vec3& p) { return xyz_line(p.x, p.y, p.z); }
 
+// The points as a binary PLY of doubles: the CLI reads exactly the positions generated.
+void write_binary_ply(const fs::path& p, const PointCloud& cloud)
+{
+    std::ofstream ply(p, std::ios::binary);
+    ply << "ply\nformat binary_little_endian 1.0\nelement vertex " << cloud.positions.size()
+        << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    for (const Vec3& q : cloud.positions)
+        for (const double c : {q.x, q.y, q.z})
+            ply.write(reinterpret_cast<const char*>(&c), sizeof c);
+}
+
 // A small sphere sample (a Fibonacci spiral on the unit sphere).
 std::vector<std::array<double, 3>> sphere_points(int n)
 {
@@ -809,15 +820,7 @@ TEST(Cli, thin_walls_is_an_option_of_every_meshing_command)
 TEST(Cli, crack_rounds_leave_to_the_caps_the_loops_they_close)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    const PointCloud sample = testing::sampled_obj_surface(MRTILE_SHARED_DATA "/fandisk.obj", 300000, 2);
-    {
-        std::ofstream ply(dir / "fan.ply", std::ios::binary);
-        ply << "ply\nformat binary_little_endian 1.0\nelement vertex " << sample.positions.size()
-            << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-        for (const Vec3& p : sample.positions)
-            for (const double c : {p.x, p.y, p.z})
-                ply.write(reinterpret_cast<const char*>(&c), sizeof c);
-    }
+    write_binary_ply(dir / "fan.ply", testing::sampled_obj_surface(MRTILE_SHARED_DATA "/fandisk.obj", 300000, 2));
     const auto reconstruct = [&](const std::string& name, const std::string& extra) {
         const Result r = mrtile("reconstruct " + (dir / "fan.ply").string() + " -o " + (dir / (name + ".ply")).string() +
                                     " --tolerance 0.005 --stats-json " + (dir / (name + ".json")).string() + extra, dir);
@@ -837,18 +840,7 @@ TEST(Cli, crack_rounds_leave_to_the_caps_the_loops_they_close)
 TEST(Cli, linked_rings_five_spacings_apart_stay_two_pieces)
 {
     const fs::path dir = testing::fresh_test_dir("cli");
-    PointCloud rings = shapes::torus(41000, 1.0, 0.15, 12);
-    const PointCloud other = shapes::torus(41000, 1.0, 0.15, 1012);
-    for (const Vec3& p : other.positions)
-        rings.positions.push_back({p.x + 2.0 - 0.3 - 0.06, p.z, p.y}); // through the first's hole, 0.06 off its tube
-    {
-        std::ofstream ply(dir / "rings.ply", std::ios::binary);
-        ply << "ply\nformat binary_little_endian 1.0\nelement vertex " << rings.positions.size()
-            << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-        for (const Vec3& p : rings.positions)
-            for (const double c : {p.x, p.y, p.z})
-                ply.write(reinterpret_cast<const char*>(&c), sizeof c);
-    }
+    write_binary_ply(dir / "rings.ply", shapes::linked_tori(41000, 1.0, 0.15, 0.06, 12));
     const Result r = mrtile("reconstruct " + (dir / "rings.ply").string() + " -o " + (dir / "rings_mesh.ply").string() +
                                 " --stats-json " + (dir / "rings.json").string(), dir);
     ASSERT_EQ(r.code, 0) << r.err;

@@ -180,25 +180,13 @@ TEST(RemoveBridges, options_out_of_range_and_a_mesh_without_properties_are_refus
     EXPECT_THROW(remove_bridges(bare, b.h, kSpacingOf), InvalidInput);
 }
 
-// Two linked rings (R = 1, r = 0.15), the second in the xz-plane through the first's hole, their tubes
-// `gap` apart where they pass; `count` points on each.
-Hierarchy linked_rings(std::size_t count, double gap, std::uint32_t seed)
-{
-    PointCloud a = shapes::torus(count, 1.0, 0.15, seed);
-    const PointCloud b = shapes::torus(count, 1.0, 0.15, seed + 1000);
-    const double centres = 2.0 - 2 * 0.15 - gap; // the second ring's inner side `gap` off the first's
-    for (const Vec3& p : b.positions)
-        a.positions.push_back({p.x + centres, p.z, p.y});
-    return build_hierarchy(a);
-}
-
 TEST(RemoveBridges, linked_rings_five_spacings_apart_mesh_as_two_rings)
 {
     // 41,000 points per ring: a spacing of 0.012, the gap 5 of them, the tubes 25 across. Seeds 12 and
     // 14 had the two rings joined by a tube at the default tolerance (one piece) before the pass.
     for (const std::uint32_t seed : {12u, 14u}) {
         SCOPED_TRACE("seed " + std::to_string(seed));
-        const Hierarchy h = linked_rings(41000, 0.06, seed);
+        const Hierarchy h = build_hierarchy(shapes::linked_tori(41000, 1.0, 0.15, 0.06, seed));
         const MendedMeshResult m = mesh_at_tolerance(h, 0.002);
         const TopologyStats t = topology_stats(m.result.mesh);
         EXPECT_EQ(t.components, 2u);
