@@ -4,12 +4,14 @@
 // The noise floor goes beyond the paper, which assumes that its smallest clusters are pieces of surface:
 // under noise of about a point spacing they are blobs, and the floor keeps cuts above them.
 #include "libmrtile/hierarchy.h"
+#include "libmrtile/errors.h"
 #include "libmrtile/median.h"
 #include "libmrtile/parallel.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace mrt {
 
@@ -277,6 +279,57 @@ std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& 
                 out.push_back(i);
     }
     return out;
+}
+
+std::vector<char> has_point_within(const Hierarchy& h, const std::vector<Vec3>& queries, const std::vector<double>& radii,
+                                   const std::vector<std::int32_t>* first_nodes, std::size_t threads)
+{
+    if (radii.size() != queries.size())
+        throw InvalidInput("has_point_within: " + std::to_string(radii.size()) + " radii for " + std::to_string(queries.size()) + " queries");
+    if (first_nodes && first_nodes->size() != queries.size())
+        throw InvalidInput("has_point_within: " + std::to_string(first_nodes->size()) + " first nodes for " +
+                           std::to_string(queries.size()) + " queries");
+    if (first_nodes)
+        for (const std::int32_t id : *first_nodes)
+            if (id < -1 || (id >= 0 && static_cast<std::size_t>(id) >= h.nodes.size()))
+                throw InvalidInput("has_point_within: first node " + std::to_string(id) + " is no node of the " +
+                                   std::to_string(h.nodes.size()) + " of the hierarchy");
+    std::vector<char> within(queries.size(), 0);
+    if (h.nodes.empty())
+        return within;
+    run_parallel_ranges(queries.size(), 256, threads, [&](std::size_t begin, std::size_t end) {
+        std::vector<std::int32_t> stack;
+        for (std::size_t k = begin; k < end; ++k) {
+            const Vec3& q = queries[k];
+            if (!(radii[k] >= 0.0))
+                continue;
+            const double reach2 = radii[k] * radii[k];
+            const std::int32_t first = first_nodes ? (*first_nodes)[k] : -1;
+            // Depth first from `start`, skipping `done` (a subtree searched already); a box's distance is
+            // never more than that of a point in it, so no point within reach is passed over.
+            const auto search = [&](std::int32_t start, std::int32_t done) {
+                stack.assign(1, start);
+                while (!stack.empty()) {
+                    const std::int32_t id = stack.back();
+                    stack.pop_back();
+                    const Node& n = h.nodes[static_cast<std::size_t>(id)];
+                    if (id == done || n.box.squared_distance_to(q) > reach2)
+                        continue;
+                    if (!n.is_leaf()) {
+                        stack.push_back(n.right);
+                        stack.push_back(n.left);
+                        continue;
+                    }
+                    for (std::uint32_t i = n.begin; i < n.end; ++i)
+                        if (squared_norm(h.cloud.positions[i] - q) <= reach2)
+                            return true;
+                }
+                return false;
+            };
+            within[k] = (first > 0 && search(first, -1)) || search(0, first > 0 ? first : -1) ? 1 : 0;
+        }
+    });
+    return within;
 }
 
 void update_derived(Hierarchy& h)

@@ -155,6 +155,17 @@ struct Hierarchy
 //! with `stride` > 1 only the points whose index is a multiple of it are (a regular sample).
 std::vector<std::uint32_t> points_in_box(const Hierarchy& h, const BoundingBox& box, std::size_t stride = 1);
 
+//! \brief For each query k, whether a point of the cloud lies within radii[k] of it (squared distance
+//! at most radii[k]²; never for a radius that is negative or NaN), searched through the nodes' boxes:
+//! from first_nodes[k]'s subtree when given (a node near the query, or -1), then the rest. No box
+//! beyond the radius is opened, so a query with no point near costs a few nodes, where a nearest-point
+//! search (squared_nearest_point_distances, mesh_stats.h) goes on to the nearest point however far.
+//! Deterministic; `threads` workers (0 = one per hardware thread) give the same result.
+//! \throw InvalidInput if `radii` or `first_nodes` does not have one entry per query, or a first node
+//! is neither -1 nor a node of `h`.
+std::vector<char> has_point_within(const Hierarchy& h, const std::vector<Vec3>& queries, const std::vector<double>& radii,
+                                   const std::vector<std::int32_t>* first_nodes = nullptr, std::size_t threads = 0);
+
 //! Recomputes the derived fields: every node's frame and rms_plane_distance from its moments, then
 //! scale, view and the nodes' noise floors (derive_noise_floor).
 void update_derived(Hierarchy& h);

@@ -780,12 +780,16 @@ std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const st
         return {};
     if (points.empty())
         throw InvalidInput("squared_nearest_point_distances: no points to search");
-    // Each node's box around `points` (the stored boxes are of the cloud's positions, and raw ones can
-    // lie outside them). Parents come before children, so backwards every child is done first.
-    std::vector<BoundingBox> box(h.nodes.size());
-    for (std::size_t id = h.nodes.size(); id-- > 0;) {
+    // Each node's box around `points`: the stored ones where they are the cloud's positions (the same
+    // boxes, exactly: load_model checks it), else computed (raw positions can lie outside them; a pass
+    // over every point, which a caller searching a few spots of a 4M-point cloud would mostly spend
+    // here). Parents come before children, so backwards every child is done first.
+    const bool stored_boxes = &points == &h.cloud.positions;
+    std::vector<BoundingBox> computed(stored_boxes ? 0 : h.nodes.size());
+    const auto box_of = [&](std::size_t id) -> const BoundingBox& { return stored_boxes ? h.nodes[id].box : computed[id]; };
+    for (std::size_t id = computed.size(); id-- > 0;) {
         const Node& n = h.nodes[id];
-        BoundingBox& b = box[id];
+        BoundingBox& b = computed[id];
         if (n.is_leaf()) {
             b.min = Vec3{1, 1, 1} * std::numeric_limits<double>::infinity();
             b.max = Vec3{1, 1, 1} * -std::numeric_limits<double>::infinity();
@@ -794,8 +798,8 @@ std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const st
                 b.max = max(b.max, points[i]);
             }
         } else {
-            const BoundingBox& l = box[static_cast<std::size_t>(n.left)];
-            const BoundingBox& r = box[static_cast<std::size_t>(n.right)];
+            const BoundingBox& l = computed[static_cast<std::size_t>(n.left)];
+            const BoundingBox& r = computed[static_cast<std::size_t>(n.right)];
             b = {min(l.min, r.min), max(l.max, r.max)};
         }
     }
@@ -808,7 +812,7 @@ std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const st
             while (!stack.empty()) {
                 const std::size_t id = static_cast<std::size_t>(stack.back());
                 stack.pop_back();
-                if (!(box[id].squared_distance_to(q) < best))
+                if (!(box_of(id).squared_distance_to(q) < best))
                     continue;
                 const Node& n = h.nodes[id];
                 if (n.is_leaf()) {
@@ -825,8 +829,8 @@ std::vector<double> squared_nearest_point_distances(const Hierarchy& h, const st
                 // centre is nearer, which halves the leaves scanned.
                 const auto& l = h.nodes[static_cast<std::size_t>(n.left)];
                 const auto& r = h.nodes[static_cast<std::size_t>(n.right)];
-                const double to_left = box[static_cast<std::size_t>(n.left)].squared_distance_to(q);
-                const double to_right = box[static_cast<std::size_t>(n.right)].squared_distance_to(q);
+                const double to_left = box_of(static_cast<std::size_t>(n.left)).squared_distance_to(q);
+                const double to_right = box_of(static_cast<std::size_t>(n.right)).squared_distance_to(q);
                 const bool left_nearer = to_left < to_right ||
                                          (to_left == to_right && squared_norm(l.centre() - q) <= squared_norm(r.centre() - q));
                 stack.push_back(left_nearer ? n.right : n.left);

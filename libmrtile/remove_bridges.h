@@ -12,7 +12,9 @@
 //! from surface by where it lies: every one of its faces is a gap face with an edge over
 //! `min_edge_spacings` spacings and a share of its area over `off_share` farther than
 //! `reach_spacings` from every input point (it spans the empty gap; gap faces over sampled surface
-//! lie within a spacing of the points), the faces form an annulus (Euler characteristic 0), and its
+//! lie within a spacing of the points; judged only where a long edge's midpoint lies off the sample by
+//! 0.15 of the face's longest edge, as the middle of an edge across a gap does and a chord of a curved
+//! surface at a coarse cut does not), the faces form an annulus (Euler characteristic 0), and its
 //! two boundary loops are short (at most `max_loop_edges` edges each) and border faces outside it on
 //! every edge. The tube is taken out and each loop capped: a triangle, or two across the shorter
 //! diagonal of a 4-edge loop. Caps are gap faces (f:tile -1, f:gap true). A tube whose caps OpenMesh
@@ -49,6 +51,11 @@ struct BridgeStats
     std::size_t tubes = 0;   //!< tubes cut
     std::size_t removed = 0; //!< faces taken out with them
     std::size_t caps = 0;    //!< cap faces put on their loops
+    //! The work, counted the same on every machine: gap faces with an edge over min_edge_spacings,
+    //! and those of them whose area was judged spot by spot (a long edge's midpoint off the sample by
+    //! 0.15 of the face's longest edge; a coarse cut's chords across curved surface are not).
+    std::size_t long_faces = 0;
+    std::size_t judged = 0;
 };
 
 //! \throw InvalidInput for options out of range (as remove_bridges).

@@ -802,6 +802,11 @@ TEST(Distance, nearest_points_through_a_hierarchy_with_and_without_a_bound)
             EXPECT_EQ(started[k], exact[k]) << k; // a node elsewhere: found from the root
         }
     }
+    // A copy of the cloud's positions takes the other path (each node's box computed from the points
+    // given, not the one stored with it): the same results, to the bit.
+    const std::vector<Vec3> copy = h.cloud.positions;
+    EXPECT_EQ(squared_nearest_point_distances(h, copy, queries, 1, &bound, &first), started);
+    EXPECT_EQ(squared_nearest_point_distances(h, copy, queries, 2, &bound), bounded);
     std::vector<std::int32_t> wrong = first;
     wrong[3] = static_cast<std::int32_t>(h.nodes.size());
     EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &bound, &wrong), InvalidInput);
@@ -810,6 +815,49 @@ TEST(Distance, nearest_points_through_a_hierarchy_with_and_without_a_bound)
     const std::vector<double> short_bound(queries.size() - 1, 1.0);
     EXPECT_THROW(squared_nearest_point_distances(h, h.cloud.positions, queries, 1, &short_bound), InvalidInput);
     EXPECT_THROW(squared_nearest_point_distances(h, std::vector<Vec3>(3), queries), InvalidInput);
+}
+
+// has_point_within, per query: whether the nearest point (brute force) lies within the radius, from the
+// root and from a node of each query's (its nearest point's leaf, a node elsewhere, none).
+TEST(Distance, point_within_a_radius_through_a_hierarchy)
+{
+    std::mt19937 rng(51);
+    std::uniform_real_distribution<double> u(-1.4, 1.4);
+    const Hierarchy h = sphere_and_scatter(rng);
+    std::vector<Vec3> queries(600);
+    for (Vec3& q : queries)
+        q = Vec3{u(rng), u(rng), u(rng)} * 1.5;
+    const std::vector<double> exact = brute_force_nearest(queries, h.cloud.positions);
+    std::vector<double> radii(queries.size());
+    std::vector<char> expected(queries.size());
+    std::size_t yes = 0;
+    for (std::size_t k = 0; k < queries.size(); ++k) {
+        // Half a hair beyond the nearest point, half a hair short of it; the first 20 exactly at it.
+        const double d = std::sqrt(exact[k]);
+        radii[k] = k < 20 ? d : d * (k % 2 == 0 ? 1.001 : 0.999);
+        expected[k] = k < 20 || k % 2 == 0 ? 1 : 0;
+        if (k < 20) // a radius whose square rounds below the nearest squared distance says no
+            expected[k] = radii[k] * radii[k] >= exact[k] ? 1 : 0;
+        yes += expected[k];
+    }
+    ASSERT_GT(yes, 250u);
+    ASSERT_LT(yes, 350u);
+    EXPECT_EQ(has_point_within(h, queries, radii, nullptr, 1), expected);
+    EXPECT_EQ(has_point_within(h, queries, radii, nullptr, 3), expected);
+    std::vector<std::int32_t> first(queries.size(), -1);
+    for (std::size_t k = 0; k < queries.size(); ++k)
+        if (k % 3 != 2)
+            first[k] = static_cast<std::int32_t>(k % 3 == 0 ? h.nodes.size() - 1 - k % 11 : k % h.nodes.size());
+    EXPECT_EQ(has_point_within(h, queries, radii, &first, 2), expected);
+    const std::vector<double> none(queries.size(), -1.0), nan(queries.size(), std::nan(""));
+    EXPECT_EQ(has_point_within(h, queries, none), std::vector<char>(queries.size(), 0));
+    EXPECT_EQ(has_point_within(h, queries, nan), std::vector<char>(queries.size(), 0));
+    std::vector<std::int32_t> wrong = first;
+    wrong[5] = static_cast<std::int32_t>(h.nodes.size());
+    EXPECT_THROW(has_point_within(h, queries, radii, &wrong), InvalidInput);
+    wrong.pop_back();
+    EXPECT_THROW(has_point_within(h, queries, radii, &wrong), InvalidInput);
+    EXPECT_THROW(has_point_within(h, queries, std::vector<double>(3, 1.0)), InvalidInput);
 }
 
 TEST(Distance, degenerate_input)

@@ -5,6 +5,7 @@
 
 #include "libmrtile/remove_bridges.h"
 #include "libmrtile/cluster_tree.h"
+#include "libmrtile/cut.h"
 #include "libmrtile/errors.h"
 #include "libmrtile/mesh_stats.h"
 #include "libmrtile/reconstruct.h"
@@ -121,6 +122,8 @@ TEST(RemoveBridges, a_tube_across_empty_space_is_cut_and_both_ends_capped)
     EXPECT_EQ(stats.tubes, 1u);
     EXPECT_EQ(stats.removed, 6u);
     EXPECT_EQ(stats.caps, 2u);
+    EXPECT_EQ(stats.long_faces, 6u); // the tube's faces, the only gap faces
+    EXPECT_EQ(stats.judged, 6u);
     const TopologyStats t = topology_stats(b.mesh);
     EXPECT_EQ(t.components, 2u);
     EXPECT_EQ(t.boundary_loops, 0u);
@@ -178,6 +181,22 @@ TEST(RemoveBridges, options_out_of_range_and_a_mesh_without_properties_are_refus
     Mesh bare;
     bare.add_vertex({0, 0, 0});
     EXPECT_THROW(remove_bridges(bare, b.h, kSpacingOf), InvalidInput);
+}
+
+// A coarse cut of a dense sample is all long gap faces (each thousands of spots at a third of the
+// reach apart); their chords lie off the curved surface by their sagitta, not by half a gap, and are
+// not judged spot by spot. The counts are the pass's work, the same on every machine.
+TEST(RemoveBridges, chords_of_a_coarse_cut_are_not_judged)
+{
+    const Hierarchy h = build_hierarchy(shapes::sphere(100000));
+    for (const double tolerance : {0.02, 0.005}) {
+        SCOPED_TRACE("tolerance " + std::to_string(tolerance));
+        const MeshResult m = mesh_cut(h, cut_by_tolerance(h, tolerance));
+        EXPECT_GT(m.bridges.long_faces, 50u);
+        EXPECT_LE(m.bridges.judged * 20, m.bridges.long_faces);
+        EXPECT_EQ(m.bridges.tubes, 0u);
+        EXPECT_EQ(topology_stats(m.mesh).genus, 0);
+    }
 }
 
 TEST(RemoveBridges, linked_rings_five_spacings_apart_mesh_as_two_rings)
