@@ -138,19 +138,11 @@ public:
     // stands for the same area.
     double share_uncovered(const std::array<Vec3, 3>& t) const
     {
-        const double longest = std::max({distance(t[0], t[1]), distance(t[1], t[2]), distance(t[2], t[0])});
-        const int steps = std::clamp(static_cast<int>(std::ceil(longest / (reach_ / 3.0))), 1, 200);
-        const Vec3 du = (t[1] - t[0]) / static_cast<double>(steps), dv = (t[2] - t[0]) / static_cast<double>(steps);
         std::size_t off = 0;
         const Vec3* last = nullptr;
-        for (int i = 0; i < steps; ++i)
-            for (int j = 0; i + j < steps; ++j) {
-                const Vec3 corner = t[0] + du * static_cast<double>(i) + dv * static_cast<double>(j);
-                off += near(corner + (du + dv) / 3.0, last) ? 0 : 1; // the sub-triangle pointing up
-                if (i + j + 1 < steps)
-                    off += near(corner + (du + dv) * (2.0 / 3.0), last) ? 0 : 1; // and the one pointing down
-            }
-        return static_cast<double>(off) / (static_cast<double>(steps) * static_cast<double>(steps));
+        const std::size_t spots =
+            visit_subtriangle_centres(t[0], t[1], t[2], reach_ / 3.0, 200, [&](const Vec3& spot) { off += near(spot, last) ? 0 : 1; });
+        return static_cast<double>(off) / static_cast<double>(spots);
     }
 
 private:

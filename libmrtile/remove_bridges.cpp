@@ -122,8 +122,14 @@ private:
     {
         // Each long edge's midpoint, asked for a point within the larger of the reach and
         // kMinMidpointShare of its face's longest edge.
-        std::vector<Mesh::FaceHandle> long_faces;
-        std::vector<double> reach_of;
+        struct LongFace
+        {
+            Mesh::FaceHandle face;
+            std::array<Vec3, 3> corners;
+            double reach;
+            std::int32_t node; // its first corner's tile's
+        };
+        std::vector<LongFace> long_faces;
         std::vector<std::size_t> first_middle{0};
         std::vector<Vec3> middles;
         std::vector<double> radii;
@@ -144,8 +150,7 @@ private:
                 }
             if (middles.size() == first_middle.back())
                 continue;
-            long_faces.push_back(f);
-            reach_of.push_back(reach);
+            long_faces.push_back({f, p, reach, node});
             first_middle.push_back(middles.size());
         }
         stats_.long_faces = long_faces.size();
@@ -153,10 +158,9 @@ private:
             return {};
         const std::vector<char> middle_near = has_point_within(h_, middles, radii, &first_nodes);
 
-        // The spots of the faces with a midpoint off the sample (the grid of share_uncovered in
-        // close_covered_holes.cpp: the centres of steps² equal sub-triangles), asked for a point
-        // within the reach.
-        std::vector<Mesh::FaceHandle> judged;
+        // The spots of the faces with a midpoint off the sample (centres of equal sub-triangles, as
+        // close_covered_holes judges a face's share off the sample), asked for a point within the reach.
+        std::vector<const LongFace*> judged;
         std::vector<std::size_t> first_spot{0};
         std::vector<Vec3> spots;
         radii.clear();
@@ -165,21 +169,12 @@ private:
             if (std::all_of(middle_near.begin() + static_cast<std::ptrdiff_t>(first_middle[i]),
                             middle_near.begin() + static_cast<std::ptrdiff_t>(first_middle[i + 1]), [](char near) { return near != 0; }))
                 continue;
-            const std::array<Vec3, 3> t = face_corners(mesh_, long_faces[i]);
-            const double longest = std::max({distance(t[0], t[1]), distance(t[1], t[2]), distance(t[2], t[0])});
-            const double reach = reach_of[i];
-            const int steps = std::clamp(static_cast<int>(std::ceil(longest / (reach / 3.0))), 1, kMaxSpotSteps);
-            const Vec3 du = (t[1] - t[0]) / static_cast<double>(steps), dv = (t[2] - t[0]) / static_cast<double>(steps);
-            for (int a = 0; a < steps; ++a)
-                for (int b = 0; a + b < steps; ++b) {
-                    const Vec3 corner = t[0] + du * static_cast<double>(a) + dv * static_cast<double>(b);
-                    spots.push_back(corner + (du + dv) / 3.0); // the sub-triangle pointing up
-                    if (a + b + 1 < steps)
-                        spots.push_back(corner + (du + dv) * (2.0 / 3.0)); // and the one pointing down
-                }
-            radii.resize(spots.size(), reach);
-            first_nodes.resize(spots.size(), mesh_.property(cluster_, *mesh_.cfv_begin(long_faces[i])));
-            judged.push_back(long_faces[i]);
+            const LongFace& l = long_faces[i];
+            visit_subtriangle_centres(l.corners[0], l.corners[1], l.corners[2], l.reach / 3.0, kMaxSpotSteps,
+                                      [&](const Vec3& spot) { spots.push_back(spot); });
+            radii.resize(spots.size(), l.reach);
+            first_nodes.resize(spots.size(), l.node);
+            judged.push_back(&l);
             first_spot.push_back(spots.size());
         }
         stats_.judged = judged.size();
@@ -190,10 +185,10 @@ private:
             for (std::size_t s = first_spot[i]; s < first_spot[i + 1]; ++s)
                 off += spot_near[s] ? 0 : 1;
             const auto spots_of_face = static_cast<double>(first_spot[i + 1] - first_spot[i]);
-            const std::array<Vec3, 3> p = face_corners(mesh_, judged[i]);
+            const std::array<Vec3, 3>& p = judged[i]->corners;
             const double area = 0.5 * norm(cross(p[1] - p[0], p[2] - p[0]));
             if (area > 0.0 && area * (static_cast<double>(off) / spots_of_face) >= o_.off_share * area)
-                across.push_back(judged[i]);
+                across.push_back(judged[i]->face);
         }
         return across;
     }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 
 namespace mrt {
 
@@ -144,6 +145,25 @@ bool all_triangle_spots(const Vec3& a, const Vec3& b, const Vec3& c, double step
                 return false;
         }
     return true;
+}
+
+//! Calls visit(spot) at the centre of each of the steps² equal sub-triangles of triangle (a, b, c),
+//! steps = ceil(longest edge / step) (1 to max_steps), in a fixed order, and returns steps². Each spot
+//! stands for the same share of the area: how the share of a triangle away from the points is told.
+template <typename Visit>
+std::size_t visit_subtriangle_centres(const Vec3& a, const Vec3& b, const Vec3& c, double step, int max_steps, Visit visit)
+{
+    const double longest = std::max({distance(a, b), distance(b, c), distance(c, a)});
+    const int steps = std::clamp(static_cast<int>(std::ceil(longest / step)), 1, max_steps);
+    const Vec3 du = (b - a) / static_cast<double>(steps), dv = (c - a) / static_cast<double>(steps);
+    for (int i = 0; i < steps; ++i)
+        for (int j = 0; i + j < steps; ++j) {
+            const Vec3 corner = a + du * static_cast<double>(i) + dv * static_cast<double>(j);
+            visit(corner + (du + dv) / 3.0); // the sub-triangle pointing up
+            if (i + j + 1 < steps)
+                visit(corner + (du + dv) * (2.0 / 3.0)); // and the one pointing down
+        }
+    return static_cast<std::size_t>(steps) * static_cast<std::size_t>(steps);
 }
 
 //! An orthonormal frame of a plane (origin, in-plane axes u and v, normal n): a point's coordinates in
